@@ -1,1 +1,36 @@
-//! placeholder
+//! Triangle geometry and ray queries for bdpm.
+//!
+//! This crate owns what every higher layer needs of space and chance:
+//! - [`TriangleMesh`]: an indexed triangle soup with optional vertex normals and one opaque
+//!   material index per triangle;
+//! - [`Geometry`]: the mesh with a compressed-wide BVH (obvhs CWBVH) for closest-hit and
+//!   occlusion queries, per-triangle areas and area-weighted surface sampling;
+//! - [`Frame`] and the [`sampling`] warps (cosine hemisphere, uniform sphere);
+//! - [`Rng`]: deterministic random streams keyed by (seed, domain, indices), so that every
+//!   sample is a pure function of its keys whatever the thread count.
+//!
+//! Units: positions and distances in metres, areas in m², solid angles in sr.
+//!
+//! Architecture invariant: this crate knows nothing of materials (a material is an opaque
+//! `u32`), lights, photons, weights or files.
+//!
+//! ```
+//! use bdpm_geometry::{Geometry, TriangleMesh};
+//! use glam::Vec3;
+//! let mut mesh = TriangleMesh::default();
+//! mesh.push_quad([Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, -1.0),
+//!                 Vec3::new(1.0, 0.0, 1.0), Vec3::new(-1.0, 0.0, 1.0)], 0);
+//! let geometry = Geometry::new(mesh).unwrap();
+//! let hit = geometry.intersect(Vec3::new(0.2, 1.0, 0.3), Vec3::NEG_Y, f32::INFINITY).unwrap();
+//! assert!((hit.t - 1.0).abs() < 1e-6);
+//! assert!((geometry.total_area() - 4.0).abs() < 1e-6);
+//! ```
+
+mod frame;
+mod mesh;
+mod rng;
+pub mod sampling;
+
+pub use frame::Frame;
+pub use mesh::{Geometry, GeometryError, Hit, SurfaceSample, TriangleMesh, spawn_offset};
+pub use rng::{Domain, Rng};

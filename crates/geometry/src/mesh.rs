@@ -1,0 +1,669 @@
+use std::fmt;
+use std::time::Duration;
+
+use glam::{Vec2, Vec3, Vec3A};
+use obvhs::BvhBuildParams;
+use obvhs::cwbvh::CwBvh;
+use obvhs::cwbvh::builder::build_cwbvh_from_tris;
+use obvhs::ray::{Ray, RayHit};
+use obvhs::triangle::Triangle;
+
+use crate::sampling::uniform_triangle;
+
+/// An indexed triangle soup: positions (m), optional per-vertex normals, and one opaque material
+/// index per triangle.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TriangleMesh {
+    /// Vertex positions, metres.
+    pub positions: Vec<Vec3>,
+    /// Per-vertex normals (unit), or empty for flat shading.
+    pub normals: Vec<Vec3>,
+    /// Vertex indices of each triangle; counter-clockwise winding gives the front side.
+    pub indices: Vec<[u32; 3]>,
+    /// Material index of each triangle (same length as `indices`).
+    pub materials: Vec<u32>,
+}
+
+impl TriangleMesh {
+    /// Appends a planar quad split along its 0–2 diagonal into (0,1,2) and (0,2,3).
+    pub fn push_quad(&mut self, v: [Vec3; 4], material: u32) {
+        let base = self.positions.len() as u32;
+        self.positions.extend_from_slice(&v);
+        if !self.normals.is_empty() {
+            let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+            self.normals.extend_from_slice(&[n; 4]);
+        }
+        self.indices.push([base, base + 1, base + 2]);
+        self.indices.push([base, base + 2, base + 3]);
+        self.materials.extend_from_slice(&[material, material]);
+    }
+
+    /// Appends another mesh; its normals are kept only if both meshes have them (otherwise the
+    /// result is flat shaded where normals are missing).
+    pub fn append(&mut self, other: &TriangleMesh) {
+        let base = self.positions.len() as u32;
+        let self_has = !self.normals.is_empty() || self.positions.is_empty();
+        if self_has && !other.normals.is_empty() {
+            self.normals.extend_from_slice(&other.normals);
+        } else if !self.normals.is_empty() {
+            // Mixed: fill the new vertices with zero normals, which mean "use the face normal".
+            self.normals
+                .extend(std::iter::repeat_n(Vec3::ZERO, other.positions.len()));
+        }
+        self.positions.extend_from_slice(&other.positions);
+        self.indices.extend(
+            other
+                .indices
+                .iter()
+                .map(|t| [t[0] + base, t[1] + base, t[2] + base]),
+        );
+        self.materials.extend_from_slice(&other.materials);
+    }
+
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len()
+    }
+}
+
+/// Why a mesh cannot become a [`Geometry`].
+#[derive(Clone, Debug, PartialEq)]
+pub enum GeometryError {
+    /// A position is NaN or infinite.
+    NonFinitePosition {
+        /// Index of the offending vertex.
+        vertex: usize,
+    },
+    /// A triangle refers to a vertex that does not exist.
+    IndexOutOfRange {
+        /// Index of the offending triangle.
+        triangle: usize,
+        /// The vertex index it names.
+        index: u32,
+    },
+    /// `materials` and `indices` have different lengths.
+    MaterialCount {
+        /// Number of triangles.
+        triangles: usize,
+        /// Number of material indices.
+        materials: usize,
+    },
+    /// Normals are present but not one per vertex.
+    NormalCount {
+        /// Number of vertices.
+        vertices: usize,
+        /// Number of normals.
+        normals: usize,
+    },
+    /// No triangle with positive area is left.
+    Empty,
+}
+
+impl fmt::Display for GeometryError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::NonFinitePosition { vertex } => {
+                write!(f, "vertex {vertex} has a NaN or infinite position")
+            }
+            Self::IndexOutOfRange { triangle, index } => {
+                write!(
+                    f,
+                    "triangle {triangle} refers to vertex {index}, which does not exist"
+                )
+            }
+            Self::MaterialCount {
+                triangles,
+                materials,
+            } => write!(
+                f,
+                "{triangles} triangles but {materials} material indices (need one per triangle)"
+            ),
+            Self::NormalCount { vertices, normals } => {
+                write!(
+                    f,
+                    "{vertices} vertices but {normals} normals (need one per vertex or none)"
+                )
+            }
+            Self::Empty => write!(f, "the scene has no triangle with positive area"),
+        }
+    }
+}
+
+impl std::error::Error for GeometryError {}
+
+/// One triangle as stored for shading: its vertices, unit geometric normal, area and material.
+#[derive(Clone, Copy, Debug)]
+struct Tri {
+    v: [Vec3; 3],
+    n: [Vec3; 3],
+    ng: Vec3,
+    area: f32,
+    material: u32,
+    smooth: bool,
+}
+
+/// A surface point found by a ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Ray parameter (distance along a unit direction), metres.
+    pub t: f32,
+    /// Position, metres (interpolated from the vertices, not `o + t·d`, for precision).
+    pub p: Vec3,
+    /// Unit geometric normal of the triangle (front side by winding).
+    pub ng: Vec3,
+    /// Unit shading normal (interpolated vertex normals, on the same side as `ng`), or `ng`.
+    pub ns: Vec3,
+    /// Barycentric coordinates (b1, b2) of the hit; v0's weight is 1 − b1 − b2.
+    pub uv: Vec2,
+    /// Index of the triangle in the original mesh (degenerate triangles keep their index).
+    pub prim: u32,
+    /// Material index of the triangle.
+    pub material: u32,
+}
+
+/// A point sampled on the scene's surfaces.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceSample {
+    /// Position, metres.
+    pub p: Vec3,
+    /// Unit geometric normal.
+    pub ng: Vec3,
+    /// Triangle index in the original mesh.
+    pub prim: u32,
+    /// Area density of the sample, m⁻².
+    pub pdf_area: f32,
+}
+
+/// A mesh with its BVH: closest-hit and occlusion queries, areas and surface sampling.
+///
+/// Triangles whose area is zero (or below 1e-20 m²) are kept out of the BVH and counted in
+/// [`Geometry::degenerate_count`].
+pub struct Geometry {
+    tris: Vec<Tri>,
+    /// Triangles in BVH leaf order, so leaf index → intersector without indirection.
+    rt: Vec<LeafTri>,
+    /// Leaf index → original triangle index.
+    leaf_to_prim: Vec<u32>,
+    bvh: CwBvh,
+    area_cdf: Vec<f64>,
+    total_area: f64,
+    degenerate: usize,
+    bounds: (Vec3, Vec3),
+}
+
+impl fmt::Debug for Geometry {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Geometry")
+            .field("triangles", &self.tris.len())
+            .field("degenerate", &self.degenerate)
+            .field("total_area", &self.total_area)
+            .finish()
+    }
+}
+
+const MIN_AREA: f32 = 1e-20;
+
+/// A triangle laid out for the ray test: one vertex and two edges.
+#[derive(Clone, Copy, Debug)]
+struct LeafTri {
+    v0: Vec3A,
+    e1: Vec3A,
+    e2: Vec3A,
+}
+
+impl LeafTri {
+    fn new(v: [Vec3; 3]) -> LeafTri {
+        let v0 = Vec3A::from(v[0]);
+        LeafTri {
+            v0,
+            e1: Vec3A::from(v[1]) - v0,
+            e2: Vec3A::from(v[2]) - v0,
+        }
+    }
+
+    /// Möller–Trumbore; the distance `t` in units of |d|, or +∞ for a miss. Barycentrics are
+    /// compared with `>=`, so a ray through a shared edge (a quad's diagonal) hits: obvhs's own
+    /// test rejects −0.0 there and lets such rays leak through closed meshes.
+    #[inline(always)]
+    fn intersect(&self, ray: &Ray) -> f32 {
+        let p = ray.direction.cross(self.e2);
+        let det = self.e1.dot(p);
+        if det == 0.0 {
+            return f32::INFINITY;
+        }
+        let inv = 1.0 / det;
+        let s = ray.origin - self.v0;
+        let u = s.dot(p) * inv;
+        let q = s.cross(self.e1);
+        let v = ray.direction.dot(q) * inv;
+        if !(u >= 0.0 && v >= 0.0 && u + v <= 1.0) {
+            return f32::INFINITY;
+        }
+        let t = self.e2.dot(q) * inv;
+        if t > ray.tmin && t < ray.tmax {
+            t
+        } else {
+            f32::INFINITY
+        }
+    }
+
+    /// Barycentrics (b1, b2) of the point where the line o + t·d meets the triangle's plane.
+    #[inline]
+    fn barycentric(&self, o: Vec3, d: Vec3) -> Vec2 {
+        let d = Vec3A::from(d);
+        let p = d.cross(self.e2);
+        let inv = 1.0 / self.e1.dot(p);
+        let s = Vec3A::from(o) - self.v0;
+        let q = s.cross(self.e1);
+        Vec2::new(s.dot(p) * inv, d.dot(q) * inv)
+    }
+}
+
+/// The distance by which ray origins are pushed off a surface along its normal, metres:
+/// larger than f32 rounding at the point's magnitude, small against the merge radius.
+#[inline]
+pub fn spawn_offset(p: Vec3) -> f32 {
+    1e-5 * p.abs().max_element().max(1.0)
+}
+
+impl Geometry {
+    /// Validates the mesh and builds the BVH.
+    pub fn new(mesh: TriangleMesh) -> Result<Geometry, GeometryError> {
+        if mesh.materials.len() != mesh.indices.len() {
+            return Err(GeometryError::MaterialCount {
+                triangles: mesh.indices.len(),
+                materials: mesh.materials.len(),
+            });
+        }
+        if !mesh.normals.is_empty() && mesh.normals.len() != mesh.positions.len() {
+            return Err(GeometryError::NormalCount {
+                vertices: mesh.positions.len(),
+                normals: mesh.normals.len(),
+            });
+        }
+        if let Some(vertex) = mesh.positions.iter().position(|p| !p.is_finite()) {
+            return Err(GeometryError::NonFinitePosition { vertex });
+        }
+        let mut tris = Vec::with_capacity(mesh.indices.len());
+        let mut degenerate = 0;
+        let mut bounds = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for (i, idx) in mesh.indices.iter().enumerate() {
+            for &k in idx {
+                if k as usize >= mesh.positions.len() {
+                    return Err(GeometryError::IndexOutOfRange {
+                        triangle: i,
+                        index: k,
+                    });
+                }
+            }
+            let v = idx.map(|k| mesh.positions[k as usize]);
+            let cross = (v[1] - v[0]).cross(v[2] - v[0]);
+            let area = 0.5 * cross.length();
+            let ng = cross.normalize_or_zero();
+            let valid = area.is_finite() && area > MIN_AREA && ng != Vec3::ZERO;
+            if !valid {
+                degenerate += 1;
+            } else {
+                for p in v {
+                    bounds.0 = bounds.0.min(p);
+                    bounds.1 = bounds.1.max(p);
+                }
+            }
+            // Vertex normals: zero or non-finite ones mean "flat"; orient each with ng.
+            let mut n = [ng; 3];
+            let mut smooth = false;
+            if !mesh.normals.is_empty() {
+                let raw = idx.map(|k| mesh.normals[k as usize]);
+                if raw
+                    .iter()
+                    .all(|m| m.is_finite() && m.length_squared() > 1e-12)
+                {
+                    n = raw.map(|m| m.normalize());
+                    smooth = true;
+                }
+            }
+            tris.push(Tri {
+                v,
+                n,
+                ng,
+                area: if valid { area } else { 0.0 },
+                material: mesh.materials[i],
+                smooth,
+            });
+        }
+        let live: Vec<u32> = (0..tris.len() as u32)
+            .filter(|&i| tris[i as usize].area > 0.0)
+            .collect();
+        if live.is_empty() {
+            return Err(GeometryError::Empty);
+        }
+        let obvhs_tris: Vec<Triangle> = live
+            .iter()
+            .map(|&i| {
+                let v = tris[i as usize].v;
+                Triangle {
+                    v0: v[0].into(),
+                    v1: v[1].into(),
+                    v2: v[2].into(),
+                }
+            })
+            .collect();
+        let bvh = build_cwbvh_from_tris(
+            &obvhs_tris,
+            BvhBuildParams::medium_build(),
+            &mut Duration::default(),
+        );
+        let leaf_to_prim: Vec<u32> = bvh
+            .primitive_indices
+            .iter()
+            .map(|&j| live[j as usize])
+            .collect();
+        let rt = bvh
+            .primitive_indices
+            .iter()
+            .map(|&j| LeafTri::new(tris[live[j as usize] as usize].v))
+            .collect();
+        let mut area_cdf = Vec::with_capacity(tris.len());
+        let mut acc = 0.0f64;
+        for t in &tris {
+            acc += t.area as f64;
+            area_cdf.push(acc);
+        }
+        Ok(Geometry {
+            tris,
+            rt,
+            leaf_to_prim,
+            bvh,
+            area_cdf,
+            total_area: acc,
+            degenerate,
+            bounds,
+        })
+    }
+
+    /// The closest surface along the ray `origin + t·dir`, `0 < t < tmax` (dir need not be unit;
+    /// `t` is then in units of |dir|).
+    #[inline]
+    pub fn intersect(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
+        let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, tmax);
+        let mut hit = RayHit::none();
+        if !self
+            .bvh
+            .ray_traverse(ray, &mut hit, |r, id| self.rt[id].intersect(r))
+        {
+            return None;
+        }
+        let leaf = hit.primitive_id as usize;
+        let bary = self.rt[leaf].barycentric(origin, dir);
+        let prim = self.leaf_to_prim[leaf];
+        let tri = &self.tris[prim as usize];
+        let (b1, b2) = (bary.x, bary.y);
+        let b0 = 1.0 - b1 - b2;
+        let p = tri.v[0] * b0 + tri.v[1] * b1 + tri.v[2] * b2;
+        let ns = if tri.smooth {
+            let n = (tri.n[0] * b0 + tri.n[1] * b1 + tri.n[2] * b2).normalize_or_zero();
+            if n == Vec3::ZERO {
+                tri.ng
+            } else if n.dot(tri.ng) < 0.0 {
+                -n
+            } else {
+                n
+            }
+        } else {
+            tri.ng
+        };
+        Some(Hit {
+            t: hit.t,
+            p,
+            ng: tri.ng,
+            ns,
+            uv: Vec2::new(b1, b2),
+            prim,
+            material: tri.material,
+        })
+    }
+
+    /// True if any surface lies on the open segment from `from` to `to`. The caller offsets
+    /// `from` off its surface (see [`spawn_offset`]); `to` is typically a point light.
+    #[inline]
+    pub fn occluded(&self, from: Vec3, to: Vec3) -> bool {
+        let d = to - from;
+        // Stop just short of `to` so that a light on a surface is not shadowed by that surface.
+        let ray = Ray::new(Vec3A::from(from), Vec3A::from(d), 0.0, 1.0 - 1e-5);
+        !self
+            .bvh
+            .ray_traverse_miss(ray, |r, id| self.rt[id].intersect(r))
+    }
+
+    /// Number of triangles in the original mesh (degenerate ones included).
+    pub fn triangle_count(&self) -> usize {
+        self.tris.len()
+    }
+
+    /// Number of zero-area triangles that were left out of the BVH.
+    pub fn degenerate_count(&self) -> usize {
+        self.degenerate
+    }
+
+    /// Area of triangle `prim`, m² (0 for a degenerate one).
+    pub fn area(&self, prim: u32) -> f32 {
+        self.tris[prim as usize].area
+    }
+
+    /// Unit geometric normal of triangle `prim`.
+    pub fn normal(&self, prim: u32) -> Vec3 {
+        self.tris[prim as usize].ng
+    }
+
+    /// Vertices of triangle `prim`, metres.
+    pub fn vertices(&self, prim: u32) -> [Vec3; 3] {
+        self.tris[prim as usize].v
+    }
+
+    /// Material index of triangle `prim`.
+    pub fn material(&self, prim: u32) -> u32 {
+        self.tris[prim as usize].material
+    }
+
+    /// Total surface area, m².
+    pub fn total_area(&self) -> f64 {
+        self.total_area
+    }
+
+    /// Axis-aligned bounds (min, max) of the non-degenerate triangles, metres.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.bounds
+    }
+
+    /// A point distributed uniformly by area over all surfaces.
+    pub fn sample_surface(&self, u: [f32; 3]) -> SurfaceSample {
+        let target = (u[0] as f64) * self.total_area;
+        let prim = self
+            .area_cdf
+            .partition_point(|&c| c <= target)
+            .min(self.tris.len() - 1);
+        let tri = &self.tris[prim];
+        let (b1, b2) = uniform_triangle([u[1], u[2]]);
+        let p = tri.v[0] * (1.0 - b1 - b2) + tri.v[1] * b1 + tri.v[2] * b2;
+        SurfaceSample {
+            p,
+            ng: tri.ng,
+            prim: prim as u32,
+            pdf_area: (1.0 / self.total_area) as f32,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Domain, Rng};
+
+    fn unit_box() -> TriangleMesh {
+        let mut m = TriangleMesh::default();
+        let c = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+        // Six inward-facing faces of [0,1]³ with material = face index.
+        let faces = [
+            [c(0., 0., 0.), c(1., 0., 0.), c(1., 0., 1.), c(0., 0., 1.)],
+            [c(0., 1., 0.), c(0., 1., 1.), c(1., 1., 1.), c(1., 1., 0.)],
+            [c(0., 0., 0.), c(0., 0., 1.), c(0., 1., 1.), c(0., 1., 0.)],
+            [c(1., 0., 0.), c(1., 1., 0.), c(1., 1., 1.), c(1., 0., 1.)],
+            [c(0., 0., 0.), c(0., 1., 0.), c(1., 1., 0.), c(1., 0., 0.)],
+            [c(0., 0., 1.), c(1., 0., 1.), c(1., 1., 1.), c(0., 1., 1.)],
+        ];
+        for (i, f) in faces.into_iter().enumerate() {
+            m.push_quad(f, i as u32);
+        }
+        m
+    }
+
+    /// Brute-force closest hit over all triangles (Möller–Trumbore in f64).
+    fn brute(mesh: &TriangleMesh, o: Vec3, d: Vec3) -> Option<(f64, usize)> {
+        let (o, d) = (o.as_dvec3(), d.as_dvec3());
+        let mut best: Option<(f64, usize)> = None;
+        for (i, idx) in mesh.indices.iter().enumerate() {
+            let v = idx.map(|k| mesh.positions[k as usize].as_dvec3());
+            let (e1, e2) = (v[1] - v[0], v[2] - v[0]);
+            let p = d.cross(e2);
+            let det = e1.dot(p);
+            if det.abs() < 1e-14 {
+                continue;
+            }
+            let s = o - v[0];
+            let u = s.dot(p) / det;
+            let q = s.cross(e1);
+            let w = d.dot(q) / det;
+            let t = e2.dot(q) / det;
+            if u >= 0.0 && w >= 0.0 && u + w <= 1.0 && t > 0.0 && best.is_none_or(|b| t < b.0) {
+                best = Some((t, i));
+            }
+        }
+        best
+    }
+
+    #[test]
+    fn closest_hit_matches_brute_force_inside_a_box() {
+        let mesh = unit_box();
+        let g = Geometry::new(mesh.clone()).unwrap();
+        let mut rng = Rng::new(11, Domain::Other, [0; 3]);
+        let mut checked = 0;
+        for _ in 0..20_000 {
+            let o = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 0.9 + 0.05;
+            let d = crate::sampling::uniform_sphere(rng.uniform2());
+            let h = g
+                .intersect(o, d, f32::INFINITY)
+                .expect("closed box: every ray hits");
+            let (t, i) = brute(&mesh, o, d).unwrap();
+            assert!((h.t as f64 - t).abs() < 1e-4, "t {} vs {}", h.t, t);
+            // On the shared diagonal either triangle of a face is right; the material is the face.
+            assert_eq!(h.material, mesh.materials[i]);
+            assert!((h.p - (o + d * h.t)).length() < 1e-4);
+            checked += 1;
+        }
+        assert_eq!(checked, 20_000);
+    }
+
+    #[test]
+    fn rays_through_a_shared_diagonal_hit() {
+        let mut m = TriangleMesh::default();
+        m.push_quad(
+            [
+                Vec3::new(1., 0., 0.),
+                Vec3::new(1., 1., 0.),
+                Vec3::new(1., 1., 1.),
+                Vec3::new(1., 0., 1.),
+            ],
+            0,
+        );
+        let g = Geometry::new(m).unwrap();
+        // (1, ½, ½) lies on the 0–2 diagonal, where obvhs's own test leaks.
+        let a = Vec3::splat(0.5);
+        assert_eq!(g.intersect(a, Vec3::X, 10.0).map(|h| h.t), Some(0.5));
+        assert!(g.occluded(a, Vec3::new(1.5, 0.5, 0.5)));
+    }
+
+    #[test]
+    fn occlusion_and_offsets() {
+        let g = Geometry::new(unit_box()).unwrap();
+        let a = Vec3::new(0.5, 0.5, 0.5);
+        assert!(!g.occluded(a, Vec3::new(0.9, 0.9, 0.9)));
+        assert!(g.occluded(a, Vec3::new(1.5, 0.5, 0.5)));
+        // A light 1e-4 m from the floor is visible from a floor point beside it.
+        let floor = Vec3::new(0.3, 0.0, 0.3);
+        let origin = floor + Vec3::Y * spawn_offset(floor);
+        assert!(!g.occluded(origin, Vec3::new(0.3, 1e-4, 0.3 + 1e-3)));
+    }
+
+    #[test]
+    fn areas_sampling_and_degenerate_triangles() {
+        let mut mesh = unit_box();
+        // A zero-area triangle is skipped and counted, not an error.
+        let base = mesh.positions.len() as u32;
+        mesh.positions.extend([Vec3::ZERO, Vec3::X, Vec3::X * 2.0]);
+        mesh.indices.push([base, base + 1, base + 2]);
+        mesh.materials.push(9);
+        let g = Geometry::new(mesh).unwrap();
+        assert_eq!(g.degenerate_count(), 1);
+        assert!((g.total_area() - 6.0).abs() < 1e-5);
+        let mut rng = Rng::new(5, Domain::Other, [0; 3]);
+        let mut counts = [0usize; 7];
+        let n = 60_000;
+        for _ in 0..n {
+            let s = g.sample_surface(rng.uniform3());
+            assert!(g.area(s.prim) > 0.0);
+            counts[g.material(s.prim) as usize] += 1;
+            assert!((s.pdf_area - 1.0 / 6.0).abs() < 1e-6);
+        }
+        // Each face has probability 1/6: binomial SE = sqrt(n·p·(1−p)) ≈ 91; allow 5 SE.
+        for c in &counts[..6] {
+            assert!(
+                (*c as f64 - n as f64 / 6.0).abs() < 5.0 * 91.3,
+                "{counts:?}"
+            );
+        }
+        assert_eq!(counts[6], 0);
+    }
+
+    #[test]
+    fn bad_meshes_are_errors() {
+        let mut m = unit_box();
+        m.positions[3] = Vec3::new(f32::NAN, 0.0, 0.0);
+        assert_eq!(
+            Geometry::new(m).unwrap_err(),
+            GeometryError::NonFinitePosition { vertex: 3 }
+        );
+        let mut m = unit_box();
+        m.indices[2][1] = 999;
+        assert!(matches!(
+            Geometry::new(m).unwrap_err(),
+            GeometryError::IndexOutOfRange {
+                triangle: 2,
+                index: 999
+            }
+        ));
+        assert_eq!(
+            Geometry::new(TriangleMesh::default()).unwrap_err(),
+            GeometryError::Empty
+        );
+    }
+
+    #[test]
+    fn shading_normals_interpolate_and_face_the_geometric_side() {
+        let mut m = TriangleMesh::default();
+        m.positions = vec![Vec3::ZERO, Vec3::X, Vec3::Z];
+        // Vertex normals point to −y, opposite to the winding's +y: they are flipped.
+        m.normals = vec![
+            Vec3::new(0.0, -1.0, 0.2).normalize(),
+            Vec3::NEG_Y,
+            Vec3::NEG_Y,
+        ];
+        m.indices = vec![[0, 2, 1]];
+        m.materials = vec![0];
+        let g = Geometry::new(m).unwrap();
+        let h = g
+            .intersect(Vec3::new(0.1, 1.0, 0.1), Vec3::NEG_Y, 10.0)
+            .unwrap();
+        assert!((h.ng - Vec3::Y).length() < 1e-6);
+        assert!(h.ns.dot(h.ng) > 0.9 && (h.ns.length() - 1.0).abs() < 1e-5);
+    }
+}
