@@ -649,16 +649,17 @@ mod tests {
 
     #[test]
     fn shading_normals_interpolate_and_face_the_geometric_side() {
-        let mut m = TriangleMesh::default();
-        m.positions = vec![Vec3::ZERO, Vec3::X, Vec3::Z];
         // Vertex normals point to −y, opposite to the winding's +y: they are flipped.
-        m.normals = vec![
-            Vec3::new(0.0, -1.0, 0.2).normalize(),
-            Vec3::NEG_Y,
-            Vec3::NEG_Y,
-        ];
-        m.indices = vec![[0, 2, 1]];
-        m.materials = vec![0];
+        let m = TriangleMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Z],
+            normals: vec![
+                Vec3::new(0.0, -1.0, 0.2).normalize(),
+                Vec3::NEG_Y,
+                Vec3::NEG_Y,
+            ],
+            indices: vec![[0, 2, 1]],
+            materials: vec![0],
+        };
         let g = Geometry::new(m).unwrap();
         let h = g
             .intersect(Vec3::new(0.1, 1.0, 0.1), Vec3::NEG_Y, 10.0)
