@@ -1,0 +1,95 @@
+use std::fmt;
+
+use bdpm_mis::Heuristic;
+
+/// What a render computes: the unidirectional reference, or the BDPM mix with a weight mode.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Mode {
+    /// Unidirectional path tracing with next-event estimation (the reference).
+    Path,
+    /// The BDD=0/BDD=1 photon-mapping mix weighted by a heuristic.
+    Bdpm(Heuristic),
+}
+
+impl Mode {
+    /// Every mode name the parser accepts, `path` first.
+    pub fn names() -> Vec<&'static str> {
+        std::iter::once("path").chain(Heuristic::ALL_NAMES.iter().copied()).collect()
+    }
+
+    /// Parses a mode name (`path`, `bdd0`, `bdd1`, `threshold`, …).
+    pub fn parse(name: &str) -> Option<Mode> {
+        if name == "path" { Some(Mode::Path) } else { Heuristic::parse(name).map(Mode::Bdpm) }
+    }
+
+    /// The mode's name as [`Mode::parse`] accepts it.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Mode::Path => "path",
+            Mode::Bdpm(h) => h.name(),
+        }
+    }
+}
+
+impl fmt::Display for Mode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Everything a render needs besides the scene. Defaults live in [`RenderSettings::default`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderSettings {
+    /// Image width, pixels.
+    pub width: u32,
+    /// Image height, pixels.
+    pub height: u32,
+    /// Number of passes K (each with a new photon map and new camera samples).
+    pub passes: u32,
+    /// Photons emitted per pass, N_F.
+    pub photons: u64,
+    /// Camera samples per pixel per pass, N_B.
+    pub spp: u32,
+    /// Merge (gather) radius r, metres; `None` = the scene's largest extent / 1600.
+    pub radius: Option<f32>,
+    /// Master seed of every random stream.
+    pub seed: u64,
+    /// Integrator and weight mode.
+    pub mode: Mode,
+    /// Radius R of the threshold rule (eq. 11), metres.
+    pub threshold_radius: f32,
+    /// Angular bins K per radiance-cache cell (one bin is used for Lambert-only scenes).
+    pub cache_bins: u32,
+    /// Backward rays per pixel of the A/B pre-pass, N.
+    pub pixel_table_rays: u32,
+    /// Clamp optimal weights to [0, 1] (the mix stays unbiased either way).
+    pub clamp_weights: bool,
+    /// Path-tracing depth after which Russian roulette starts.
+    pub roulette_depth: u32,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            width: 256,
+            height: 256,
+            passes: 4,
+            photons: 100_000,
+            spp: 4,
+            radius: None,
+            seed: 1,
+            mode: Mode::Path,
+            threshold_radius: 0.2,
+            cache_bins: 100,
+            pixel_table_rays: 64,
+            clamp_weights: false,
+            roulette_depth: 3,
+        }
+    }
+}
+
+/// Default merge radius for a scene whose bounding box has largest extent `extent` (metres):
+/// extent / 1600, as the preprint's Cornell box uses.
+pub fn default_radius(extent: f32) -> f32 {
+    extent / 1600.0
+}

@@ -1,0 +1,132 @@
+use glam::Vec3;
+
+use crate::SceneError;
+
+/// A pinhole camera with a square-pixel image plane; image row 0 is the top.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Pinhole position, metres.
+    pub position: Vec3,
+    /// Unit viewing direction.
+    pub forward: Vec3,
+    /// Unit image-right direction (`forward × up`).
+    pub right: Vec3,
+    /// Unit image-up direction.
+    pub up: Vec3,
+    /// Vertical field of view, degrees.
+    pub vfov_degrees: f32,
+    /// Image width, pixels.
+    pub width: u32,
+    /// Image height, pixels.
+    pub height: u32,
+    tan_half: f32,
+}
+
+impl Camera {
+    /// A camera at `eye` looking at `target`, with `up` as the approximate image-up direction,
+    /// a vertical field of view in degrees, and an image of `width` × `height` pixels.
+    pub fn look_at(
+        eye: Vec3,
+        target: Vec3,
+        up: Vec3,
+        vfov_degrees: f32,
+        width: u32,
+        height: u32,
+    ) -> Result<Camera, SceneError> {
+        if !(eye.is_finite() && target.is_finite() && up.is_finite()) {
+            return Err(SceneError::BadCamera("position, target and up must be finite"));
+        }
+        let forward = (target - eye).normalize_or_zero();
+        if forward == Vec3::ZERO {
+            return Err(SceneError::BadCamera("target equals position"));
+        }
+        let right = forward.cross(up).normalize_or_zero();
+        if right == Vec3::ZERO {
+            return Err(SceneError::BadCamera("up is parallel to the viewing direction"));
+        }
+        if !(vfov_degrees > 0.0 && vfov_degrees < 179.0) {
+            return Err(SceneError::BadCamera("vertical fov must be in (0, 179) degrees"));
+        }
+        if width == 0 || height == 0 {
+            return Err(SceneError::BadCamera("resolution must be at least 1×1"));
+        }
+        let up = right.cross(forward);
+        Ok(Camera {
+            position: eye,
+            forward,
+            right,
+            up,
+            vfov_degrees,
+            width,
+            height,
+            tan_half: (vfov_degrees.to_radians() * 0.5).tan(),
+        })
+    }
+
+    /// The same camera with another image size (the field of view stays vertical).
+    pub fn with_resolution(&self, width: u32, height: u32) -> Result<Camera, SceneError> {
+        Camera::look_at(
+            self.position,
+            self.position + self.forward,
+            self.up,
+            self.vfov_degrees,
+            width,
+            height,
+        )
+    }
+
+    /// Unit direction of the ray through image point (x, y) in pixels from the top-left corner
+    /// (pixel (i, j) covers [i, i+1) × [j, j+1)).
+    #[inline]
+    pub fn ray_direction(&self, x: f32, y: f32) -> Vec3 {
+        let aspect = self.width as f32 / self.height as f32;
+        let sx = (2.0 * x / self.width as f32 - 1.0) * self.tan_half * aspect;
+        let sy = (1.0 - 2.0 * y / self.height as f32) * self.tan_half;
+        (self.forward + self.right * sx + self.up * sy).normalize()
+    }
+
+    /// The image point (x, y) in pixels where a world point projects, if it is in front of the
+    /// camera and inside the image.
+    pub fn project(&self, p: Vec3) -> Option<(f32, f32)> {
+        let d = p - self.position;
+        let z = d.dot(self.forward);
+        if z <= 0.0 {
+            return None;
+        }
+        let aspect = self.width as f32 / self.height as f32;
+        let sx = d.dot(self.right) / (z * self.tan_half * aspect);
+        let sy = d.dot(self.up) / (z * self.tan_half);
+        let x = (sx + 1.0) * 0.5 * self.width as f32;
+        let y = (1.0 - sy) * 0.5 * self.height as f32;
+        let inside = (0.0..self.width as f32).contains(&x) && (0.0..self.height as f32).contains(&y);
+        inside.then_some((x, y))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cornell_view_is_not_mirrored_and_projection_inverts_rays() {
+        // Looking along +z with +y up, +x is on the image's left (right-handed world).
+        let c = Camera::look_at(Vec3::new(0.0, 0.0, -4.0), Vec3::ZERO, Vec3::Y, 40.0, 200, 100)
+            .unwrap();
+        let (x, _) = c.project(Vec3::new(0.5, 0.0, 0.0)).unwrap();
+        assert!(x < 100.0);
+        let (_, y) = c.project(Vec3::new(0.0, 0.5, 0.0)).unwrap();
+        assert!(y < 50.0, "up is the top of the image");
+        let d = c.ray_direction(37.25, 81.5);
+        let (x, y) = c.project(c.position + d * 3.0).unwrap();
+        assert!((x - 37.25).abs() < 1e-3 && (y - 81.5).abs() < 1e-3);
+        assert!((c.ray_direction(100.0, 50.0) - c.forward).length() < 1e-6);
+    }
+
+    #[test]
+    fn bad_cameras_are_rejected() {
+        assert!(Camera::look_at(Vec3::ZERO, Vec3::ZERO, Vec3::Y, 40.0, 4, 4).is_err());
+        assert!(Camera::look_at(Vec3::ZERO, Vec3::Y, Vec3::Y, 40.0, 4, 4).is_err());
+        assert!(Camera::look_at(Vec3::ZERO, Vec3::Z, Vec3::Y, 0.0, 4, 4).is_err());
+        assert!(Camera::look_at(Vec3::ZERO, Vec3::Z, Vec3::Y, 40.0, 0, 4).is_err());
+    }
+}
