@@ -1,1 +1,520 @@
-//! placeholder
+//! MIS weights that mix the two photon-mapping strategies BDD=0 and BDD=1.
+//!
+//! This crate owns the weight functions of `method.md` §4 (eq. 8–11: `bdd0`, `bdd1`,
+//! `threshold`, `algebraic-direct`, `algebraic`, `optimal`) and §8 (the peers'
+//! `balance` and `power` heuristics on path densities). Every mode is a variant of one
+//! [`Heuristic`] enum; [`Heuristic::weight`] returns the weight w₁ of BDD=1 (the camera
+//! path continues to x₁ and merges photons there) for one pair (x₀, x₁). The weight of
+//! BDD=0 is w₀ = 1 − w₁ exactly ([`Weight::w0`]), which keeps the mix unbiased for any
+//! weight function.
+//!
+//! **Architecture invariant:** this crate depends on nothing, not even a vector library.
+//! It knows nothing about rays, BVHs, photons or caches; it sees only the scalars of
+//! `method.md` §4 and §8 (f̃, L₀, L_d, b, κ, A, B, path densities), so any renderer can
+//! call it. Where a renderer has RGB quantities it passes their luminances.
+//!
+//! **Numerics:** every weight is a pure function and never panics. For finite
+//! non-negative inputs (radiance from 1e-30 to 1e30, N_B and N_F from 1, S from tiny to
+//! huge, f̃ from 0) every output is finite: divisions are guarded (L = 0, f̃ = 0,
+//! 1 − c·B ≤ ε, zero densities) and intermediate products saturate at `f64::MAX` instead
+//! of overflowing. NaN or negative scalar inputs are treated as 0.
+//!
+//! **Units:** radiance in W·m⁻²·sr⁻¹, f̃ in sr⁻¹, merge area S in m², flux Φ in W,
+//! area-measure densities in m⁻², distances in m. κ(L) = S·L·N_F/Φ is the photon count
+//! of method.md §1 (formally per steradian, like N_B f̃ which it is added to); c·B and
+//! the weights are dimensionless.
+//!
+//! # Example
+//!
+//! The algebraic weight (eq. 10) at a Lambert x₀ is 1/(1 + π κ(L)/N_B):
+//!
+//! ```
+//! use bdpm_mis::{Budget, Heuristic, Pair};
+//! use std::f64::consts::PI;
+//!
+//! let budget = Budget { camera_samples: 30.0, photons: 1e6, merge_area: 1e-5, flux: 1.0 };
+//! let pair = Pair { f_tilde: 1.0 / PI, direct: 2.0, indirect: 0.5, ..Pair::default() };
+//! let heuristic = Heuristic::parse("algebraic").unwrap();
+//! assert!(heuristic.needs().radiance_cache);
+//!
+//! let w = heuristic.weight(&budget, &pair, None);
+//! let expected = 1.0 / (1.0 + PI * budget.kappa(2.5) / 30.0);
+//! assert!((w.w1 - expected).abs() < 1e-12);
+//! assert_eq!(w.w0() + w.w1, 1.0);
+//! ```
+
+use std::fmt;
+
+/// The per-pass budget and merge settings shared by every weight of one render.
+///
+/// Preconditions: `camera_samples ≥ 1`, `photons ≥ 1`, `merge_area ≥ 0`, `flux > 0`.
+/// Values outside them give finite (if meaningless) weights, never NaN.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Budget {
+    /// N_B, camera samples per pixel per pass (≥ 1).
+    pub camera_samples: f64,
+    /// N_F, photons emitted per pass (≥ 1).
+    pub photons: f64,
+    /// S = π r², the merge (gather) disk area, m².
+    pub merge_area: f64,
+    /// Φ, total emitted flux (luminance), W.
+    pub flux: f64,
+}
+
+impl Budget {
+    /// κ(L) = S·L·N_F/Φ, the photon count of method.md §1 for radiance `radiance`
+    /// (W·m⁻²·sr⁻¹): photons per pass in one merge disk, per steradian of arrival
+    /// direction. Zero when L = 0 or S = 0; saturates at `f64::MAX`.
+    pub fn kappa(&self, radiance: f64) -> f64 {
+        mul(self.photon_density_factor(), nonneg(radiance))
+    }
+
+    /// c = (1 − 1/N_F)·S·N_F/(Φ·N_B), the correlation coefficient of method.md §4, in
+    /// W⁻¹·m²; c·B is dimensionless. Zero when N_F = 1 (no photon is reused).
+    pub fn c(&self) -> f64 {
+        let n_b = nonneg(self.camera_samples);
+        let c_n_b = self.correlation_factor();
+        if c_n_b == 0.0 { 0.0 } else { sat(c_n_b / n_b) }
+    }
+
+    /// S·N_F/Φ (W⁻¹·m²), the factor of κ(L) = (S·N_F/Φ)·L.
+    fn photon_density_factor(&self) -> f64 {
+        ratio_sat(
+            mul(nonneg(self.merge_area), nonneg(self.photons)),
+            self.flux,
+        )
+    }
+
+    /// N_B·c = (N_F − 1)·S/Φ (W⁻¹·m²), the factor of c·G̃ in the numerator of eq. 8.
+    fn correlation_factor(&self) -> f64 {
+        // (1 − 1/N_F)·N_F = N_F − 1, written so that N_F = 1 gives exactly 0.
+        let reused = nonneg(self.photons - 1.0);
+        ratio_sat(mul(nonneg(self.merge_area), reused), self.flux)
+    }
+}
+
+/// Which quantities a mode needs, so the integrator computes only those (method.md §7).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Needs {
+    /// Gather photons at x₀ (false only for `bdd1`).
+    pub photons_at_x0: bool,
+    /// Trace the camera path's second vertex x₁ (false only for `bdd0`).
+    pub second_vertex: bool,
+    /// L₀(x₁→x₀) is needed by the weight itself (shadow rays from x₁).
+    pub direct_at_x1: bool,
+    /// L_d(x₁→x₀) from the directional radiance cache is needed (method.md §5).
+    pub radiance_cache: bool,
+    /// b(x₁→x₀) from the cache is needed (`optimal` only).
+    pub cache_b: bool,
+    /// The per-pixel A, B table of method.md §6 is needed (`optimal` only).
+    pub pixel_table: bool,
+    /// Path densities p_C, p_L are needed (`balance`, `power`).
+    pub densities: bool,
+}
+
+/// What the weight of one (x₀, x₁) pair may depend on.
+///
+/// The integrator fills what [`Heuristic::needs`] asks for; the rest may be 0.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Pair {
+    /// f̃(v, u; x₀) = f/µ at x₀ for v = x₀→x₁ and u towards the camera, sr⁻¹
+    /// (Lambert: 1/π).
+    pub f_tilde: f64,
+    /// L₀(x₁→x₀), radiance leaving x₁ towards x₀ due to direct light, W·m⁻²·sr⁻¹.
+    pub direct: f64,
+    /// L_d(x₁→x₀), secondary radiance from the cache, W·m⁻²·sr⁻¹.
+    pub indirect: f64,
+    /// b(x₁→x₀) from the cache, W·m⁻²·sr⁻² (radiance times sr⁻¹).
+    pub b: f64,
+    /// The smallest distance |x₁ − x_LS| over all lights, m (`threshold` only).
+    pub light_distance: f64,
+    /// Which full path this weight is for (`balance`, `power` only).
+    pub path: PathKind,
+    /// p_C(x₀→x₁), area measure, m⁻²; the camera path at x₀ never absorbs.
+    pub camera_density: f64,
+    /// p_L(x₁→x₀), area measure, m⁻², including the photon's Russian roulette at x₁.
+    pub light_density: f64,
+    /// p_L(light→x₁), area measure, m⁻², including the choice of light
+    /// ([`PathKind::OneBounce`] only).
+    pub emission_density: f64,
+}
+
+/// Which full path a density-based weight is for (method.md §8).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PathKind {
+    /// A merge path …x₂→x₁→x₀ (the photon at x₀ has been scattered at least twice).
+    #[default]
+    Merge,
+    /// A one-bounce path light→x₁→x₀ (BDD=1 gets it through L₀(x₁)).
+    OneBounce,
+}
+
+/// The per-pixel integrals A(u, x₀) and B(u, x₀) of method.md §4 and §6.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PixelTerms {
+    /// A = ∫ W₁ f̃ L cos dv, W·m⁻²·sr⁻¹.
+    pub a: f64,
+    /// B = ∫ W₁ L cos dv, W·m⁻²; c·B is dimensionless.
+    pub b: f64,
+}
+
+/// The result of one weight evaluation.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Weight {
+    /// The weight of BDD=1 (dimensionless); the weight of BDD=0 is 1 − w1 exactly.
+    pub w1: f64,
+    /// `optimal`: c·B was clamped to 1 − [`CB_EPSILON`].
+    pub clamped_cb: bool,
+    /// w1 was outside [0, 1] before the optional clamp (only `optimal` can do this).
+    pub outside_unit: bool,
+}
+
+impl Weight {
+    /// The weight of BDD=0, w₀ = 1 − w₁.
+    pub fn w0(&self) -> f64 {
+        1.0 - self.w1
+    }
+
+    /// A weight that needed no guard.
+    fn plain(w1: f64) -> Self {
+        Weight {
+            w1,
+            clamped_cb: false,
+            outside_unit: false,
+        }
+    }
+}
+
+/// The constant ε of the c·B clamp (method.md §4): when 1 − c·B ≤ ε, c·B is taken as
+/// 1 − ε, which caps the amplification 1/(1 − c·B) of A at 1/ε = 1000.
+pub const CB_EPSILON: f64 = 1e-3;
+
+/// The threshold radius R of eq. 11 used by [`Heuristic::parse`], m (the preprint's 20 cm).
+pub const DEFAULT_THRESHOLD_RADIUS: f64 = 0.2;
+
+/// One weighting mode of method.md §4 and §8.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Heuristic {
+    /// w₁ = 0: merge photons at x₀ only.
+    Bdd0,
+    /// w₁ = 1: always continue to x₁ and merge there.
+    Bdd1,
+    /// Eq. 11: w₁ = 1 if x₁ is at least `radius` (m) from every light, else 0.
+    Threshold {
+        /// R, m.
+        radius: f64,
+    },
+    /// Eq. 10 with L = L₀(x₁→x₀) only.
+    AlgebraicDirect,
+    /// Eq. 10 with L = L₀ + L_d.
+    Algebraic,
+    /// Eq. 8–9 in the division-safe form of method.md §4.
+    Optimal {
+        /// Clamp w₁ to [0, 1] (the unclamped weight is unbiased too).
+        clamp_weights: bool,
+    },
+    /// Veach's balance heuristic on path densities (method.md §8).
+    Balance,
+    /// Veach's power heuristic (exponent 2) on path densities (method.md §8).
+    Power,
+}
+
+impl Heuristic {
+    /// Every name [`Heuristic::parse`] accepts, in the order of method.md §4.
+    pub const ALL_NAMES: &'static [&'static str] = &[
+        "bdd0",
+        "bdd1",
+        "threshold",
+        "algebraic-direct",
+        "algebraic",
+        "optimal",
+        "balance",
+        "power",
+    ];
+
+    /// The mode's name as used on the command line and in reports.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Heuristic::Bdd0 => "bdd0",
+            Heuristic::Bdd1 => "bdd1",
+            Heuristic::Threshold { .. } => "threshold",
+            Heuristic::AlgebraicDirect => "algebraic-direct",
+            Heuristic::Algebraic => "algebraic",
+            Heuristic::Optimal { .. } => "optimal",
+            Heuristic::Balance => "balance",
+            Heuristic::Power => "power",
+        }
+    }
+
+    /// The inverse of [`Heuristic::name`]: `threshold` gets [`DEFAULT_THRESHOLD_RADIUS`],
+    /// `optimal` gets no weight clamp. Unknown names give `None`.
+    pub fn parse(name: &str) -> Option<Heuristic> {
+        Some(match name {
+            "bdd0" => Heuristic::Bdd0,
+            "bdd1" => Heuristic::Bdd1,
+            "threshold" => Heuristic::Threshold {
+                radius: DEFAULT_THRESHOLD_RADIUS,
+            },
+            "algebraic-direct" => Heuristic::AlgebraicDirect,
+            "algebraic" => Heuristic::Algebraic,
+            "optimal" => Heuristic::Optimal {
+                clamp_weights: false,
+            },
+            "balance" => Heuristic::Balance,
+            "power" => Heuristic::Power,
+            _ => return None,
+        })
+    }
+
+    /// What the integrator must compute for this mode (method.md §4 table and §7).
+    pub fn needs(&self) -> Needs {
+        // Every mixing mode gathers at x₀ and traces x₁; the pure strategies drop one.
+        let mix = Needs {
+            photons_at_x0: true,
+            second_vertex: true,
+            ..Needs::default()
+        };
+        match self {
+            Heuristic::Bdd0 => Needs {
+                photons_at_x0: true,
+                ..Needs::default()
+            },
+            Heuristic::Bdd1 => Needs {
+                second_vertex: true,
+                ..Needs::default()
+            },
+            // Eq. 11 needs only positions, which the integrator always has.
+            Heuristic::Threshold { .. } => mix,
+            Heuristic::AlgebraicDirect => Needs {
+                direct_at_x1: true,
+                ..mix
+            },
+            Heuristic::Algebraic => Needs {
+                direct_at_x1: true,
+                radiance_cache: true,
+                ..mix
+            },
+            Heuristic::Optimal { .. } => Needs {
+                direct_at_x1: true,
+                radiance_cache: true,
+                cache_b: true,
+                pixel_table: true,
+                ..mix
+            },
+            Heuristic::Balance | Heuristic::Power => Needs {
+                densities: true,
+                ..mix
+            },
+        }
+    }
+
+    /// The weight w₁ of BDD=1 for one pair (x₀, x₁).
+    ///
+    /// `pixel` holds the pixel's A, B (used by `optimal` only; `None` means A = B = 0,
+    /// which reduces eq. 8 to W₁ with the b term). The output is finite for all finite
+    /// non-negative inputs; see the crate docs for the guards.
+    pub fn weight(&self, budget: &Budget, pair: &Pair, pixel: Option<&PixelTerms>) -> Weight {
+        match *self {
+            Heuristic::Bdd0 => Weight::plain(0.0),
+            Heuristic::Bdd1 => Weight::plain(1.0),
+            // method.md §4, eq. 11.
+            Heuristic::Threshold { radius } => Weight::plain(if pair.light_distance >= radius {
+                1.0
+            } else {
+                0.0
+            }),
+            // method.md §4, eq. 10 with L_d dropped.
+            Heuristic::AlgebraicDirect => {
+                Weight::plain(algebraic(budget, pair.f_tilde, pair.direct))
+            }
+            // method.md §4, eq. 10.
+            Heuristic::Algebraic => {
+                Weight::plain(algebraic(budget, pair.f_tilde, total_radiance(pair)))
+            }
+            // method.md §4, eq. 8–9.
+            Heuristic::Optimal { clamp_weights } => optimal(budget, pair, pixel, clamp_weights),
+            // method.md §8.
+            Heuristic::Balance => Weight::plain(density_share(budget, pair, 1)),
+            Heuristic::Power => Weight::plain(density_share(budget, pair, 2)),
+        }
+    }
+}
+
+impl fmt::Display for Heuristic {
+    /// Writes [`Heuristic::name`], with the parameter where it differs from `parse`'s.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Heuristic::Threshold { radius } if radius != DEFAULT_THRESHOLD_RADIUS => {
+                write!(f, "threshold (R = {radius} m)")
+            }
+            Heuristic::Optimal {
+                clamp_weights: true,
+            } => f.write_str("optimal (clamped)"),
+            _ => f.write_str(self.name()),
+        }
+    }
+}
+
+/// W₁ = N_B f̃ / D of method.md §4, with D = N_B f̃ + b/L + κ(L): the per-direction
+/// weight used to accumulate the pixel integrals A and B (method.md §6).
+///
+/// `f_tilde` in sr⁻¹, `radiance` = L(x₁→x₀) = L₀ + L_d in W·m⁻²·sr⁻¹, `b` in
+/// W·m⁻²·sr⁻². Guards: L = 0 takes b/L = 0 (so W₁ = 1 when f̃ > 0); f̃ = 0 gives
+/// W₁ = 0. The result is in [0, 1].
+pub fn w1_partial(budget: &Budget, f_tilde: f64, radiance: f64, b: f64) -> f64 {
+    let terms = OptimalTerms::new(budget, f_tilde, radiance, b);
+    terms.partial()
+}
+
+/// L = L₀ + L_d of one pair, W·m⁻²·sr⁻¹.
+fn total_radiance(pair: &Pair) -> f64 {
+    sat(nonneg(pair.direct) + nonneg(pair.indirect))
+}
+
+/// Eq. 10: w₁ = N_B f̃ / (N_B f̃ + κ(L)).
+///
+/// Evaluated as 1/(1 + κ/(N_B f̃)), which is monotone non-increasing in L even after
+/// rounding. f̃ = 0 gives 0 (also when L = 0, where the ratio is 0/0).
+fn algebraic(budget: &Budget, f_tilde: f64, radiance: f64) -> f64 {
+    let camera = mul(nonneg(budget.camera_samples), nonneg(f_tilde));
+    share(camera, budget.kappa(radiance), 1, 0.0)
+}
+
+/// N_B f̃ and the denominator D of W₁ (method.md §4) for one direction.
+struct OptimalTerms {
+    /// N_B f̃, sr⁻¹.
+    camera: f64,
+    /// D = N_B f̃ + b/L + κ(L), sr⁻¹.
+    denominator: f64,
+}
+
+impl OptimalTerms {
+    fn new(budget: &Budget, f_tilde: f64, radiance: f64, b: f64) -> Self {
+        let radiance = nonneg(radiance);
+        let camera = mul(nonneg(budget.camera_samples), nonneg(f_tilde));
+        // L = 0 means x₁ is unlit, hence b = 0 too: take b/L = 0 (method.md §4 guards).
+        let b_over_l = if radiance == 0.0 {
+            0.0
+        } else {
+            ratio_sat(nonneg(b), radiance)
+        };
+        let denominator = sat(camera + b_over_l + budget.kappa(radiance));
+        OptimalTerms {
+            camera,
+            denominator,
+        }
+    }
+
+    /// W₁ = N_B f̃ / D; 0 when f̃ = 0 (including D = 0).
+    fn partial(&self) -> f64 {
+        if self.camera == 0.0 {
+            0.0
+        } else {
+            self.camera / self.denominator
+        }
+    }
+}
+
+/// Eq. 8–9 in the division-safe form of method.md §4:
+/// G̃ = A/(1 − c·B), w₁ = N_B (f̃ + c·G̃)/D = W₁ + N_B·c·G̃/D.
+fn optimal(budget: &Budget, pair: &Pair, pixel: Option<&PixelTerms>, clamp: bool) -> Weight {
+    let terms = OptimalTerms::new(budget, pair.f_tilde, total_radiance(pair), pair.b);
+    let (a, b) = pixel.map_or((0.0, 0.0), |p| (nonneg(p.a), nonneg(p.b)));
+
+    // 1 − c·B ≤ ε: the noise functional is no longer convex; clamp c·B to 1 − ε.
+    let cb = mul(budget.c(), b);
+    let clamped_cb = 1.0 - cb <= CB_EPSILON;
+    let one_minus_cb = if clamped_cb { CB_EPSILON } else { 1.0 - cb };
+    let g_tilde = sat(a / one_minus_cb);
+    // N_B·c·G̃, sr⁻¹: the correlation term of the numerator.
+    let correlation = mul(budget.correlation_factor(), g_tilde);
+
+    let w1 = if terms.denominator == 0.0 {
+        // f̃ = 0 and L = 0: the direction carries no BDD=1 contribution at x₀, and the
+        // ratio is 0/0 or c·G̃/0. This crate chooses w₁ = 0.
+        0.0
+    } else {
+        sat(terms.partial() + sat(correlation / terms.denominator))
+    };
+
+    let outside_unit = !(0.0..=1.0).contains(&w1);
+    Weight {
+        w1: if clamp { w1.clamp(0.0, 1.0) } else { w1 },
+        clamped_cb,
+        outside_unit,
+    }
+}
+
+/// Method.md §8: the balance (`power` = 1) or power (`power` = 2) heuristic on
+/// area-measure path densities. Both densities 0 (or both infinite) give w₁ = ½.
+fn density_share(budget: &Budget, pair: &Pair, power: i32) -> f64 {
+    let camera = nonneg(pair.camera_density);
+    let light = match pair.path {
+        // η = S·N_F and the common prefix …x₂→x₁ cancel.
+        PathKind::Merge => nonneg(pair.light_density),
+        // The photon technique pays η = S·N_F for the merge at x₀.
+        PathKind::OneBounce => product(&[
+            nonneg(budget.merge_area),
+            nonneg(budget.photons),
+            nonneg(pair.emission_density),
+            nonneg(pair.light_density),
+        ]),
+    };
+    share(camera, light, power, 0.5)
+}
+
+/// aᵖ/(aᵖ + bᵖ) for a, b ≥ 0 (possibly +∞), as 1/(1 + (b/a)ᵖ).
+///
+/// This form is monotone non-decreasing in a and non-increasing in b after rounding.
+/// `a = 0` gives 0, except `a = b = 0` which gives `both_zero`; `a = b = ∞` gives ½.
+fn share(a: f64, b: f64, power: i32, both_zero: f64) -> f64 {
+    if a == 0.0 {
+        if b == 0.0 { both_zero } else { 0.0 }
+    } else if a.is_infinite() && b.is_infinite() {
+        0.5
+    } else {
+        // a > 0, so b/a is in [0, ∞]; 1/(1 + ∞) = 0.
+        1.0 / (1.0 + (b / a).powi(power))
+    }
+}
+
+/// `x` if it is positive (including +∞), else 0: NaN and negative inputs become 0.
+fn nonneg(x: f64) -> f64 {
+    if x > 0.0 { x } else { 0.0 }
+}
+
+/// Saturates +∞ to `f64::MAX` (inputs are never NaN here).
+fn sat(x: f64) -> f64 {
+    x.min(f64::MAX)
+}
+
+/// The saturated product of two non-negative numbers, with 0·∞ = 0.
+fn mul(a: f64, b: f64) -> f64 {
+    if a == 0.0 || b == 0.0 {
+        0.0
+    } else {
+        sat(a * b)
+    }
+}
+
+/// The product of non-negative factors (unsaturated), with 0·∞ = 0.
+fn product(factors: &[f64]) -> f64 {
+    if factors.contains(&0.0) {
+        0.0
+    } else {
+        factors.iter().product()
+    }
+}
+
+/// The saturated ratio num/den of non-negative numbers; 0 when num = 0 (also 0/0), and
+/// `f64::MAX` for num > 0 over den = 0.
+fn ratio_sat(num: f64, den: f64) -> f64 {
+    if num == 0.0 {
+        0.0
+    } else {
+        sat(num / nonneg(den))
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,445 @@
+//! Unit tests: every formula of method.md §4 and §8 against hand-computed values, and
+//! every guard.
+
+use super::*;
+use std::f64::consts::PI;
+
+/// N_B = 2, N_F = 2, S = 0.5 m², Φ = 1 W: κ(L) = L and c = (1 − ½)·0.5·2/(1·2) = ¼.
+const SIMPLE: Budget = Budget {
+    camera_samples: 2.0,
+    photons: 2.0,
+    merge_area: 0.5,
+    flux: 1.0,
+};
+
+const OPTIMAL: Heuristic = Heuristic::Optimal {
+    clamp_weights: false,
+};
+
+fn assert_close(actual: f64, expected: f64) {
+    let tolerance = 1e-14 * expected.abs().max(1.0);
+    assert!(
+        (actual - expected).abs() <= tolerance,
+        "{actual} != {expected} (tolerance {tolerance})"
+    );
+}
+
+fn lit(f_tilde: f64, direct: f64, indirect: f64, b: f64) -> Pair {
+    Pair {
+        f_tilde,
+        direct,
+        indirect,
+        b,
+        ..Pair::default()
+    }
+}
+
+#[test]
+fn kappa_and_c_match_hand_values() {
+    assert_close(SIMPLE.kappa(3.0), 3.0);
+    assert_close(SIMPLE.c(), 0.25);
+    let budget = Budget {
+        camera_samples: 30.0,
+        photons: 1e6,
+        merge_area: 2e-5,
+        flux: 4.0,
+    };
+    // κ = 2e-5 · 7 · 1e6 / 4 = 35; c = (1 − 1e-6) · 2e-5 · 1e6 / (4 · 30).
+    assert_close(budget.kappa(7.0), 35.0);
+    assert_close(budget.c(), (1.0 - 1e-6) * 2e-5 * 1e6 / 120.0);
+    assert_eq!(budget.kappa(0.0), 0.0);
+}
+
+#[test]
+fn c_vanishes_with_one_photon() {
+    let budget = Budget {
+        photons: 1.0,
+        ..SIMPLE
+    };
+    assert_eq!(budget.c(), 0.0);
+    // Without correlation, eq. 8 is W₁ even with large A, B.
+    let pair = lit(0.5, 1.0, 3.0, 8.0);
+    let pixel = PixelTerms { a: 5.0, b: 50.0 };
+    let w = OPTIMAL.weight(&budget, &pair, Some(&pixel));
+    assert_close(w.w1, w1_partial(&budget, 0.5, 4.0, 8.0));
+    assert!(!w.clamped_cb);
+}
+
+#[test]
+fn algebraic_matches_hand_values() {
+    // N_B f̃ = 1. Direct only: κ(1) = 1, w₁ = ½. Direct + indirect: κ(4) = 4, w₁ = ⅕.
+    let pair = lit(0.5, 1.0, 3.0, 0.0);
+    let direct = Heuristic::AlgebraicDirect.weight(&SIMPLE, &pair, None);
+    let full = Heuristic::Algebraic.weight(&SIMPLE, &pair, None);
+    assert_close(direct.w1, 0.5);
+    assert_close(full.w1, 0.2);
+    assert_close(full.w0(), 0.8);
+    assert!(!full.outside_unit && !full.clamped_cb);
+}
+
+#[test]
+fn algebraic_lambert_is_preprint_closed_form() {
+    let budget = Budget {
+        camera_samples: 30.0,
+        photons: 1e6,
+        merge_area: PI * 1.7e-3 * 1.7e-3,
+        flux: 1.0,
+    };
+    for radiance in [0.0, 1e-3, 0.05, 1.0, 40.0, 3e4] {
+        let pair = lit(1.0 / PI, radiance, 0.0, 0.0);
+        let w = Heuristic::AlgebraicDirect.weight(&budget, &pair, None);
+        let expected = 1.0 / (1.0 + PI * budget.kappa(radiance) / 30.0);
+        assert_close(w.w1, expected);
+    }
+}
+
+#[test]
+fn optimal_matches_hand_values() {
+    // N_B f̃ = 1, L = 4, b/L = 2, κ = 4: D = 7, W₁ = 1/7.
+    // c·B = ½, G̃ = A/(1 − c·B) = 2, w₁ = N_B (f̃ + c·G̃)/D = 2·(½ + ½)/7 = 2/7.
+    let pair = lit(0.5, 1.0, 3.0, 8.0);
+    assert_close(w1_partial(&SIMPLE, 0.5, 4.0, 8.0), 1.0 / 7.0);
+    let pixel = PixelTerms { a: 1.0, b: 2.0 };
+    let w = OPTIMAL.weight(&SIMPLE, &pair, Some(&pixel));
+    assert_close(w.w1, 2.0 / 7.0);
+    assert!(!w.clamped_cb && !w.outside_unit);
+    // Without a pixel table, A = B = 0 and eq. 8 is W₁.
+    assert_close(OPTIMAL.weight(&SIMPLE, &pair, None).w1, 1.0 / 7.0);
+}
+
+#[test]
+fn optimal_without_correlation_or_b_is_algebraic() {
+    let budget = Budget {
+        camera_samples: 10.0,
+        photons: 250_000.0,
+        merge_area: 3e-6,
+        flux: 1.0,
+    };
+    let zero = PixelTerms { a: 0.0, b: 0.0 };
+    for (f_tilde, direct, indirect) in [(1.0 / PI, 0.3, 0.02), (40.0, 12.0, 1.0), (0.01, 1e3, 7.0)]
+    {
+        let pair = lit(f_tilde, direct, indirect, 0.0);
+        let algebraic = Heuristic::Algebraic.weight(&budget, &pair, None).w1;
+        assert_close(OPTIMAL.weight(&budget, &pair, Some(&zero)).w1, algebraic);
+        assert_close(OPTIMAL.weight(&budget, &pair, None).w1, algebraic);
+    }
+}
+
+#[test]
+fn optimal_equals_preprint_form() {
+    // w₁ = W₁·(1 + (1/f̃)·c·A/(1 − c·B)) (preprint eq. 8 with eq. 9).
+    let budget = Budget {
+        camera_samples: 3.0,
+        photons: 1000.0,
+        merge_area: 1e-3,
+        flux: 2.0,
+    };
+    let c = budget.c();
+    for (f_tilde, direct, indirect, b, a, big_b) in [
+        (1.0 / PI, 0.5, 0.1, 0.03, 0.2, 1.0),
+        (25.0, 3.0, 0.0, 4.0, 7.0, 5.0),
+        (0.02, 0.0, 9.0, 1.0, 0.5, 5.5),
+    ] {
+        let pair = lit(f_tilde, direct, indirect, b);
+        let pixel = PixelTerms { a, b: big_b };
+        let w = OPTIMAL.weight(&budget, &pair, Some(&pixel));
+        let partial = w1_partial(&budget, f_tilde, direct + indirect, b);
+        let preprint = partial * (1.0 + c * a / (1.0 - c * big_b) / f_tilde);
+        assert!(c * big_b < 1.0 - CB_EPSILON);
+        assert_close(w.w1, preprint);
+    }
+}
+
+#[test]
+fn unlit_x1_gives_full_partial_weight() {
+    // L = 0 takes b/L = 0 even for an inconsistent b > 0: W₁ = 1.
+    assert_eq!(w1_partial(&SIMPLE, 0.5, 0.0, 0.0), 1.0);
+    assert_eq!(w1_partial(&SIMPLE, 0.5, 0.0, 3.0), 1.0);
+    assert_eq!(
+        Heuristic::Algebraic
+            .weight(&SIMPLE, &lit(0.5, 0.0, 0.0, 0.0), None)
+            .w1,
+        1.0
+    );
+    // Eq. 8 with D = N_B f̃: w₁ = 1 + c·G̃/f̃ = 1 + ¼·2/½ = 2, outside [0, 1].
+    let pixel = PixelTerms { a: 1.0, b: 2.0 };
+    let w = OPTIMAL.weight(&SIMPLE, &lit(0.5, 0.0, 0.0, 0.0), Some(&pixel));
+    assert_close(w.w1, 2.0);
+    assert!(w.outside_unit);
+}
+
+#[test]
+fn zero_f_tilde_gives_zero_partial_weight() {
+    assert_eq!(w1_partial(&SIMPLE, 0.0, 4.0, 8.0), 0.0);
+    let pair = lit(0.0, 1.0, 3.0, 8.0);
+    assert_eq!(Heuristic::Algebraic.weight(&SIMPLE, &pair, None).w1, 0.0);
+    assert_eq!(
+        Heuristic::AlgebraicDirect.weight(&SIMPLE, &pair, None).w1,
+        0.0
+    );
+    // Eq. 8 keeps its correlation term: w₁ = N_B·c·G̃/D = 2·¼·2/6 = ⅙.
+    let pixel = PixelTerms { a: 1.0, b: 2.0 };
+    assert_close(OPTIMAL.weight(&SIMPLE, &pair, Some(&pixel)).w1, 1.0 / 6.0);
+}
+
+#[test]
+fn zero_f_tilde_and_unlit_x1_gives_zero_weight() {
+    // D = 0: no division, w₁ = 0 by the documented choice.
+    assert_eq!(w1_partial(&SIMPLE, 0.0, 0.0, 0.0), 0.0);
+    let pair = lit(0.0, 0.0, 0.0, 0.0);
+    assert_eq!(Heuristic::Algebraic.weight(&SIMPLE, &pair, None).w1, 0.0);
+    let pixel = PixelTerms { a: 1.0, b: 2.0 };
+    let w = OPTIMAL.weight(&SIMPLE, &pair, Some(&pixel));
+    assert_eq!(w.w1, 0.0);
+    assert!(!w.outside_unit);
+}
+
+#[test]
+fn cb_near_one_is_clamped() {
+    let pair = lit(0.5, 1.0, 3.0, 8.0);
+    // c = ¼: B = 4 gives c·B = 1, B = 40 gives c·B = 10; both clamp to 1 − ε.
+    for big_b in [4.0, 40.0, 4.0 * (1.0 - 0.5 * CB_EPSILON)] {
+        let pixel = PixelTerms { a: 1.0, b: big_b };
+        let w = OPTIMAL.weight(&SIMPLE, &pair, Some(&pixel));
+        assert!(w.clamped_cb, "B = {big_b}");
+        // G̃ = A/ε; w₁ = 2·(½ + ¼·A/ε)/7.
+        assert_close(w.w1, 2.0 * (0.5 + 0.25 / CB_EPSILON) / 7.0);
+        assert!(w.w1.is_finite() && w.outside_unit);
+    }
+    // Just inside the convex range: no clamp.
+    let pixel = PixelTerms {
+        a: 1.0,
+        b: 4.0 * (1.0 - 2.0 * CB_EPSILON),
+    };
+    assert!(!OPTIMAL.weight(&SIMPLE, &pair, Some(&pixel)).clamped_cb);
+}
+
+#[test]
+fn optional_clamp_keeps_the_report() {
+    let pair = lit(0.5, 0.0, 0.0, 0.0);
+    let pixel = PixelTerms { a: 1.0, b: 2.0 };
+    let clamped = Heuristic::Optimal {
+        clamp_weights: true,
+    }
+    .weight(&SIMPLE, &pair, Some(&pixel));
+    assert_eq!(clamped.w1, 1.0);
+    assert_eq!(clamped.w0(), 0.0);
+    assert!(clamped.outside_unit);
+}
+
+#[test]
+fn pure_strategies_and_threshold() {
+    let mut pair = lit(0.5, 1.0, 3.0, 8.0);
+    assert_eq!(Heuristic::Bdd0.weight(&SIMPLE, &pair, None).w1, 0.0);
+    assert_eq!(Heuristic::Bdd1.weight(&SIMPLE, &pair, None).w1, 1.0);
+    let threshold = Heuristic::Threshold { radius: 0.2 };
+    for (distance, expected) in [(0.0, 0.0), (0.199, 0.0), (0.2, 1.0), (3.0, 1.0)] {
+        pair.light_distance = distance;
+        assert_eq!(
+            threshold.weight(&SIMPLE, &pair, None).w1,
+            expected,
+            "d = {distance}"
+        );
+    }
+}
+
+fn densities(path: PathKind, camera: f64, light: f64, emission: f64) -> Pair {
+    Pair {
+        path,
+        camera_density: camera,
+        light_density: light,
+        emission_density: emission,
+        ..Pair::default()
+    }
+}
+
+#[test]
+fn balance_and_power_match_hand_values() {
+    // Merge: p_C = 3, p_L = 1.
+    let merge = densities(PathKind::Merge, 3.0, 1.0, 123.0);
+    assert_close(Heuristic::Balance.weight(&SIMPLE, &merge, None).w1, 0.75);
+    assert_close(Heuristic::Power.weight(&SIMPLE, &merge, None).w1, 0.9);
+    // One bounce: S·N_F = 1, S·N_F·p_L(light→x₁)·p_L(x₁→x₀) = 2·1.5 = 3, p_C = 1.
+    let one_bounce = densities(PathKind::OneBounce, 1.0, 1.5, 2.0);
+    assert_close(
+        Heuristic::Balance.weight(&SIMPLE, &one_bounce, None).w1,
+        0.25,
+    );
+    assert_close(Heuristic::Power.weight(&SIMPLE, &one_bounce, None).w1, 0.1);
+    // η = S·N_F enters only the one-bounce case.
+    let budget = Budget {
+        merge_area: 0.05,
+        ..SIMPLE
+    };
+    assert_close(Heuristic::Balance.weight(&budget, &merge, None).w1, 0.75);
+    assert_close(
+        Heuristic::Balance.weight(&budget, &one_bounce, None).w1,
+        1.0 / 1.3,
+    );
+}
+
+#[test]
+fn balance_for_lambert_merge_is_one_over_one_plus_q() {
+    // Lambert x₀ and x₁ at distance d with cosines cos₀, cos₁; photon survival q at x₁.
+    let (d, cos0, cos1) = (1.3_f64, 0.8, 0.35);
+    for q in [1.0, 0.5, 0.25] {
+        let p_c = cos0 / PI * cos1 / (d * d);
+        let p_l = q * cos1 / PI * cos0 / (d * d);
+        let pair = densities(PathKind::Merge, p_c, p_l, 0.0);
+        assert_close(
+            Heuristic::Balance.weight(&SIMPLE, &pair, None).w1,
+            1.0 / (1.0 + q),
+        );
+        assert_close(
+            Heuristic::Power.weight(&SIMPLE, &pair, None).w1,
+            1.0 / (1.0 + q * q),
+        );
+    }
+}
+
+#[test]
+fn density_guards() {
+    for heuristic in [Heuristic::Balance, Heuristic::Power] {
+        let w = |camera, light| {
+            let pair = densities(PathKind::Merge, camera, light, 0.0);
+            heuristic.weight(&SIMPLE, &pair, None).w1
+        };
+        assert_eq!(w(0.0, 0.0), 0.5);
+        assert_eq!(w(f64::INFINITY, f64::INFINITY), 0.5);
+        assert_eq!(w(0.0, 2.0), 0.0);
+        assert_eq!(w(2.0, 0.0), 1.0);
+        assert_eq!(w(f64::INFINITY, 2.0), 1.0);
+        assert_eq!(w(2.0, f64::INFINITY), 0.0);
+        assert_eq!(w(f64::NAN, 2.0), 0.0);
+        assert_eq!(w(1e-300, 1e300), 0.0);
+        // One bounce with 0·∞ among the light factors: the light term is 0.
+        let pair = densities(PathKind::OneBounce, 1.0, 0.0, f64::INFINITY);
+        assert_eq!(heuristic.weight(&SIMPLE, &pair, None).w1, 1.0);
+    }
+}
+
+#[test]
+fn names_round_trip() {
+    let all = [
+        Heuristic::Bdd0,
+        Heuristic::Bdd1,
+        Heuristic::Threshold {
+            radius: DEFAULT_THRESHOLD_RADIUS,
+        },
+        Heuristic::AlgebraicDirect,
+        Heuristic::Algebraic,
+        Heuristic::Optimal {
+            clamp_weights: false,
+        },
+        Heuristic::Balance,
+        Heuristic::Power,
+    ];
+    let names: Vec<_> = all.iter().map(Heuristic::name).collect();
+    assert_eq!(names, Heuristic::ALL_NAMES);
+    for (name, heuristic) in Heuristic::ALL_NAMES.iter().zip(all) {
+        assert_eq!(Heuristic::parse(name), Some(heuristic));
+        assert_eq!(heuristic.to_string(), *name);
+    }
+    assert_eq!(Heuristic::parse("Optimal"), None);
+    assert_eq!(Heuristic::parse(""), None);
+    assert_eq!(
+        Heuristic::Threshold { radius: 0.5 }.to_string(),
+        "threshold (R = 0.5 m)"
+    );
+}
+
+#[test]
+fn needs_follow_method_table() {
+    let needs = |name| Heuristic::parse(name).unwrap().needs();
+    let mix = Needs {
+        photons_at_x0: true,
+        second_vertex: true,
+        ..Needs::default()
+    };
+    assert_eq!(
+        needs("bdd0"),
+        Needs {
+            photons_at_x0: true,
+            ..Needs::default()
+        }
+    );
+    assert_eq!(
+        needs("bdd1"),
+        Needs {
+            second_vertex: true,
+            ..Needs::default()
+        }
+    );
+    assert_eq!(needs("threshold"), mix);
+    let direct = Needs {
+        direct_at_x1: true,
+        ..mix
+    };
+    assert_eq!(needs("algebraic-direct"), direct);
+    let cached = Needs {
+        radiance_cache: true,
+        ..direct
+    };
+    assert_eq!(needs("algebraic"), cached);
+    assert_eq!(
+        needs("optimal"),
+        Needs {
+            cache_b: true,
+            pixel_table: true,
+            ..cached
+        }
+    );
+    let density = Needs {
+        densities: true,
+        ..mix
+    };
+    assert_eq!(needs("balance"), density);
+    assert_eq!(needs("power"), density);
+}
+
+#[test]
+fn extreme_inputs_stay_finite() {
+    let budgets = [
+        Budget {
+            camera_samples: 1.0,
+            photons: 1.0,
+            merge_area: 1e-14,
+            flux: 1e-10,
+        },
+        Budget {
+            camera_samples: 1e9,
+            photons: 1e9,
+            merge_area: 1e2,
+            flux: 1e-10,
+        },
+        Budget {
+            camera_samples: 1.0,
+            photons: 1e300,
+            merge_area: 1e300,
+            flux: 1e-300,
+        },
+    ];
+    let pixel = PixelTerms {
+        a: 1e300,
+        b: 1e-300,
+    };
+    for budget in &budgets {
+        for f_tilde in [0.0, 1e-300, 1.0, 1e300] {
+            for radiance in [0.0, 1e-300, 1.0, 1e300] {
+                for b in [0.0, 1e300] {
+                    let pair = lit(f_tilde, radiance, radiance, b);
+                    for name in Heuristic::ALL_NAMES {
+                        let w = Heuristic::parse(name)
+                            .unwrap()
+                            .weight(budget, &pair, Some(&pixel));
+                        assert!(
+                            w.w1.is_finite() && w.w0().is_finite(),
+                            "{name} {budget:?} {pair:?}"
+                        );
+                    }
+                    assert!(w1_partial(budget, f_tilde, radiance, b).is_finite());
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,132 @@
+//! Property tests over wide input ranges: every weight is finite, w₀ + w₁ = 1, the
+//! bounded modes stay in [0, 1], and eq. 10 is monotone in the radiance at x₁.
+
+use bdpm_mis::{Budget, Heuristic, Pair, PathKind, PixelTerms, w1_partial};
+use proptest::prelude::*;
+
+/// 10ˣ for x uniform in [lo, hi]: log-uniform over many decades.
+fn decades(lo: f64, hi: f64) -> impl Strategy<Value = f64> {
+    (lo..=hi).prop_map(|x| 10f64.powf(x))
+}
+
+/// Zero or log-uniform in [10^lo, 10^hi].
+fn zero_or(lo: f64, hi: f64) -> impl Strategy<Value = f64> {
+    prop_oneof![1 => Just(0.0), 4 => decades(lo, hi)]
+}
+
+fn budget() -> impl Strategy<Value = Budget> {
+    (
+        decades(0.0, 9.0),
+        decades(0.0, 9.0),
+        decades(-14.0, 2.0),
+        decades(-10.0, 10.0),
+    )
+        .prop_map(|(camera_samples, photons, merge_area, flux)| Budget {
+            camera_samples,
+            photons,
+            merge_area,
+            flux,
+        })
+}
+
+fn density() -> impl Strategy<Value = f64> {
+    prop_oneof![8 => zero_or(-30.0, 30.0), 1 => Just(f64::INFINITY)]
+}
+
+fn pair() -> impl Strategy<Value = Pair> {
+    (
+        (
+            zero_or(-12.0, 4.0),
+            zero_or(-30.0, 30.0),
+            zero_or(-30.0, 30.0),
+            zero_or(-30.0, 30.0),
+            0.0..10.0f64,
+        ),
+        (
+            prop_oneof![Just(PathKind::Merge), Just(PathKind::OneBounce)],
+            density(),
+            density(),
+            density(),
+        ),
+    )
+        .prop_map(
+            |((f_tilde, direct, indirect, b, light_distance), (path, camera, light, emission))| {
+                Pair {
+                    f_tilde,
+                    direct,
+                    indirect,
+                    b,
+                    light_distance,
+                    path,
+                    camera_density: camera,
+                    light_density: light,
+                    emission_density: emission,
+                }
+            },
+        )
+}
+
+fn pixel() -> impl Strategy<Value = Option<PixelTerms>> {
+    prop_oneof![
+        1 => Just(None),
+        4 => (zero_or(-30.0, 30.0), zero_or(-30.0, 30.0)).prop_map(|(a, b)| Some(PixelTerms { a, b })),
+    ]
+}
+
+const BOUNDED: [Heuristic; 7] = [
+    Heuristic::Bdd0,
+    Heuristic::Bdd1,
+    Heuristic::Threshold { radius: 0.2 },
+    Heuristic::AlgebraicDirect,
+    Heuristic::Algebraic,
+    Heuristic::Balance,
+    Heuristic::Power,
+];
+
+proptest! {
+    #[test]
+    fn bounded_modes_stay_in_unit_interval(budget in budget(), pair in pair(), pixel in pixel()) {
+        for heuristic in BOUNDED {
+            let w = heuristic.weight(&budget, &pair, pixel.as_ref());
+            prop_assert!((0.0..=1.0).contains(&w.w1), "{heuristic}: {w:?}");
+            prop_assert_eq!(w.w0() + w.w1, 1.0);
+            prop_assert!(!w.outside_unit && !w.clamped_cb);
+        }
+    }
+
+    #[test]
+    fn optimal_is_finite_and_reports_honestly(budget in budget(), pair in pair(), pixel in pixel()) {
+        let free = Heuristic::Optimal { clamp_weights: false }.weight(&budget, &pair, pixel.as_ref());
+        let clamped = Heuristic::Optimal { clamp_weights: true }.weight(&budget, &pair, pixel.as_ref());
+        prop_assert!(free.w1.is_finite() && free.w0().is_finite(), "{free:?}");
+        // The correlation term is non-negative: w₁ ≥ W₁ ≥ 0.
+        let partial = w1_partial(&budget, pair.f_tilde, pair.direct + pair.indirect, pair.b);
+        prop_assert!((0.0..=1.0).contains(&partial));
+        prop_assert!(free.w1 >= partial);
+        prop_assert_eq!(free.outside_unit, !(0.0..=1.0).contains(&free.w1));
+        // w₀ = 1 − w₁ by definition; the float sum is exact up to w₁'s own rounding.
+        prop_assert!((free.w0() + free.w1 - 1.0).abs() <= f64::EPSILON * free.w1.max(1.0));
+        prop_assert_eq!(clamped.w1, free.w1.clamp(0.0, 1.0));
+        prop_assert_eq!(clamped.w0() + clamped.w1, 1.0);
+        prop_assert_eq!((clamped.outside_unit, clamped.clamped_cb), (free.outside_unit, free.clamped_cb));
+    }
+
+    #[test]
+    fn algebraic_is_monotone_in_radiance(
+        budget in budget(),
+        pair in pair(),
+        extra_direct in zero_or(-30.0, 30.0),
+        extra_indirect in zero_or(-30.0, 30.0),
+    ) {
+        let brighter = Pair {
+            direct: pair.direct + extra_direct,
+            indirect: pair.indirect + extra_indirect,
+            ..pair
+        };
+        for heuristic in [Heuristic::AlgebraicDirect, Heuristic::Algebraic] {
+            let dim = heuristic.weight(&budget, &pair, None).w1;
+            let bright = heuristic.weight(&budget, &brighter, None).w1;
+            prop_assert!(bright <= dim, "{heuristic}: {bright} > {dim}");
+        }
+    }
+}
