@@ -1,0 +1,230 @@
+//! The Lambert + Gaussian-lobe mixture `f = kd/π + g_r·G` (method.md §9).
+
+use std::f32::consts::{FRAC_1_PI, TAU};
+use std::fmt;
+use std::sync::Arc;
+
+use glam::Vec3;
+
+use crate::error::BdfError;
+use crate::lobe::{DELTA_MAX, DELTA_MIN, LobeTable, lobe_table};
+use crate::luminance;
+
+/// Slack allowed on kd + gr ≤ 1, so that values written as decimals (0.3 + 0.7) pass.
+const ENERGY_SLACK: f32 = 1e-6;
+
+/// One sampled scattering direction, as returned by [`Bdf::sample`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BdfSample {
+    /// Sampled incident direction (local frame, unit, z > 0).
+    pub wi: Vec3,
+    /// BDF value f(wo, wi), sr⁻¹.
+    pub f: Vec3,
+    /// Solid-angle pdf of `wi`, sr⁻¹: the full mixture pdf, equal to [`Bdf::pdf`]`(wo, wi)`.
+    pub pdf: f32,
+    /// `f · cos θᵢ / pdf` (dimensionless).
+    pub weight: Vec3,
+}
+
+/// A surface's scattering model: `f = kd/π + g_r·G` with G the Gaussian lobe of
+/// method.md §9 (width Δ, normalised so that `∫ G cos ≤ 1` for every direction).
+///
+/// Directions are in the local shading frame (normal +z), unit, pointing away from the
+/// surface: `wo` towards the viewer (the next vertex of the eye path), `wi` towards the
+/// light. Both components are reciprocal, `f(wo, wi) = f(wi, wo)`, so the same value
+/// serves camera and light paths and there is no transport mode. Only reflection exists:
+/// any direction with z ≤ 0 (or not finite) gives zero.
+///
+/// Cloning is cheap: the lobe's tables are shared between all models with the same Δ.
+#[derive(Clone, Debug)]
+pub struct Bdf {
+    kd: Vec3,
+    gr: Vec3,
+    luminance_kd: f32,
+    luminance_gr: f32,
+    /// Present iff gr ≠ 0.
+    lobe: Option<Arc<LobeTable>>,
+}
+
+impl Bdf {
+    /// A Lambert surface, `f = kd/π`.
+    pub fn lambert(kd: Vec3) -> Result<Self, BdfError> {
+        Self::new(kd, Vec3::ZERO, DELTA_MAX as f32)
+    }
+
+    /// The mixture `kd/π + gr·G` with lobe width `delta` (radians).
+    ///
+    /// Every channel of kd and gr must be finite and in [0, 1], with kd + gr ≤ 1; Δ must
+    /// be in [0.05°, 90°] when gr ≠ 0 (it is ignored otherwise). The first use of a Δ
+    /// computes its normalisation and albedo table (a few milliseconds); later uses are
+    /// a cache lookup.
+    pub fn new(kd: Vec3, gr: Vec3, delta: f32) -> Result<Self, BdfError> {
+        check_albedo("kd", kd)?;
+        check_albedo("gr", gr)?;
+        if (kd + gr).cmpgt(Vec3::splat(1.0 + ENERGY_SLACK)).any() {
+            return Err(BdfError::EnergyGain { kd, gr });
+        }
+        let lobe = if gr == Vec3::ZERO {
+            None
+        } else {
+            // Compare in f64 with a relative slack so that `0.05f32.to_radians()` passes.
+            // NaN is in no range, so it is rejected too.
+            let accepted = DELTA_MIN * (1.0 - 1e-6)..=DELTA_MAX * (1.0 + 1e-6);
+            if !accepted.contains(&f64::from(delta)) {
+                return Err(BdfError::LobeWidth { delta });
+            }
+            Some(lobe_table(delta))
+        };
+        Ok(Self {
+            kd,
+            gr,
+            luminance_kd: luminance(kd),
+            luminance_gr: luminance(gr),
+            lobe,
+        })
+    }
+
+    /// The Lambert albedo kd.
+    pub fn kd(&self) -> Vec3 {
+        self.kd
+    }
+
+    /// The lobe albedo g_r.
+    pub fn gr(&self) -> Vec3 {
+        self.gr
+    }
+
+    /// The lobe width Δ in radians, or `None` without a lobe (gr = 0).
+    pub fn delta(&self) -> Option<f32> {
+        self.lobe.as_ref().map(|l| l.delta())
+    }
+
+    /// True iff there is no lobe (gr = 0), i.e. `f = kd/π`.
+    pub fn is_lambert(&self) -> bool {
+        self.lobe.is_none()
+    }
+
+    /// The lobe's normalisation constant C (method.md §9), or `None` without a lobe.
+    pub fn lobe_constant(&self) -> Option<f64> {
+        self.lobe.as_ref().map(|l| l.c())
+    }
+
+    /// f(wo, wi) in sr⁻¹; zero if either direction is not above the surface.
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+        if !(above(wo) && above(wi)) {
+            return Vec3::ZERO;
+        }
+        let diffuse = self.kd * FRAC_1_PI;
+        match &self.lobe {
+            Some(lobe) => diffuse + self.gr * lobe.value(wo, wi),
+            None => diffuse,
+        }
+    }
+
+    /// Solid-angle pdf (sr⁻¹) with which [`Self::sample`] returns `wi` given `wo`.
+    ///
+    /// This is the mixture `P_d·cos θᵢ/π + P_G·p_G(wi)`. The lobe density is not
+    /// renormalised for the part of the lobe below the horizon (those samples fail), so
+    /// the pdf integrates to at most 1 over the hemisphere.
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if !(above(wo) && above(wi)) {
+            return 0.0;
+        }
+        let Some(p_lobe) = self.lobe_probability(wo) else {
+            return 0.0;
+        };
+        let diffuse = (1.0 - p_lobe) * wi.z * FRAC_1_PI;
+        match &self.lobe {
+            Some(lobe) if p_lobe > 0.0 => diffuse + p_lobe * lobe.pdf(wo, wi),
+            _ => diffuse,
+        }
+    }
+
+    /// Samples an incident direction for `wo` from `u` uniform in [0, 1)³.
+    ///
+    /// `u[0]` picks Lambert or the lobe, with probabilities proportional to their
+    /// albedos at `wo` (by luminance); `u[1]`, `u[2]` place the direction (cosine-weighted
+    /// hemisphere, or the lobe's exact exponential sampling around the mirror direction).
+    /// Returns `None` when the lobe's direction falls below the horizon (for `wo` near
+    /// grazing), when `wo` is not above the surface, or when kd and gr are both zero:
+    /// such a sample contributes zero, which keeps the estimator unbiased.
+    pub fn sample(&self, wo: Vec3, u: [f32; 3]) -> Option<BdfSample> {
+        if !above(wo) {
+            return None;
+        }
+        let p_lobe = self.lobe_probability(wo)?;
+        let wi = match &self.lobe {
+            Some(lobe) if u[0] < p_lobe => lobe.sample(wo, u[1], u[2]),
+            _ => cosine_hemisphere(u[1], u[2]),
+        };
+        if !above(wi) {
+            return None;
+        }
+        // pdf and f come from the same functions callers use, so they agree bit for bit.
+        let pdf = self.pdf(wo, wi);
+        if !(pdf > 0.0 && pdf.is_finite()) {
+            return None;
+        }
+        let f = self.eval(wo, wi);
+        Some(BdfSample {
+            wi,
+            f,
+            pdf,
+            weight: f * (wi.z / pdf),
+        })
+    }
+
+    /// Directional albedo µ(wo) = ∫ f(wo, wi) cos θᵢ dwi (dimensionless, ≤ 1 per channel):
+    /// kd + gr·µ_G(wo), µ_G interpolated from the lobe's table. Zero below the surface.
+    pub fn albedo(&self, wo: Vec3) -> Vec3 {
+        if !above(wo) {
+            return Vec3::ZERO;
+        }
+        match &self.lobe {
+            Some(lobe) => self.kd + self.gr * lobe.albedo(wo.z),
+            None => self.kd,
+        }
+    }
+
+    /// Probability of sampling the lobe at `wo`, or `None` if nothing is reflected.
+    fn lobe_probability(&self, wo: Vec3) -> Option<f32> {
+        let lobe = match &self.lobe {
+            Some(lobe) => self.luminance_gr * lobe.albedo(wo.z),
+            None => 0.0,
+        };
+        let total = self.luminance_kd + lobe;
+        (total > 0.0).then(|| lobe / total)
+    }
+}
+
+impl fmt::Display for Bdf {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "Bdf[kd = {}", self.kd)?;
+        if let Some(delta) = self.delta() {
+            write!(f, ", gr = {}, delta = {}°", self.gr, delta.to_degrees())?;
+        }
+        write!(f, "]")
+    }
+}
+
+fn check_albedo(which: &'static str, value: Vec3) -> Result<(), BdfError> {
+    if !value.is_finite() {
+        Err(BdfError::NotFinite { which, value })
+    } else if value.min_element() < 0.0 || value.max_element() > 1.0 {
+        Err(BdfError::AlbedoOutOfRange { which, value })
+    } else {
+        Ok(())
+    }
+}
+
+/// Strictly above the surface; rejects NaN so that no NaN propagates into f or pdf.
+fn above(w: Vec3) -> bool {
+    w.z > 0.0 && w.is_finite()
+}
+
+/// Cosine-weighted direction on the upper hemisphere (pdf cos θ/π).
+fn cosine_hemisphere(u1: f32, u2: f32) -> Vec3 {
+    let r = u1.sqrt();
+    let (sin_p, cos_p) = (TAU * u2).sin_cos();
+    Vec3::new(r * cos_p, r * sin_p, (1.0 - u1).max(0.0).sqrt())
+}
