@@ -34,7 +34,9 @@ impl Camera {
         height: u32,
     ) -> Result<Camera, SceneError> {
         if !(eye.is_finite() && target.is_finite() && up.is_finite()) {
-            return Err(SceneError::BadCamera("position, target and up must be finite"));
+            return Err(SceneError::BadCamera(
+                "position, target and up must be finite",
+            ));
         }
         let forward = (target - eye).normalize_or_zero();
         if forward == Vec3::ZERO {
@@ -42,10 +44,14 @@ impl Camera {
         }
         let right = forward.cross(up).normalize_or_zero();
         if right == Vec3::ZERO {
-            return Err(SceneError::BadCamera("up is parallel to the viewing direction"));
+            return Err(SceneError::BadCamera(
+                "up is parallel to the viewing direction",
+            ));
         }
         if !(vfov_degrees > 0.0 && vfov_degrees < 179.0) {
-            return Err(SceneError::BadCamera("vertical fov must be in (0, 179) degrees"));
+            return Err(SceneError::BadCamera(
+                "vertical fov must be in (0, 179) degrees",
+            ));
         }
         if width == 0 || height == 0 {
             return Err(SceneError::BadCamera("resolution must be at least 1×1"));
@@ -98,7 +104,8 @@ impl Camera {
         let sy = d.dot(self.up) / (z * self.tan_half);
         let x = (sx + 1.0) * 0.5 * self.width as f32;
         let y = (1.0 - sy) * 0.5 * self.height as f32;
-        let inside = (0.0..self.width as f32).contains(&x) && (0.0..self.height as f32).contains(&y);
+        let inside =
+            (0.0..self.width as f32).contains(&x) && (0.0..self.height as f32).contains(&y);
         inside.then_some((x, y))
     }
 }
@@ -110,8 +117,15 @@ mod tests {
     #[test]
     fn cornell_view_is_not_mirrored_and_projection_inverts_rays() {
         // Looking along +z with +y up, +x is on the image's left (right-handed world).
-        let c = Camera::look_at(Vec3::new(0.0, 0.0, -4.0), Vec3::ZERO, Vec3::Y, 40.0, 200, 100)
-            .unwrap();
+        let c = Camera::look_at(
+            Vec3::new(0.0, 0.0, -4.0),
+            Vec3::ZERO,
+            Vec3::Y,
+            40.0,
+            200,
+            100,
+        )
+        .unwrap();
         let (x, _) = c.project(Vec3::new(0.5, 0.0, 0.0)).unwrap();
         assert!(x < 100.0);
         let (_, y) = c.project(Vec3::new(0.0, 0.5, 0.0)).unwrap();

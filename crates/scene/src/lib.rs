@@ -86,11 +86,17 @@ impl fmt::Display for SceneError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::MissingMaterial { material, count } => {
-                write!(f, "a triangle uses material {material} but only {count} are defined")
+                write!(
+                    f,
+                    "a triangle uses material {material} but only {count} are defined"
+                )
             }
             Self::NoLight => write!(f, "the scene has no light with positive flux"),
             Self::BadLight { index } => {
-                write!(f, "light {index} has a non-finite position or a negative/non-finite flux")
+                write!(
+                    f,
+                    "light {index} has a non-finite position or a negative/non-finite flux"
+                )
             }
             Self::BadCamera(why) => write!(f, "camera: {why}"),
         }
@@ -140,7 +146,10 @@ impl Scene {
         for prim in 0..geometry.triangle_count() as u32 {
             let m = geometry.material(prim);
             if m as usize >= materials.len() {
-                return Err(SceneError::MissingMaterial { material: m, count: materials.len() });
+                return Err(SceneError::MissingMaterial {
+                    material: m,
+                    count: materials.len(),
+                });
             }
         }
         for (index, l) in lights.iter().enumerate() {
@@ -160,7 +169,13 @@ impl Scene {
             return Err(SceneError::NoLight);
         }
         light_cdf.iter_mut().for_each(|c| *c /= acc);
-        Ok(Scene { geometry, materials, lights, camera, light_cdf })
+        Ok(Scene {
+            geometry,
+            materials,
+            lights,
+            camera,
+            light_cdf,
+        })
     }
 
     /// The scattering model of a material index.
@@ -182,7 +197,10 @@ impl Scene {
     /// Picks a light with probability proportional to its flux luminance: (index, probability).
     #[inline]
     pub fn pick_light(&self, u: f32) -> (usize, f32) {
-        let i = self.light_cdf.partition_point(|&c| c <= u).min(self.lights.len() - 1);
+        let i = self
+            .light_cdf
+            .partition_point(|&c| c <= u)
+            .min(self.lights.len() - 1);
         let lo = if i == 0 { 0.0 } else { self.light_cdf[i - 1] };
         (i, self.light_cdf[i] - lo)
     }
@@ -220,7 +238,8 @@ impl Scene {
         if sh.ng.dot(wi) <= 0.0 || sh.ng.dot(wo) <= 0.0 {
             return Vec3::ZERO;
         }
-        self.bdf(sh.material).eval(sh.frame.to_local(wo), sh.frame.to_local(wi))
+        self.bdf(sh.material)
+            .eval(sh.frame.to_local(wo), sh.frame.to_local(wi))
     }
 
     /// Direct radiance L₀ leaving `sh` towards `wo`: Σ over lights of f·cos·I/d²·visibility,
