@@ -12,6 +12,10 @@
 //!   their Rec. 709 [`luminance`].
 //! - Both models are reciprocal, so there is no transport mode: light paths and camera
 //!   paths use the same `eval`, with the arguments in either order.
+//! - Sampling may fail (`None`): a lobe direction below the horizon counts as a sample
+//!   of zero weight, and `pdf` is not renormalised for it, so `pdf` integrates to at most 1.
+//! - The lobe's constant C and its albedo table are computed once per distinct Δ
+//!   (a few milliseconds) and shared process-wide; `Bdf` is cheap to clone and `Send + Sync`.
 //!
 //! # Architecture invariant
 //!
@@ -42,7 +46,7 @@ use glam::Vec3;
 
 pub use bdf::{Bdf, BdfSample};
 pub use error::BdfError;
-pub use lobe::LOBE_EPSILON;
+pub use lobe::{LOBE_EPSILON, LOBE_WIDTH_MAX, LOBE_WIDTH_MIN};
 
 /// Rec. 709 luminance of a linear RGB colour.
 pub fn luminance(c: Vec3) -> f32 {

@@ -182,7 +182,13 @@ fn constructors_validate() {
     ));
 
     // The limits themselves, and decimal sums that round above 1, are accepted.
-    for delta in [0.05f32.to_radians(), 90f32.to_radians(), FRAC_PI_2] {
+    for delta in [
+        0.05f32.to_radians(),
+        90f32.to_radians(),
+        FRAC_PI_2,
+        bdpm_bdf::LOBE_WIDTH_MIN,
+        bdpm_bdf::LOBE_WIDTH_MAX,
+    ] {
         assert!(Bdf::new(half, half, delta).is_ok(), "Δ={delta}");
     }
     assert!(Bdf::new(Vec3::splat(0.3), Vec3::splat(0.7), 0.1).is_ok());
@@ -213,6 +219,14 @@ fn accessors_and_lambert() {
 
     assert!((luminance(Vec3::ONE) - 1.0).abs() < 1e-6);
     assert!((luminance(Vec3::new(0.0, 1.0, 0.0)) - 0.7152).abs() < 1e-6);
+}
+
+#[test]
+fn shareable_between_threads() {
+    fn assert_send_sync<T: Send + Sync + Clone>() {}
+    assert_send_sync::<Bdf>();
+    assert_send_sync::<bdpm_bdf::BdfSample>();
+    assert_send_sync::<BdfError>();
 }
 
 #[test]
