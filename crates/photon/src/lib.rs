@@ -1,1 +1,80 @@
-//! placeholder
+//! Photon tracing from point lights and a fixed-radius photon map (method.md §1, §7, §8).
+//!
+//! This crate owns:
+//! - emission ([`emit`]): N_F photons per pass shared between the point lights in proportion
+//!   to flux luminance, isotropic directions, power Φ_l/(p_l·N_F);
+//! - the random walk ([`trace_photons`], [`for_each_arrival`]): BDF sampling with Russian
+//!   roulette of survival q = [`survival_probability`] (depends only on the vertex and the
+//!   arrival direction, as the balance heuristic of §8 needs), recording every surface
+//!   vertex ([`PathVertex`]) with its depth, arrival direction, q and optionally which
+//!   lights it sees;
+//! - the [`PhotonMap`]: the stored [`Photon`]s (arrivals after ≥ 1 scattering, each with
+//!   the index of its previous vertex y_p) in a hashed uniform grid of cell 2r, for
+//!   allocation-free range queries ([`PhotonMap::for_each_near`]).
+//!
+//! Units: positions and radii in m, powers in W per RGB channel (Φ/N_F already included),
+//! directions unit vectors pointing away from the surface, pdfs per steradian.
+//!
+//! **Determinism:** photon `i` of pass `pass` draws only from
+//! `Rng::new(seed, domain, [pass, i, 0])`; work is split into fixed chunks of photon indices
+//! and the chunks' outputs are concatenated in chunk order, so the map (every photon, vertex
+//! and the grid order) is bit-identical whatever the thread count.
+//!
+//! **Approximation:** scattering uses the BDF in the shading frame and the plain sample weight
+//! f·cos/pdf, without the adjoint shading-normal correction; for flat-shaded meshes (shading
+//! normal = geometric normal, as in the scenes of method.md §10) this is exact.
+//!
+//! Architecture invariant: this crate knows nothing of MIS weights, radiance caches, cameras
+//! or films. It records what the weights need (previous vertices, q, light visibility) but
+//! never evaluates a weight or a density estimate.
+//!
+//! ```
+//! use bdpm_bdf::Bdf;
+//! use bdpm_geometry::{Geometry, TriangleMesh};
+//! use bdpm_photon::{PhotonMap, TraceOptions};
+//! use bdpm_scene::{Camera, Material, PointLight, Scene};
+//! use glam::Vec3;
+//!
+//! // A closed unit cube, Lambert albedo 0.5, with a 1 W light in the middle.
+//! let v = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+//! let mut mesh = TriangleMesh::default();
+//! for q in [
+//!     [v(0., 0., 0.), v(1., 0., 0.), v(1., 0., 1.), v(0., 0., 1.)],
+//!     [v(0., 1., 0.), v(0., 1., 1.), v(1., 1., 1.), v(1., 1., 0.)],
+//!     [v(0., 0., 0.), v(0., 0., 1.), v(0., 1., 1.), v(0., 1., 0.)],
+//!     [v(1., 0., 0.), v(1., 1., 0.), v(1., 1., 1.), v(1., 0., 1.)],
+//!     [v(0., 0., 0.), v(0., 1., 0.), v(1., 1., 0.), v(1., 0., 0.)],
+//!     [v(0., 0., 1.), v(1., 0., 1.), v(1., 1., 1.), v(0., 1., 1.)],
+//! ] {
+//!     mesh.push_quad(q, 0);
+//! }
+//! let scene = Scene::new(
+//!     Geometry::new(mesh).unwrap(),
+//!     vec![Material { name: "white".into(), bdf: Bdf::lambert(Vec3::splat(0.5)).unwrap() }],
+//!     vec![PointLight { position: Vec3::splat(0.5), flux: Vec3::ONE }],
+//!     Camera::look_at(v(0.5, 0.5, 0.1), v(0.5, 0.5, 1.0), Vec3::Y, 60.0, 8, 8).unwrap(),
+//! ).unwrap();
+//!
+//! let map = PhotonMap::trace(&scene, &TraceOptions::new(10_000, 1, 0), 0.05);
+//! assert_eq!(map.emitted(), 10_000);
+//! for p in &map.photons {
+//!     // Stored photons have been scattered at least once; y_p is one scattering earlier.
+//!     assert!(map.vertex(p.vertex).depth >= 1);
+//!     assert_eq!(map.vertex(p.prev).depth + 1, map.vertex(p.vertex).depth);
+//! }
+//! // Density estimate of the indirect irradiance at the floor's centre, W/m².
+//! let mut sum = Vec3::ZERO;
+//! map.for_each_near(v(0.5, 0.0, 0.5), |p| sum += p.power);
+//! let irradiance = sum / (std::f32::consts::PI * map.radius() * map.radius());
+//! assert!(irradiance.is_finite());
+//! ```
+
+mod grid;
+mod map;
+mod trace;
+
+pub use map::{Photon, PhotonMap};
+pub use trace::{
+    Emission, MAX_SURVIVAL, PathVertex, PhotonArrival, Scatter, TraceOptions, emit,
+    for_each_arrival, survival_probability, trace_photons,
+};

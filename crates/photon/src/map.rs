@@ -1,0 +1,162 @@
+//! The photon map: stored photons, the light-path vertices they refer to, and the grid.
+
+use bdpm_scene::Scene;
+use glam::Vec3;
+
+use crate::grid::HashGrid;
+use crate::trace::{PathVertex, TraceOptions, trace_chunks};
+
+/// A stored photon: an arrival at a surface after ≥ 1 scattering (method.md §1). The first
+/// arrival from a light is direct light, which the integrators compute exactly, so it is not
+/// stored.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Photon {
+    /// Position, m.
+    pub position: Vec3,
+    /// Power E_p, W per channel; already includes Φ/N_F.
+    pub power: Vec3,
+    /// Index into [`PhotonMap::vertices`] of the previous vertex y_p (where it was scattered
+    /// from); that vertex's depth is one less than this photon's.
+    pub prev: u32,
+    /// Index into [`PhotonMap::vertices`] of this photon's own arrival vertex (its incoming
+    /// direction, normal, material and depth).
+    pub vertex: u32,
+}
+
+// Photons are the bulk of a pass's memory: keep them small.
+const _: () = assert!(size_of::<Photon>() <= 48);
+
+/// The photons of one pass in a hashed uniform grid for fixed-radius gathers.
+///
+/// `photons` is kept in grid (bucket) order; `vertices` in path order (each path's vertices
+/// consecutive, paths in photon-index order), so `Photon::prev` and `Photon::vertex` stay
+/// valid. Every field is a pure function of the scene, [`TraceOptions`] and the radius.
+#[derive(Clone, Debug)]
+pub struct PhotonMap {
+    /// Stored photons (depth ≥ 1 arrivals), sorted by grid bucket.
+    pub photons: Vec<Photon>,
+    /// Every light-path vertex of the pass (depth 0 included), in path order.
+    pub vertices: Vec<PathVertex>,
+    grid: HashGrid,
+    radius: f32,
+    emitted: u64,
+}
+
+impl PhotonMap {
+    /// Traces the pass `options` in parallel (see [`crate::trace_photons`] for the stream and
+    /// determinism guarantees) and builds the grid for merge radius `radius` (m).
+    ///
+    /// # Panics
+    /// If `radius` is not positive and finite, or the pass stores ≥ 2³² − 1 photons or vertices.
+    pub fn trace(scene: &Scene, options: &TraceOptions, radius: f32) -> PhotonMap {
+        let chunks = trace_chunks(
+            scene,
+            options,
+            |_| (Vec::<PathVertex>::new(), Vec::<Photon>::new()),
+            |(vertices, photons), a| {
+                let index = vertices.len() as u32;
+                vertices.push(a.vertex);
+                if a.vertex.depth >= 1 {
+                    // A path's vertices are pushed consecutively, so y_p is the one just before.
+                    photons.push(Photon {
+                        position: a.vertex.position,
+                        power: a.power,
+                        prev: index - 1,
+                        vertex: index,
+                    });
+                }
+            },
+        );
+        let n_vertices: usize = chunks.iter().map(|c| c.0.len()).sum();
+        let n_photons: usize = chunks.iter().map(|c| c.1.len()).sum();
+        assert!(
+            n_vertices < u32::MAX as usize,
+            "too many path vertices for u32 indices"
+        );
+        let mut vertices = Vec::with_capacity(n_vertices);
+        let mut photons = Vec::with_capacity(n_photons);
+        for (v, p) in chunks {
+            let offset = vertices.len() as u32;
+            photons.extend(p.into_iter().map(|p| Photon {
+                prev: p.prev + offset,
+                vertex: p.vertex + offset,
+                ..p
+            }));
+            vertices.extend(v);
+        }
+        PhotonMap::from_parts(photons, vertices, options.photons, radius)
+    }
+
+    /// Builds a map from photons and vertices made elsewhere (e.g. tests, or a rebuild with a
+    /// new radius): reorders `photons` into grid order for merge radius `radius` (m).
+    /// `emitted` is N_F. `prev`/`vertex` indices are not checked here; [`PhotonMap::vertex`]
+    /// panics on a bad one.
+    ///
+    /// # Panics
+    /// If `radius` is not positive and finite.
+    pub fn from_parts(
+        photons: Vec<Photon>,
+        vertices: Vec<PathVertex>,
+        emitted: u64,
+        radius: f32,
+    ) -> PhotonMap {
+        assert!(
+            radius > 0.0 && radius.is_finite(),
+            "merge radius must be positive and finite, got {radius}"
+        );
+        let positions: Vec<Vec3> = photons.iter().map(|p| p.position).collect();
+        let (grid, order) = HashGrid::build(&positions, radius);
+        let photons = order.iter().map(|&i| photons[i as usize]).collect();
+        PhotonMap {
+            photons,
+            vertices,
+            grid,
+            radius,
+            emitted,
+        }
+    }
+
+    /// The same photons in a grid for another radius (m), e.g. for a shrinking radius.
+    pub fn with_radius(self, radius: f32) -> PhotonMap {
+        PhotonMap::from_parts(self.photons, self.vertices, self.emitted, radius)
+    }
+
+    /// The merge radius r the grid was built for, m.
+    pub fn radius(&self) -> f32 {
+        self.radius
+    }
+
+    /// Calls `f` for every photon with |x − photon.position| ≤ radius (compared as squared
+    /// distances in f32). The order is deterministic (grid order); nothing is allocated. At
+    /// most 8 grid cells are visited, so the cost is the photons in a (4r)³ box.
+    #[inline]
+    pub fn for_each_near(&self, x: Vec3, mut f: impl FnMut(&Photon)) {
+        let r2 = self.radius * self.radius;
+        self.grid.for_each_bucket(x, self.radius, |range| {
+            for p in &self.photons[range] {
+                if (p.position - x).length_squared() <= r2 {
+                    f(p);
+                }
+            }
+        });
+    }
+
+    /// The path vertex with index `i` (a [`Photon::prev`] or [`Photon::vertex`]).
+    #[inline]
+    pub fn vertex(&self, i: u32) -> &PathVertex {
+        &self.vertices[i as usize]
+    }
+
+    /// Heap and inline bytes held by the map (photons, vertices, grid table).
+    pub fn memory_bytes(&self) -> u64 {
+        (size_of::<Self>()
+            + self.photons.capacity() * size_of::<Photon>()
+            + self.vertices.capacity() * size_of::<PathVertex>()) as u64
+            + self.grid.memory_bytes()
+    }
+
+    /// N_F: photons emitted in the pass (stored or not), the divisor already in each power.
+    pub fn emitted(&self) -> u64 {
+        self.emitted
+    }
+}

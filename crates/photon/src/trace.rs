@@ -1,0 +1,313 @@
+//! Emission from point lights and the random walk of photons (method.md §1).
+
+use bdpm_bdf::Bdf;
+use bdpm_geometry::sampling::uniform_sphere;
+use bdpm_geometry::{Domain, Rng};
+use bdpm_scene::{Scene, Shading};
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// Photons per parallel work item. Fixed (not derived from the thread count) so that the
+/// chunking, and therefore every output, is the same on any number of threads.
+pub(crate) const CHUNK: u64 = 4096;
+
+/// Upper bound on the Russian-roulette survival probability: even a white (non-absorbing)
+/// surface ends a path with probability ≥ 5 % per scattering, so every walk terminates.
+pub const MAX_SURVIVAL: f32 = 0.95;
+
+/// One surface vertex of a light path: every surface hit, including the first hit from the
+/// light (which is direct light and not itself stored as a [`Photon`](crate::Photon)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathVertex {
+    /// Position, m.
+    pub position: Vec3,
+    /// Unit geometric normal, flipped to the side the light arrived from (surfaces are
+    /// two-sided).
+    pub normal: Vec3,
+    /// Unit direction from this vertex back towards where the light came from (the previous
+    /// vertex, or the light for depth 0).
+    pub incoming: Vec3,
+    /// Triangle index.
+    pub prim: u32,
+    /// Material index.
+    pub material: u32,
+    /// Index of the light that emitted this path.
+    pub light: u16,
+    /// Number of scatterings before this arrival: 0 = reached directly from the light.
+    pub depth: u16,
+    /// Bit `l` is set iff light `l` (only `l < 32`) lies on the side of `normal` and no surface
+    /// blocks the segment to it. Filled only with [`TraceOptions::light_visibility`], else 0.
+    pub visible_lights: u32,
+    /// Russian-roulette survival probability q used when scattering at this vertex
+    /// (dimensionless): [`survival_probability`] of the material for `incoming`. Recorded even
+    /// where the path ended (absorbed, failed BDF sample or the depth cap), because the weights
+    /// need the density with which the walk *would* continue.
+    pub survival: f32,
+}
+
+/// Parameters of one photon pass.
+#[derive(Clone, Copy, Debug)]
+pub struct TraceOptions {
+    /// N_F: photons emitted in this pass (all lights together).
+    pub photons: u64,
+    /// Master seed of the render.
+    pub seed: u64,
+    /// Random-stream domain: `Domain::Photon` for render passes, `Domain::CachePhoton` for the
+    /// radiance-cache pre-pass (independent streams).
+    pub domain: Domain,
+    /// Pass index (stream key): photon `i` of pass `pass` uses `Rng::new(seed, domain, [pass, i, 0])`.
+    pub pass: u32,
+    /// Fill [`PathVertex::visible_lights`] (one shadow ray per light, up to 32, per vertex).
+    pub light_visibility: bool,
+    /// Hard cap on scatterings per path (arrivals have depth ≤ `max_depth`), a guard for
+    /// scenes that barely absorb; e.g. 1024.
+    pub max_depth: u32,
+}
+
+impl TraceOptions {
+    /// Options for `photons` photons of render pass `pass` with the defaults: photon domain,
+    /// no light visibility, `max_depth` 1024.
+    pub fn new(photons: u64, seed: u64, pass: u32) -> TraceOptions {
+        TraceOptions {
+            photons,
+            seed,
+            domain: Domain::Photon,
+            pass,
+            light_visibility: false,
+            max_depth: 1024,
+        }
+    }
+}
+
+/// A photon leaving a light: which light, from where, where to, with what power.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Emission {
+    /// Index of the chosen light.
+    pub light: usize,
+    /// Probability p_l with which that light was chosen.
+    pub light_probability: f32,
+    /// Ray origin (the light's position), m.
+    pub origin: Vec3,
+    /// Unit direction, uniform on the sphere (density 1/(4π) sr⁻¹).
+    pub direction: Vec3,
+    /// Power Φ_l / (p_l · N_F), W per channel.
+    pub power: Vec3,
+}
+
+/// Emits one photon of a pass of `photons` (N_F) photons: `u_light` picks a light with
+/// probability proportional to its flux luminance ([`Scene::pick_light`]), `u_dir` an isotropic
+/// direction. Returns `None` only if the picked light has zero probability (cannot happen for
+/// `u_light` in [0, 1)) or `photons` is 0.
+pub fn emit(scene: &Scene, u_light: f32, u_dir: [f32; 2], photons: u64) -> Option<Emission> {
+    let (light, p) = scene.pick_light(u_light);
+    if p.is_nan() || p <= 0.0 || photons == 0 {
+        return None;
+    }
+    let l = &scene.lights[light];
+    Some(Emission {
+        light,
+        light_probability: p,
+        origin: l.position,
+        direction: uniform_sphere(u_dir),
+        power: l.flux / (p * photons as f32),
+    })
+}
+
+/// Russian-roulette survival probability q = min(0.95, max channel of the albedo µ(ω_in)),
+/// with `incoming_local` the arrival direction in the BDF's local frame (pointing away from the
+/// surface). It depends only on the vertex and the incoming direction, never on the photon's
+/// power, so the photon density p_L(x₁→x₀) that the balance heuristic needs (method.md §8) is
+/// `q · pdf` and can be recomputed from a stored vertex. Zero below the surface.
+pub fn survival_probability(bdf: &Bdf, incoming_local: Vec3) -> f32 {
+    bdf.albedo(incoming_local)
+        .max_element()
+        .clamp(0.0, MAX_SURVIVAL)
+}
+
+/// The BDF sample drawn at an arrival (before the roulette decision).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Scatter {
+    /// Unit world direction leaving the surface, on the side of [`PathVertex::normal`].
+    pub direction: Vec3,
+    /// BDF value f(ω_in, ω_out), sr⁻¹.
+    pub f: Vec3,
+    /// Solid-angle pdf of `direction`, sr⁻¹ (without the roulette factor).
+    pub pdf: f32,
+    /// f·cos/pdf (dimensionless); the scattered energy is `power · weight`.
+    pub weight: Vec3,
+}
+
+/// Everything known at one arrival of a photon at a surface, as passed to the visitors of
+/// [`trace_photons`] and [`for_each_arrival`].
+#[derive(Clone, Copy, Debug)]
+pub struct PhotonArrival {
+    /// Index of the emitted photon in its pass (0..N_F).
+    pub photon: u64,
+    /// The vertex (its `depth` 0 is the first hit, which is direct light).
+    pub vertex: PathVertex,
+    /// Arriving power E_p, W per channel (includes Φ/N_F; for depth 0 the emitted power).
+    pub power: Vec3,
+    /// The vertex the photon was scattered from (y_p), `None` at depth 0.
+    pub previous: Option<PathVertex>,
+    /// The shading data of the hit, oriented to the side of `vertex.incoming`.
+    pub shading: Shading,
+    /// The BDF sample drawn here, before Russian roulette: present whenever sampling
+    /// succeeded on the correct side of the geometric normal, whether or not the photon then
+    /// survived. The photon continued along it iff `continued`. A visitor that needs an
+    /// unbiased scattered-direction sample (e.g. the radiance cache, method.md §5: scattered
+    /// energy `power · weight`) can use it without drawing random numbers of its own.
+    pub scatter: Option<Scatter>,
+    /// True iff the photon survived the roulette and the depth cap and left along `scatter`.
+    pub continued: bool,
+}
+
+/// Traces the pass described by `options` and calls `visit` for every arrival, in parallel and
+/// in no particular order (`visit` must synchronise itself). For deterministic accumulation use
+/// [`trace_photons`], which keeps the order.
+pub fn for_each_arrival(
+    scene: &Scene,
+    options: &TraceOptions,
+    visit: impl Fn(&PhotonArrival) + Sync,
+) {
+    trace_chunks(scene, options, |_| (), |_, a| visit(a));
+}
+
+/// Traces the pass described by `options` in parallel and returns the records that `visit`
+/// pushes for each arrival, in photon order and, within a photon, in path order, whatever the
+/// thread count: the result is a pure function of (scene, options).
+///
+/// `visit` sees every arrival, depth 0 included (filter on `arrival.vertex.depth >= 1` for
+/// stored photons), and may push any number of records of its own type.
+pub fn trace_photons<R: Send>(
+    scene: &Scene,
+    options: &TraceOptions,
+    visit: impl Fn(&PhotonArrival, &mut Vec<R>) + Sync,
+) -> Vec<R> {
+    let chunks = trace_chunks(scene, options, |_| Vec::new(), |out, a| visit(a, out));
+    let mut out = Vec::with_capacity(chunks.iter().map(Vec::len).sum());
+    for c in chunks {
+        out.extend(c);
+    }
+    out
+}
+
+/// The parallel driver: one accumulator per fixed chunk of photon indices, returned in chunk
+/// order. `new(chunk)` makes a chunk's accumulator; `visit` is called for each arrival of the
+/// chunk's photons, sequentially and in path order.
+pub(crate) fn trace_chunks<A: Send>(
+    scene: &Scene,
+    options: &TraceOptions,
+    new: impl Fn(u64) -> A + Sync,
+    visit: impl Fn(&mut A, &PhotonArrival) + Sync,
+) -> Vec<A> {
+    let chunks = options.photons.div_ceil(CHUNK);
+    (0..chunks)
+        .into_par_iter()
+        .map(|c| {
+            let mut acc = new(c);
+            let end = ((c + 1) * CHUNK).min(options.photons);
+            for i in c * CHUNK..end {
+                trace_one(scene, options, i, &mut |a| visit(&mut acc, a));
+            }
+            acc
+        })
+        .collect()
+}
+
+/// Bit mask of the lights (first 32) that are on the side of `sh.ng` and unoccluded from `sh`.
+fn visible_lights(scene: &Scene, sh: &Shading) -> u32 {
+    let mut mask = 0;
+    for (l, light) in scene.lights.iter().enumerate().take(32) {
+        let to = light.position - sh.p;
+        if sh.ng.dot(to) <= 0.0 {
+            continue;
+        }
+        if !scene.geometry.occluded(scene.spawn(sh, to), light.position) {
+            mask |= 1 << l;
+        }
+    }
+    mask
+}
+
+/// The random walk of photon `index` of the pass.
+fn trace_one(
+    scene: &Scene,
+    options: &TraceOptions,
+    index: u64,
+    visit: &mut impl FnMut(&PhotonArrival),
+) {
+    let mut rng = Rng::new(
+        options.seed,
+        options.domain,
+        [u64::from(options.pass), index, 0],
+    );
+    let u_light = rng.uniform();
+    let u_dir = rng.uniform2();
+    let Some(e) = emit(scene, u_light, u_dir, options.photons) else {
+        return;
+    };
+    // Lights beyond u16 cannot be named in a vertex; scenes have a handful.
+    let light = e.light.min(usize::from(u16::MAX)) as u16;
+    let max_depth = options.max_depth.min(u32::from(u16::MAX));
+    let mut origin = e.origin;
+    let mut dir = e.direction;
+    let mut power = e.power;
+    let mut previous: Option<PathVertex> = None;
+    let mut depth: u32 = 0;
+    while let Some(hit) = scene.geometry.intersect(origin, dir, f32::INFINITY) {
+        let incoming = -dir;
+        let sh = scene.shade(&hit, incoming);
+        let bdf = scene.bdf(sh.material);
+        let in_local = sh.frame.to_local(incoming);
+        let survival = survival_probability(bdf, in_local);
+        let vertex = PathVertex {
+            position: sh.p,
+            normal: sh.ng,
+            incoming,
+            prim: sh.prim,
+            material: sh.material,
+            light,
+            depth: depth as u16,
+            visible_lights: if options.light_visibility {
+                visible_lights(scene, &sh)
+            } else {
+                0
+            },
+            survival,
+        };
+        // The random numbers are drawn in a fixed order whatever happens, so that a visitor's
+        // view of one arrival never shifts the stream of another.
+        let u_rr = rng.uniform();
+        let u_bdf = rng.uniform3();
+        let scatter = bdf.sample(in_local, u_bdf).and_then(|s| {
+            let direction = sh.frame.to_world(s.wi);
+            // The shading normal may disagree with the geometric one; a direction that would
+            // pass through the surface carries no light (no transmission in our models).
+            (sh.ng.dot(direction) > 0.0).then_some(Scatter {
+                direction,
+                f: s.f,
+                pdf: s.pdf,
+                weight: s.weight,
+            })
+        });
+        let continued = scatter.is_some() && u_rr < survival && depth < max_depth;
+        visit(&PhotonArrival {
+            photon: index,
+            vertex,
+            power,
+            previous,
+            shading: sh,
+            scatter,
+            continued,
+        });
+        let Some(s) = scatter.filter(|_| continued) else {
+            break;
+        };
+        // Roulette with q independent of power keeps the estimator unbiased: E[w/q · 1{u<q}] = w.
+        power *= s.weight / survival;
+        origin = scene.spawn(&sh, s.direction);
+        dir = s.direction;
+        previous = Some(vertex);
+        depth += 1;
+    }
+}
