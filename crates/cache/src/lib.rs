@@ -1,1 +1,349 @@
-//! placeholder
+//! The directional radiance cache of method.md §5 (preprint §6.1): per surface cell and per
+//! outgoing-direction bin, the secondary radiance L_d and the quantity b = ∫ f² J dv' that the
+//! optimal weights need at a camera path's second vertex.
+//!
+//! - **Cells** subdivide every triangle into n² congruent sub-triangles (n from a target cell
+//!   size), so each cell's area is exactly the triangle's area / n²; each side of a surface
+//!   has its own cells (surfaces are two-sided).
+//! - **Bins** are K equal-solid-angle bins over the hemisphere: the equal-area concentric map
+//!   takes a direction to the unit square, which is split into a √K × √K grid
+//!   (so K is rounded to a square; each bin spans 2π/K sr).
+//! - **Filling** uses a photon pass of its own random stream (`Domain::CachePhoton`), frozen
+//!   before rendering, so the weights never depend on the photons they weight.
+//! - **Lambert-only scenes** get one bin per cell and no b (b = (kd/π)·L_d there, method.md §7).
+//!
+//! Values are luminances (the weights use luminance): L_d in W·m⁻²·sr⁻¹, b in W·m⁻²·sr⁻².
+//!
+//! Architecture invariant: knows nothing of weights, pixels or films; it reads photons and
+//! geometry and answers lookups by (triangle, point, direction).
+
+use std::f32::consts::PI;
+
+use bdpm_bdf::luminance;
+use bdpm_geometry::{Domain, Frame};
+use bdpm_photon::{TraceOptions, trace_photons};
+use bdpm_scene::Scene;
+use glam::{Vec2, Vec3};
+
+/// How to build a cache.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CacheSettings {
+    /// Requested bins per hemisphere K (rounded to the nearest square ≥ 1); ignored (1 bin) for
+    /// Lambert-only scenes.
+    pub bins: u32,
+    /// Target cell edge length, metres (cells are at most this long along a triangle edge).
+    pub cell_size: f32,
+    /// Photons emitted for the cache pass.
+    pub photons: u64,
+    /// Master seed (the cache uses its own stream domain).
+    pub seed: u64,
+}
+
+/// Size and cost facts about a built cache, for the run report.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CacheStats {
+    /// Number of cells per side (total cells = 2 × this).
+    pub cells: usize,
+    /// Bins per cell side.
+    pub bins: u32,
+    /// Whether b is stored.
+    pub stores_b: bool,
+    /// Photon arrivals accumulated.
+    pub arrivals: u64,
+    /// Fraction of cell sides that received at least one arrival.
+    pub filled_fraction: f64,
+    /// Memory of the tables, bytes.
+    pub bytes: u64,
+}
+
+/// The frozen cache.
+#[derive(Clone, Debug)]
+pub struct RadianceCache {
+    /// First cell index of each triangle.
+    first_cell: Vec<u32>,
+    /// Subdivision n of each triangle (n² cells).
+    subdivision: Vec<u16>,
+    /// Triangle vertices and normals for barycentric lookup.
+    tri: Vec<([Vec3; 3], Vec3)>,
+    side_bins: usize,
+    grid: u32,
+    ld: Vec<f32>,
+    b: Vec<f32>,
+    stats: CacheStats,
+}
+
+/// Inverse of the equal-area concentric square → hemisphere map: a unit direction with z ≥ 0
+/// to a point of [0, 1)².
+fn hemisphere_to_square(d: Vec3) -> Vec2 {
+    // The disk radius r with r² = 1 − z makes the map equal-area.
+    let r = (1.0 - d.z.clamp(0.0, 1.0)).max(0.0).sqrt();
+    let phi = d.y.atan2(d.x); // (−π, π]
+    let (a, b);
+    // Invert Shirley–Chiu by octant of the disk.
+    let phi = if phi < -PI / 4.0 { phi + 2.0 * PI } else { phi };
+    if phi < PI / 4.0 {
+        a = r;
+        b = phi * a / (PI / 4.0);
+    } else if phi < 3.0 * PI / 4.0 {
+        b = r;
+        a = -(phi - PI / 2.0) * b / (PI / 4.0);
+    } else if phi < 5.0 * PI / 4.0 {
+        a = -r;
+        b = (phi - PI) * a / (PI / 4.0);
+    } else {
+        b = -r;
+        a = -(phi - 3.0 * PI / 2.0) * b / (PI / 4.0);
+    }
+    Vec2::new((a + 1.0) * 0.5, (b + 1.0) * 0.5).clamp(Vec2::ZERO, Vec2::splat(1.0 - 1e-7))
+}
+
+impl RadianceCache {
+    /// Traces the cache's photon pass on `scene` and accumulates L_d (and b unless the scene
+    /// is Lambert-only) per cell and bin.
+    pub fn build(scene: &Scene, settings: &CacheSettings) -> RadianceCache {
+        let lambert = scene.all_lambert();
+        let grid = if lambert {
+            1
+        } else {
+            (settings.bins.max(1) as f32).sqrt().round().max(1.0) as u32
+        };
+        let side_bins = (grid * grid) as usize;
+        let g = &scene.geometry;
+        let n_tris = g.triangle_count();
+        let mut first_cell = Vec::with_capacity(n_tris);
+        let mut subdivision = Vec::with_capacity(n_tris);
+        let mut tri = Vec::with_capacity(n_tris);
+        let mut cells = 0u32;
+        for prim in 0..n_tris as u32 {
+            let v = g.vertices(prim);
+            let longest = (v[1] - v[0])
+                .length()
+                .max((v[2] - v[1]).length())
+                .max((v[0] - v[2]).length());
+            let n = if g.area(prim) > 0.0 {
+                ((longest / settings.cell_size.max(1e-9)).ceil() as u32).clamp(1, 256)
+            } else {
+                1
+            };
+            first_cell.push(cells);
+            subdivision.push(n as u16);
+            tri.push((v, g.normal(prim)));
+            cells += n * n;
+        }
+        let slots = cells as usize * 2 * side_bins;
+        let mut cache = RadianceCache {
+            first_cell,
+            subdivision,
+            tri,
+            side_bins,
+            grid,
+            ld: vec![0.0; slots],
+            b: if lambert {
+                Vec::new()
+            } else {
+                vec![0.0; slots]
+            },
+            stats: CacheStats {
+                cells: cells as usize,
+                bins: side_bins as u32,
+                stores_b: !lambert,
+                arrivals: 0,
+                filled_fraction: 0.0,
+                bytes: 0,
+            },
+        };
+        cache.fill(scene, settings);
+        cache
+    }
+
+    fn fill(&mut self, scene: &Scene, settings: &CacheSettings) {
+        let options = TraceOptions {
+            photons: settings.photons.max(1),
+            seed: settings.seed,
+            domain: Domain::CachePhoton,
+            pass: 0,
+            light_visibility: false,
+            max_depth: 1024,
+        };
+        // Records are made in parallel and come back in photon order, so the sequential
+        // accumulation below is bit-identical whatever the thread count.
+        let this = &*self;
+        let records: Vec<(u32, f32, f32)> = trace_photons(scene, &options, |arrival, out| {
+            // Only light that has scattered at least once is secondary (L_d, method.md §5).
+            if arrival.vertex.depth == 0 {
+                return;
+            }
+            let Some(sc) = arrival.scatter else { return };
+            let vx = &arrival.vertex;
+            let cos = sc.direction.dot(vx.normal);
+            if cos <= 0.0 {
+                return;
+            }
+            let Some(cell_side) = this.cell_side(vx.prim, vx.position, vx.normal) else {
+                return;
+            };
+            let local = Frame::from_normal(vx.normal).to_local(sc.direction);
+            let slot = (cell_side * this.side_bins + this.bin(local)) as u32;
+            let e_s = luminance(arrival.power * sc.weight);
+            out.push((slot, e_s / cos, e_s * luminance(sc.f) / cos));
+        });
+        let mut ld = vec![0f64; self.ld.len()];
+        let mut b = vec![0f64; self.b.len()];
+        let mut hit = vec![false; self.stats.cells * 2];
+        for &(slot, l, bb) in &records {
+            let slot = slot as usize;
+            ld[slot] += l as f64;
+            if !b.is_empty() {
+                b[slot] += bb as f64;
+            }
+            hit[slot / self.side_bins] = true;
+        }
+        self.stats.arrivals = records.len() as u64;
+        // Divide by cell area s and bin solid angle ω = 2π/K.
+        let omega = 2.0 * std::f64::consts::PI / self.side_bins as f64;
+        for (prim, &n) in self.subdivision.iter().enumerate() {
+            let cell_area = self.triangle_area(prim) / (n as f64 * n as f64);
+            if cell_area <= 0.0 {
+                continue;
+            }
+            let first = self.first_cell[prim] as usize;
+            for cell in first..first + n as usize * n as usize {
+                for side in 0..2 {
+                    let base = (cell * 2 + side) * self.side_bins;
+                    for k in base..base + self.side_bins {
+                        self.ld[k] = (ld[k] / (cell_area * omega)) as f32;
+                        if !b.is_empty() {
+                            self.b[k] = (b[k] / (cell_area * omega)) as f32;
+                        }
+                    }
+                }
+            }
+        }
+        self.stats.filled_fraction =
+            hit.iter().filter(|h| **h).count() as f64 / hit.len().max(1) as f64;
+        self.stats.bytes = ((self.ld.len() + self.b.len()) * 4
+            + self.first_cell.len() * 4
+            + self.subdivision.len() * 2
+            + self.tri.len() * std::mem::size_of::<([Vec3; 3], Vec3)>())
+            as u64;
+    }
+
+    fn triangle_area(&self, prim: usize) -> f64 {
+        let (v, _) = self.tri[prim];
+        0.5 * (v[1] - v[0])
+            .as_dvec3()
+            .cross((v[2] - v[0]).as_dvec3())
+            .length()
+    }
+
+    /// Index of (cell, side) for a point `p` on triangle `prim`, seen from the side of `n`.
+    fn cell_side(&self, prim: u32, p: Vec3, n: Vec3) -> Option<usize> {
+        let (v, ng) = *self.tri.get(prim as usize)?;
+        let e1 = v[1] - v[0];
+        let e2 = v[2] - v[0];
+        let d = p - v[0];
+        // Barycentrics by least squares in the triangle's plane.
+        let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+        let det = d11 * d22 - d12 * d12;
+        if det <= 0.0 {
+            return None;
+        }
+        let (p1, p2) = (d.dot(e1), d.dot(e2));
+        let b1 = ((d22 * p1 - d12 * p2) / det).clamp(0.0, 1.0);
+        let b2 = ((d11 * p2 - d12 * p1) / det).clamp(0.0, 1.0 - b1);
+        let sub = self.subdivision[prim as usize] as u32;
+        let (fu, fv) = (b1 * sub as f32, b2 * sub as f32);
+        let i = (fu as u32).min(sub - 1);
+        let j = (fv as u32).min(sub - 1 - i.min(sub - 1));
+        // Row j of the subdivided triangle holds 2(n − j) − 1 cells: "up" then "down" ones.
+        let upper = (fu - i as f32) + (fv - j as f32) > 1.0 && i + j + 1 < sub;
+        let row_start = j * (2 * sub - j);
+        let local = row_start + 2 * i + upper as u32;
+        let cell = self.first_cell[prim as usize] + local.min(sub * sub - 1);
+        let side = (ng.dot(n) < 0.0) as usize;
+        Some(cell as usize * 2 + side)
+    }
+
+    fn bin(&self, local_dir: Vec3) -> usize {
+        if self.grid == 1 {
+            return 0;
+        }
+        let s = hemisphere_to_square(local_dir);
+        let g = self.grid as f32;
+        let (x, y) = ((s.x * g) as u32, (s.y * g) as u32);
+        (y.min(self.grid - 1) * self.grid + x.min(self.grid - 1)) as usize
+    }
+
+    /// L_d and b (luminances) leaving triangle `prim` at point `p` towards the unit world
+    /// direction `wo`, on the side of `wo`. b is 0 when the cache does not store it (Lambert:
+    /// use (kd/π)·L_d).
+    pub fn lookup(&self, prim: u32, p: Vec3, wo: Vec3) -> (f32, f32) {
+        let Some(&(_, ng)) = self.tri.get(prim as usize) else {
+            return (0.0, 0.0);
+        };
+        let n = if ng.dot(wo) < 0.0 { -ng } else { ng };
+        let Some(cell_side) = self.cell_side(prim, p, n) else {
+            return (0.0, 0.0);
+        };
+        let local = Frame::from_normal(n).to_local(wo);
+        let slot = cell_side * self.side_bins + self.bin(local);
+        (self.ld[slot], self.b.get(slot).copied().unwrap_or(0.0))
+    }
+
+    /// Facts for the run report.
+    pub fn stats(&self) -> &CacheStats {
+        &self.stats
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bdpm_geometry::Rng;
+    use bdpm_geometry::sampling::uniform_sphere;
+
+    #[test]
+    fn square_map_is_equal_area_and_in_range() {
+        // Uniform directions on the hemisphere must fill a 4×4 grid of the square evenly.
+        let mut rng = Rng::new(1, Domain::Other, [0; 3]);
+        let mut counts = [0u32; 16];
+        let n = 160_000;
+        for _ in 0..n {
+            let mut d = uniform_sphere(rng.uniform2());
+            d.z = d.z.abs();
+            let s = hemisphere_to_square(d);
+            assert!(
+                (0.0..1.0).contains(&s.x) && (0.0..1.0).contains(&s.y),
+                "{s}"
+            );
+            counts[(s.y * 4.0) as usize * 4 + (s.x * 4.0) as usize] += 1;
+        }
+        // Each cell expects 10000 with binomial SE ≈ 97; allow 5 SE.
+        for c in counts {
+            assert!((c as f64 - 10_000.0).abs() < 5.0 * 97.0, "{counts:?}");
+        }
+    }
+
+    #[test]
+    fn square_map_inverts_the_concentric_hemisphere_warp() {
+        let mut rng = Rng::new(2, Domain::Other, [0; 3]);
+        for _ in 0..10_000 {
+            let u = rng.uniform2();
+            let d = bdpm_geometry::sampling::concentric_disk(u);
+            let z = (1.0 - d.length_squared()).max(0.0);
+            // Equal-area concentric hemisphere: disk point (r, φ) ↦ z = 1 − r².
+            let r = d.length();
+            let dir = if r > 0.0 {
+                let s = (1.0 - z * z).max(0.0).sqrt();
+                Vec3::new(d.x / r * s, d.y / r * s, z)
+            } else {
+                Vec3::Z
+            };
+            let back = hemisphere_to_square(dir);
+            assert!(
+                (back - Vec2::from(u)).abs().max_element() < 2e-3,
+                "{u:?} -> {back}"
+            );
+        }
+    }
+}

@@ -2,7 +2,22 @@
 //! accumulates per-pass estimates, and the render settings.
 //!
 //! Units: radiance in W·m⁻²·sr⁻¹, distances in metres.
+//!
+//! Determinism: every random number of a pass is drawn from a stream keyed by
+//! (seed, domain, pass, pixel or photon index, sample), and per-pixel results are written to
+//! their own slot, so the image bits do not depend on the number of threads.
+//!
+//! Architecture invariant: no file IO; the driver writes images and reports.
 
+pub mod bdpm;
+mod film;
+pub mod path;
+mod render;
 mod settings;
+mod table;
 
+pub use bdpm::{Techniques, scene_default_radius};
+pub use film::Film;
+pub use render::{PassOutput, RenderError, Renderer, StageReport, render_path_pass};
 pub use settings::{Mode, RenderSettings, default_radius};
+pub use table::PixelTable;

@@ -14,12 +14,18 @@ pub enum Mode {
 impl Mode {
     /// Every mode name the parser accepts, `path` first.
     pub fn names() -> Vec<&'static str> {
-        std::iter::once("path").chain(Heuristic::ALL_NAMES.iter().copied()).collect()
+        std::iter::once("path")
+            .chain(Heuristic::ALL_NAMES.iter().copied())
+            .collect()
     }
 
     /// Parses a mode name (`path`, `bdd0`, `bdd1`, `threshold`, …).
     pub fn parse(name: &str) -> Option<Mode> {
-        if name == "path" { Some(Mode::Path) } else { Heuristic::parse(name).map(Mode::Bdpm) }
+        if name == "path" {
+            Some(Mode::Path)
+        } else {
+            Heuristic::parse(name).map(Mode::Bdpm)
+        }
     }
 
     /// The mode's name as [`Mode::parse`] accepts it.

@@ -1,0 +1,405 @@
+//! The BDPM mix of method.md §2: direct light at x₀, photons merged at x₀ weighted per photon
+//! by 1 − w₁(x₀, y_p), and the camera's second vertex x₁ weighted by w₁(x₀, x₁).
+use std::f32::consts::PI;
+
+use bdpm_bdf::{Bdf, luminance};
+use bdpm_cache::RadianceCache;
+use bdpm_geometry::Hit;
+use bdpm_geometry::{Frame, Rng};
+use bdpm_mis::{Budget, Heuristic, Needs, Pair, PathKind, PixelTerms};
+use bdpm_photon::{PathVertex, PhotonMap, survival_probability};
+use bdpm_scene::{Scene, Shading};
+use glam::{DVec3, Vec3};
+
+/// The contributions of one camera sample, split by technique (for the debug layers).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Techniques {
+    /// L₀(x₀): direct light at the first vertex (never weighted).
+    pub direct: DVec3,
+    /// Photons merged at x₀, unweighted (the pure BDD=0 estimate of indirect light).
+    pub x0_raw: DVec3,
+    /// Photons merged at x₀, each weighted by 1 − w₁(x₀, y_p).
+    pub x0_weighted: DVec3,
+    /// E·(L₀(x₁→x₀) + Ph(x₁)), unweighted (the pure BDD=1 estimate of indirect light).
+    pub x1_raw: DVec3,
+    /// The same with weights w₁.
+    pub x1_weighted: DVec3,
+}
+
+impl Techniques {
+    /// The sample value: direct + weighted x₀ merge + weighted x₁ part.
+    pub fn total(&self) -> DVec3 {
+        self.direct + self.x0_weighted + self.x1_weighted
+    }
+}
+
+/// Everything that weights need to know about a candidate second vertex x₁ (the camera's own
+/// x₁, or a photon's previous vertex y_p), described identically for both so that the two
+/// techniques evaluate the same function w₁(x₀, x₁) (method.md §2).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct WeightVertex {
+    pub(crate) p: Vec3,
+    /// Geometric normal on the side that x₀ sees.
+    pub(crate) n: Vec3,
+    pub(crate) material: u32,
+    pub(crate) prim: u32,
+    /// Bit l set iff light l is visible from the vertex.
+    pub(crate) lights: u32,
+}
+
+/// Per-render constants of the mix.
+pub(crate) struct Mix<'a> {
+    pub(crate) scene: &'a Scene,
+    pub(crate) heuristic: Heuristic,
+    pub(crate) needs: Needs,
+    pub(crate) budget: Budget,
+    /// Merge kernel 1/S, m⁻².
+    pub(crate) inv_area: f32,
+    /// The frozen radiance cache, when the mode needs L_d (and b).
+    pub(crate) cache: Option<&'a RadianceCache>,
+    /// Test-only variant: weight the x₀ photon sum with w₁(x₀, x₁ᶜ) of the camera's x₁, as
+    /// the preprint's eq. 2–3 read literally. It is biased; a test shows it.
+    pub(crate) camera_x1_weighting: bool,
+}
+
+/// Visibility bits of the (first 32) lights from a shaded point.
+pub(crate) fn light_mask(scene: &Scene, sh: &Shading) -> u32 {
+    let mut mask = 0;
+    for (l, light) in scene.lights.iter().enumerate().take(32) {
+        let to = light.position - sh.p;
+        if sh.ng.dot(to) > 0.0 && !scene.geometry.occluded(scene.spawn(sh, to), light.position) {
+            mask |= 1 << l;
+        }
+    }
+    mask
+}
+
+/// L₀ leaving `v` towards the unit direction `wo`, using stored visibility bits and the
+/// geometric-normal frame (the same evaluation for camera vertices and photon vertices).
+pub(crate) fn direct_masked(scene: &Scene, v: &WeightVertex, wo: Vec3) -> Vec3 {
+    if v.lights == 0 || v.n.dot(wo) <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let frame = Frame::from_normal(v.n);
+    let bdf = scene.bdf(v.material);
+    let wo_l = frame.to_local(wo);
+    let mut sum = Vec3::ZERO;
+    for (l, light) in scene.lights.iter().enumerate().take(32) {
+        if v.lights & (1 << l) == 0 {
+            continue;
+        }
+        let to = light.position - v.p;
+        let d2 = to.length_squared();
+        let wi = to / d2.sqrt();
+        let cos = v.n.dot(wi);
+        if cos > 0.0 {
+            sum += bdf.eval(wo_l, frame.to_local(wi)) * light.intensity() * (cos / d2);
+        }
+    }
+    sum
+}
+
+impl WeightVertex {
+    pub(crate) fn from_photon_vertex(pv: &PathVertex) -> WeightVertex {
+        WeightVertex {
+            p: pv.position,
+            n: pv.normal,
+            material: pv.material,
+            prim: pv.prim,
+            lights: pv.visible_lights,
+        }
+    }
+}
+
+/// The camera side of x₀: the shading point, its outgoing direction and its BDF data.
+pub(crate) struct FirstVertex<'s> {
+    pub(crate) sh: Shading,
+    pub(crate) u: Vec3,
+    pub(crate) u_local: Vec3,
+    pub(crate) bdf: &'s Bdf,
+    /// Luminance of the directional albedo µ(u; x₀).
+    pub(crate) albedo: f32,
+}
+
+impl<'a> Mix<'a> {
+    /// f̃ = f/µ at x₀ for direction `v` (luminances), sr⁻¹.
+    fn f_tilde(&self, x0: &FirstVertex<'_>, f: Vec3) -> f64 {
+        if x0.albedo > 0.0 {
+            (luminance(f) / x0.albedo) as f64
+        } else {
+            0.0
+        }
+    }
+
+    /// Prepares x₀ for a camera ray that hit `hit` (u = towards the camera), or None if the
+    /// shading normal faces away from the camera.
+    pub(crate) fn first_vertex<'s>(&'s self, hit: &Hit, u: Vec3) -> Option<FirstVertex<'s>> {
+        let sh = self.scene.shade(hit, u);
+        let u_local = sh.frame.to_local(u);
+        if u_local.z <= 0.0 {
+            return None;
+        }
+        let bdf = self.scene.bdf(sh.material);
+        Some(FirstVertex {
+            sh,
+            u,
+            u_local,
+            bdf,
+            albedo: luminance(bdf.albedo(u_local)),
+        })
+    }
+
+    /// The pair data shared by both path kinds for x₀ and a candidate x₁ at `x1`.
+    pub(crate) fn pair(&self, x0: &FirstVertex<'_>, x1: &WeightVertex, v: Vec3, f0: Vec3) -> Pair {
+        let mut pair = Pair {
+            f_tilde: self.f_tilde(x0, f0),
+            ..Pair::default()
+        };
+        if self.needs.direct_at_x1 {
+            pair.direct = luminance(direct_masked(self.scene, x1, -v)) as f64;
+        }
+        if let Some(cache) = self.cache.filter(|_| self.needs.radiance_cache) {
+            let (ld, b) = cache.lookup(x1.prim, x1.p, -v);
+            pair.indirect = ld as f64;
+            pair.b = if cache.stats().stores_b {
+                b as f64
+            } else {
+                // Lambert: b = (kd/π)·L_d (method.md §7).
+                (luminance(self.scene.bdf(x1.material).kd()) / PI * ld) as f64
+            };
+        }
+        if let Heuristic::Threshold { .. } = self.heuristic {
+            pair.light_distance = self
+                .scene
+                .lights
+                .iter()
+                .map(|l| (l.position - x1.p).length())
+                .fold(f32::INFINITY, f32::min) as f64;
+        }
+        pair
+    }
+
+    /// Area-measure densities of §8 for a full path …→x₁→x₀ whose light path arrives at x₁
+    /// from direction `incoming` (unit, pointing away from x₁). Returns (p_C(x₀→x₁), p_L(x₁→x₀)).
+    fn densities(
+        &self,
+        x0: &FirstVertex<'_>,
+        x1: &WeightVertex,
+        v: Vec3,
+        dist2: f32,
+        incoming: Vec3,
+    ) -> (f64, f64) {
+        let cos1 = x1.n.dot(v).abs();
+        let cos0 = x0.sh.ng.dot(v).abs();
+        let p_c = x0.bdf.pdf(x0.u_local, x0.sh.frame.to_local(v)) * cos1 / dist2;
+        let frame1 = Frame::from_normal(x1.n);
+        let bdf1 = self.scene.bdf(x1.material);
+        let in_l = frame1.to_local(incoming);
+        let q = survival_probability(bdf1, in_l);
+        let p_l = q * bdf1.pdf(in_l, frame1.to_local(-v)) * cos0 / dist2;
+        (p_c as f64, p_l as f64)
+    }
+
+    /// Emission density p_L(light→x₁) in area measure (choice of light included).
+    fn emission_density(&self, light: usize, x1: &WeightVertex) -> f64 {
+        let l = &self.scene.lights[light];
+        let to = l.position - x1.p;
+        let d2 = to.length_squared();
+        let cos = x1.n.dot(to).abs() / d2.sqrt();
+        (self.scene.light_probability(light) / (4.0 * PI) * cos / d2) as f64
+    }
+
+    fn w1(&self, pair: &Pair, pixel: Option<&PixelTerms>) -> f64 {
+        self.heuristic.weight(&self.budget, pair, pixel).w1
+    }
+
+    /// One camera sample through image point (x, y): the value split by technique.
+    pub(crate) fn sample(
+        &self,
+        map: &PhotonMap,
+        x: f32,
+        y: f32,
+        rng: &mut Rng,
+        pixel: Option<&PixelTerms>,
+    ) -> Techniques {
+        let scene = self.scene;
+        let cam = &scene.camera;
+        let mut t = Techniques::default();
+        let dir = cam.ray_direction(x, y);
+        let Some(hit0) = scene.geometry.intersect(cam.position, dir, f32::INFINITY) else {
+            return t;
+        };
+        let u = -dir;
+        t.direct = scene.direct(&scene.shade(&hit0, u), u).as_dvec3();
+        let Some(x0) = self.first_vertex(&hit0, u) else {
+            return t;
+        };
+
+        // The camera's x₁ is sampled first: the test-only variant needs its weight at x₀.
+        let mut camera_w1 = None;
+        if self.needs.second_vertex {
+            camera_w1 = self.second_vertex(&x0, map, rng, pixel, &mut t);
+        }
+        if self.needs.photons_at_x0 {
+            self.merge_at_x0(&x0, map, pixel, camera_w1, &mut t);
+        }
+        t
+    }
+
+    /// BDD=1: sample v at x₀ (never absorbed), find x₁, add E·(L₀(x₁→x₀) + Ph(x₁)) with weights.
+    /// Returns the weight w₁(x₀, x₁ᶜ) of the merge kind (for the test-only variant).
+    fn second_vertex(
+        &self,
+        x0: &FirstVertex<'_>,
+        map: &PhotonMap,
+        rng: &mut Rng,
+        pixel: Option<&PixelTerms>,
+        t: &mut Techniques,
+    ) -> Option<f64> {
+        let scene = self.scene;
+        let s = x0.bdf.sample(x0.u_local, rng.uniform3())?;
+        let v = x0.sh.frame.to_world(s.wi);
+        if x0.sh.ng.dot(v) <= 0.0 {
+            return None;
+        }
+        let hit1 = scene
+            .geometry
+            .intersect(scene.spawn(&x0.sh, v), v, f32::INFINITY)?;
+        let wo1 = -v;
+        let sh1 = scene.shade(&hit1, wo1);
+        let e = s.weight;
+        let lights = light_mask(scene, &sh1);
+        let x1 = WeightVertex {
+            p: sh1.p,
+            n: sh1.ng,
+            material: sh1.material,
+            prim: sh1.prim,
+            lights,
+        };
+        let pair = self.pair(x0, &x1, v, s.f);
+        let dist2 = (x1.p - x0.sh.p).length_squared();
+
+        // One-bounce paths light→x₁→x₀, light by light (their balance weights differ).
+        let mut direct_raw = Vec3::ZERO;
+        let mut direct_weighted = Vec3::ZERO;
+        let per_light = self.needs.densities;
+        let w_const = if per_light {
+            0.0
+        } else {
+            self.w1(&pair, pixel)
+        };
+        for (l, light) in scene.lights.iter().enumerate() {
+            let c = scene.direct_from(&sh1, wo1, light);
+            if c == Vec3::ZERO {
+                continue;
+            }
+            direct_raw += c;
+            let w = if per_light {
+                let incoming = (light.position - x1.p).normalize();
+                let (pc, pl) = self.densities(x0, &x1, v, dist2, incoming);
+                let pair = Pair {
+                    path: PathKind::OneBounce,
+                    camera_density: pc,
+                    light_density: pl,
+                    emission_density: self.emission_density(l, &x1),
+                    ..pair
+                };
+                self.w1(&pair, pixel)
+            } else {
+                w_const
+            };
+            direct_weighted += c * w as f32;
+        }
+
+        // Merge paths …→x₂→x₁→x₀: photons around x₁.
+        let mut ph_raw = Vec3::ZERO;
+        let mut ph_weighted = Vec3::ZERO;
+        map.for_each_near(x1.p, |ph| {
+            let prev = map.vertex(ph.prev);
+            let wp = (prev.position - ph.position).normalize_or_zero();
+            let f = scene.eval(&sh1, wo1, wp);
+            if f == Vec3::ZERO {
+                return;
+            }
+            let c = f * ph.power;
+            ph_raw += c;
+            let w = if per_light {
+                let (pc, pl) = self.densities(x0, &x1, v, dist2, wp);
+                let pair = Pair {
+                    path: PathKind::Merge,
+                    camera_density: pc,
+                    light_density: pl,
+                    ..pair
+                };
+                self.w1(&pair, pixel)
+            } else {
+                w_const
+            };
+            ph_weighted += c * w as f32;
+        });
+        let k = self.inv_area;
+        t.x1_raw = (e * (direct_raw + ph_raw * k)).as_dvec3();
+        t.x1_weighted = (e * (direct_weighted + ph_weighted * k)).as_dvec3();
+        Some(w_const)
+    }
+
+    /// BDD=0: photons around x₀, each weighted by 1 − w₁(x₀, y_p) (method.md §2).
+    fn merge_at_x0(
+        &self,
+        x0: &FirstVertex<'_>,
+        map: &PhotonMap,
+        pixel: Option<&PixelTerms>,
+        camera_w1: Option<f64>,
+        t: &mut Techniques,
+    ) {
+        let scene = self.scene;
+        let mut raw = Vec3::ZERO;
+        let mut weighted = Vec3::ZERO;
+        let pure = matches!(self.heuristic, Heuristic::Bdd0);
+        map.for_each_near(x0.sh.p, |ph| {
+            let prev = map.vertex(ph.prev);
+            let to_prev = prev.position - x0.sh.p;
+            let wp = (prev.position - ph.position).normalize_or_zero();
+            let f = scene.eval(&x0.sh, x0.u, wp);
+            if f == Vec3::ZERO {
+                return;
+            }
+            let c = f * ph.power;
+            raw += c;
+            let w0 = if pure {
+                1.0
+            } else if self.camera_x1_weighting {
+                1.0 - camera_w1.unwrap_or(0.0)
+            } else {
+                let dist2 = to_prev.length_squared();
+                if dist2 <= 0.0 {
+                    return;
+                }
+                let v = to_prev / dist2.sqrt();
+                let y = WeightVertex::from_photon_vertex(prev);
+                let f0 = scene.eval(&x0.sh, x0.u, v);
+                let mut pair = self.pair(x0, &y, v, f0);
+                if self.needs.densities {
+                    let (pc, pl) = self.densities(x0, &y, v, dist2, prev.incoming);
+                    pair.camera_density = pc;
+                    pair.light_density = pl;
+                    if prev.depth == 0 {
+                        pair.path = PathKind::OneBounce;
+                        pair.emission_density = self.emission_density(prev.light as usize, &y);
+                    }
+                }
+                1.0 - self.w1(&pair, pixel)
+            };
+            weighted += c * w0 as f32;
+        });
+        let k = self.inv_area;
+        t.x0_raw = (raw * k).as_dvec3();
+        t.x0_weighted = (weighted * k).as_dvec3();
+    }
+}
+
+/// The default merge radius for `scene`: its largest bounding-box extent / 1600, metres.
+pub fn scene_default_radius(scene: &Scene) -> f32 {
+    let (lo, hi) = scene.geometry.bounds();
+    crate::settings::default_radius((hi - lo).max_element())
+}

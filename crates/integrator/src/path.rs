@@ -1,0 +1,56 @@
+//! The unidirectional reference: path tracing with next-event estimation to point lights.
+use bdpm_geometry::Rng;
+use bdpm_scene::Scene;
+use glam::Vec3;
+
+/// Hard cap on path length; Russian roulette ends paths long before it (it guards against a
+/// non-absorbing scene whose roulette probability is pinned at its ceiling).
+const MAX_DEPTH: u32 = 1024;
+/// Ceiling of the roulette survival probability, so that non-absorbing scenes terminate.
+const MAX_SURVIVAL: f32 = 0.95;
+
+/// One path-traced radiance sample along the camera ray `(origin, dir)` (unit `dir`):
+/// an unbiased estimate of the radiance arriving at `origin` from `-dir`, W·m⁻²·sr⁻¹.
+///
+/// Russian roulette starts after `roulette_depth` scatterings, with survival probability
+/// min(max throughput channel, 0.95).
+pub fn trace_path(
+    scene: &Scene,
+    mut origin: Vec3,
+    mut dir: Vec3,
+    rng: &mut Rng,
+    roulette_depth: u32,
+) -> Vec3 {
+    let mut radiance = Vec3::ZERO;
+    let mut beta = Vec3::ONE;
+    for depth in 0..MAX_DEPTH {
+        let Some(hit) = scene.geometry.intersect(origin, dir, f32::INFINITY) else {
+            break;
+        };
+        let wo = -dir;
+        let sh = scene.shade(&hit, wo);
+        radiance += beta * scene.direct(&sh, wo);
+        let wo_local = sh.frame.to_local(wo);
+        if wo_local.z <= 0.0 {
+            break;
+        }
+        let Some(s) = scene.bdf(sh.material).sample(wo_local, rng.uniform3()) else {
+            break;
+        };
+        let wi = sh.frame.to_world(s.wi);
+        if sh.ng.dot(wi) <= 0.0 {
+            break;
+        }
+        beta *= s.weight;
+        if depth + 1 >= roulette_depth {
+            let q = beta.max_element().min(MAX_SURVIVAL);
+            if q <= 0.0 || rng.uniform() >= q {
+                break;
+            }
+            beta /= q;
+        }
+        origin = scene.spawn(&sh, wi);
+        dir = wi;
+    }
+    radiance
+}

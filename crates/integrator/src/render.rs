@@ -1,0 +1,404 @@
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use bdpm_geometry::{Domain, Rng};
+use bdpm_scene::Scene;
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+
+use bdpm_bdf::luminance;
+use bdpm_cache::{CacheSettings, RadianceCache};
+use bdpm_mis::{Budget, CB_EPSILON, Heuristic};
+use bdpm_photon::{PhotonMap, TraceOptions};
+
+use crate::bdpm::{Mix, Techniques, scene_default_radius};
+use crate::path::trace_path;
+use crate::settings::{Mode, RenderSettings};
+use crate::table::{self, PixelTable};
+
+/// Radiance-cache cells per largest scene extent: cells of ~9 cm in the 2.8 m Cornell box,
+/// far larger than the merge radius, as method.md §5 asks.
+const CACHE_CELLS_PER_EXTENT: f32 = 32.0;
+
+/// Time and memory of one preparatory stage (photon map, radiance cache, A/B table, …).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StageReport {
+    /// Stage name, e.g. `"radiance cache"`.
+    pub name: &'static str,
+    /// Wall time, seconds.
+    pub seconds: f64,
+    /// Memory held by the stage's result, bytes.
+    pub bytes: u64,
+    /// One line of facts (cell counts, bins, …).
+    pub detail: String,
+}
+
+/// Why a render cannot start.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RenderError {
+    /// The settings do not fit the scene or each other.
+    Settings(String),
+}
+
+impl std::fmt::Display for RenderError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RenderError::Settings(m) => write!(f, "{m}"),
+        }
+    }
+}
+
+impl std::error::Error for RenderError {}
+
+/// A scene and settings made ready to render passes: validates the settings, builds what the
+/// mode needs once (and nothing it does not need), then renders any pass on demand.
+pub struct Renderer<'a> {
+    scene: &'a Scene,
+    settings: RenderSettings,
+    stages: Vec<StageReport>,
+    radius: f32,
+    techniques: bool,
+    camera_x1_weighting: bool,
+    cache: Option<RadianceCache>,
+    table: Option<PixelTable>,
+}
+
+impl<'a> Renderer<'a> {
+    /// Checks `settings` against `scene` and prepares the mode's pre-passes.
+    pub fn new(scene: &'a Scene, settings: &RenderSettings) -> Result<Renderer<'a>, RenderError> {
+        let s = settings;
+        if s.width == 0 || s.height == 0 || s.passes == 0 || s.spp == 0 || s.photons == 0 {
+            return Err(RenderError::Settings(
+                "resolution, passes, spp and photons must all be at least 1".into(),
+            ));
+        }
+        if (scene.camera.width, scene.camera.height) != (s.width, s.height) {
+            return Err(RenderError::Settings(format!(
+                "camera is {}×{} but the settings ask for {}×{}",
+                scene.camera.width, scene.camera.height, s.width, s.height
+            )));
+        }
+        if let Some(r) = s.radius
+            && !(r.is_finite() && r > 0.0)
+        {
+            return Err(RenderError::Settings(format!(
+                "merge radius {r} must be positive"
+            )));
+        }
+        let radius = s.radius.unwrap_or_else(|| scene_default_radius(scene));
+        let mut settings = s.clone();
+        settings.radius = Some(radius);
+        if let Mode::Bdpm(Heuristic::Optimal { .. }) = settings.mode {
+            settings.mode = Mode::Bdpm(Heuristic::Optimal {
+                clamp_weights: s.clamp_weights,
+            });
+        }
+        if let Mode::Bdpm(Heuristic::Threshold { .. }) = settings.mode {
+            settings.mode = Mode::Bdpm(Heuristic::Threshold {
+                radius: s.threshold_radius as f64,
+            });
+        }
+        let mut renderer = Renderer {
+            scene,
+            settings,
+            stages: Vec::new(),
+            radius,
+            techniques: false,
+            camera_x1_weighting: false,
+            cache: None,
+            table: None,
+        };
+        if let Mode::Bdpm(h) = renderer.settings.mode {
+            renderer.prepare(h);
+        }
+        Ok(renderer)
+    }
+
+    /// Builds the radiance cache and the A/B table when (and only when) `h` needs them.
+    fn prepare(&mut self, h: Heuristic) {
+        let needs = h.needs();
+        let s = &self.settings;
+        if needs.radiance_cache {
+            let start = std::time::Instant::now();
+            let (lo, hi) = self.scene.geometry.bounds();
+            let settings = CacheSettings {
+                bins: s.cache_bins,
+                cell_size: (hi - lo).max_element() / CACHE_CELLS_PER_EXTENT,
+                photons: s.photons,
+                seed: s.seed,
+            };
+            let cache = RadianceCache::build(self.scene, &settings);
+            let st = cache.stats();
+            self.stages.push(StageReport {
+                name: "radiance cache",
+                seconds: start.elapsed().as_secs_f64(),
+                bytes: st.bytes,
+                detail: format!(
+                    "{} cells x 2 sides, {} bin(s) per side, b {}, {} photons emitted, {} arrivals, {:.1}% of cell sides hit",
+                    st.cells,
+                    st.bins,
+                    if st.stores_b { "stored" } else { "derived (Lambert-only scene)" },
+                    settings.photons,
+                    st.arrivals,
+                    100.0 * st.filled_fraction
+                ),
+            });
+            self.cache = Some(cache);
+        }
+        if needs.pixel_table {
+            let start = std::time::Instant::now();
+            let table = table::build(&self.mix(h), s.width, s.height, s.pixel_table_rays, s.seed);
+            let c = self.budget().c();
+            let clamped = table
+                .terms()
+                .iter()
+                .filter(|t| c * t.b >= 1.0 - CB_EPSILON)
+                .count();
+            self.stages.push(StageReport {
+                name: "pixel table",
+                seconds: start.elapsed().as_secs_f64(),
+                bytes: table.bytes(),
+                detail: format!(
+                    "A, B for {}x{} pixels, {} rays each; {} pixels with c*B clamped",
+                    s.width, s.height, s.pixel_table_rays, clamped
+                ),
+            });
+            self.table = Some(table);
+        }
+    }
+
+    /// The mix of mode `h` with this renderer's constants.
+    fn mix(&self, heuristic: Heuristic) -> Mix<'_> {
+        Mix {
+            scene: self.scene,
+            heuristic,
+            needs: heuristic.needs(),
+            budget: self.budget(),
+            inv_area: 1.0 / (std::f32::consts::PI * self.radius * self.radius),
+            cache: self.cache.as_ref(),
+            camera_x1_weighting: self.camera_x1_weighting,
+        }
+    }
+
+    /// Also return each sample's contributions split by technique ([`PassOutput::techniques`]).
+    pub fn with_technique_layers(mut self, on: bool) -> Self {
+        self.techniques = on;
+        self
+    }
+
+    /// Test-only: weight the photon sum at x₀ with the camera's w₁(x₀, x₁ᶜ) as the preprint's
+    /// eq. 2–3 read literally. This estimator is biased (method.md §2); it exists so that a test
+    /// can show the bias.
+    #[doc(hidden)]
+    pub fn with_camera_x1_weighting(mut self, on: bool) -> Self {
+        self.camera_x1_weighting = on;
+        self
+    }
+
+    /// The merge radius r in use, metres.
+    pub fn radius(&self) -> f32 {
+        self.radius
+    }
+
+    /// The settings this renderer uses.
+    pub fn settings(&self) -> &RenderSettings {
+        &self.settings
+    }
+
+    /// The preparatory stages that ran, with their cost.
+    pub fn stages(&self) -> &[StageReport] {
+        &self.stages
+    }
+
+    /// Renders pass number `pass` (0-based). `progress` is called with units of work done
+    /// (one per image row); a pass has [`Renderer::work_per_pass`] units.
+    pub fn render_pass(&self, pass: u32, progress: &(dyn Fn(u64) + Sync)) -> PassOutput {
+        match self.settings.mode {
+            Mode::Path => render_path_pass(self.scene, &self.settings, pass, progress),
+            Mode::Bdpm(h) => self.render_bdpm_pass(h, pass, progress),
+        }
+    }
+
+    /// Units of progress one pass reports.
+    pub fn work_per_pass(&self) -> u64 {
+        self.settings.height as u64
+    }
+}
+
+impl Renderer<'_> {
+    fn budget(&self) -> Budget {
+        Budget {
+            camera_samples: self.settings.spp as f64,
+            photons: self.settings.photons as f64,
+            merge_area: (std::f64::consts::PI * (self.radius as f64).powi(2)),
+            flux: luminance(self.scene.total_flux()) as f64,
+        }
+    }
+
+    fn render_bdpm_pass(
+        &self,
+        heuristic: Heuristic,
+        pass: u32,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> PassOutput {
+        let s = &self.settings;
+        let needs = heuristic.needs();
+        let t_photons = std::time::Instant::now();
+        let options = TraceOptions {
+            photons: s.photons,
+            seed: s.seed,
+            domain: Domain::Photon,
+            pass,
+            light_visibility: needs.direct_at_x1,
+            max_depth: 1024,
+        };
+        let map = PhotonMap::trace(self.scene, &options, self.radius);
+        let photon_seconds = t_photons.elapsed().as_secs_f64();
+        let mix = self.mix(heuristic);
+        let table = self.table.as_ref();
+        let t_camera = std::time::Instant::now();
+        let (w, h) = (s.width as usize, s.height as usize);
+        let dropped = AtomicU64::new(0);
+        let mut estimates = vec![DVec3::ZERO; w * h];
+        let mut techniques = vec![Techniques::default(); if self.techniques { w * h } else { 0 }];
+        let record = self.techniques;
+        let render_row = |y: usize, row: &mut [DVec3], mut trow: Option<&mut [Techniques]>| {
+            let mut row_dropped = 0;
+            for (x, px) in row.iter_mut().enumerate() {
+                let pixel = (y * w + x) as u64;
+                let mut sum = DVec3::ZERO;
+                let mut tsum = Techniques::default();
+                for k in 0..s.spp {
+                    let mut rng = Rng::new(s.seed, Domain::Camera, [pass as u64, pixel, k as u64]);
+                    let [jx, jy] = rng.uniform2();
+                    let terms = table.map(|t| t.get(x as u32, y as u32));
+                    let t = mix.sample(&map, x as f32 + jx, y as f32 + jy, &mut rng, terms);
+                    let value = t.total();
+                    if value.is_finite() {
+                        sum += value;
+                        if record {
+                            tsum.direct += t.direct;
+                            tsum.x0_raw += t.x0_raw;
+                            tsum.x0_weighted += t.x0_weighted;
+                            tsum.x1_raw += t.x1_raw;
+                            tsum.x1_weighted += t.x1_weighted;
+                        }
+                    } else {
+                        row_dropped += 1;
+                    }
+                }
+                let n = s.spp as f64;
+                *px = sum / n;
+                if let Some(trow) = trow.as_deref_mut() {
+                    trow[x] = Techniques {
+                        direct: tsum.direct / n,
+                        x0_raw: tsum.x0_raw / n,
+                        x0_weighted: tsum.x0_weighted / n,
+                        x1_raw: tsum.x1_raw / n,
+                        x1_weighted: tsum.x1_weighted / n,
+                    };
+                }
+            }
+            dropped.fetch_add(row_dropped, Ordering::Relaxed);
+            progress(1);
+        };
+        if record {
+            estimates
+                .par_chunks_mut(w)
+                .zip(techniques.par_chunks_mut(w))
+                .enumerate()
+                .for_each(|(y, (row, trow))| render_row(y, row, Some(trow)));
+        } else {
+            estimates
+                .par_chunks_mut(w)
+                .enumerate()
+                .for_each(|(y, row)| render_row(y, row, None));
+        }
+        PassOutput {
+            estimates,
+            dropped: dropped.into_inner(),
+            samples: (w * h) as u64 * s.spp as u64,
+            stage_seconds: vec![
+                ("photons", photon_seconds),
+                ("camera", t_camera.elapsed().as_secs_f64()),
+            ],
+            techniques: if record { Some(techniques) } else { None },
+            photons_stored: map.photons.len() as u64,
+        }
+    }
+}
+
+/// What one pass produced: the per-pixel estimates and counters.
+#[derive(Clone, Debug)]
+pub struct PassOutput {
+    /// Per-pixel pass estimate (mean of the pass's camera samples), row-major, W·m⁻²·sr⁻¹.
+    pub estimates: Vec<DVec3>,
+    /// Camera samples whose value was NaN or infinite (dropped: they contribute zero).
+    pub dropped: u64,
+    /// Camera samples taken.
+    pub samples: u64,
+    /// Wall time of the pass's stages (e.g. photon tracing, camera samples), seconds.
+    pub stage_seconds: Vec<(&'static str, f64)>,
+    /// Per-pixel pass estimates split by technique, when asked for
+    /// ([`Renderer::with_technique_layers`]; BDPM modes only).
+    pub techniques: Option<Vec<Techniques>>,
+    /// Photons stored in this pass's map (0 for `path`).
+    pub photons_stored: u64,
+}
+
+/// Adds a sample to a pixel sum unless it is non-finite, in which case it is counted.
+#[inline]
+pub(crate) fn accumulate(sum: &mut DVec3, sample: Vec3, dropped: &mut u64) {
+    if sample.is_finite() {
+        *sum += sample.as_dvec3();
+    } else {
+        *dropped += 1;
+    }
+}
+
+/// Renders pass `pass` of the `path` reference: N_B jittered samples per pixel, each a pure
+/// function of (seed, pass, pixel, sample). `progress` is called with the number of rows done.
+pub fn render_path_pass(
+    scene: &Scene,
+    settings: &RenderSettings,
+    pass: u32,
+    progress: &(dyn Fn(u64) + Sync),
+) -> PassOutput {
+    debug_assert_eq!(settings.mode, Mode::Path);
+    let (w, h) = (settings.width, settings.height);
+    let cam = &scene.camera;
+    let start = std::time::Instant::now();
+    let dropped = AtomicU64::new(0);
+    let mut estimates = vec![DVec3::ZERO; w as usize * h as usize];
+    estimates
+        .par_chunks_mut(w as usize)
+        .enumerate()
+        .for_each(|(y, row)| {
+            let mut row_dropped = 0;
+            for (x, px) in row.iter_mut().enumerate() {
+                let pixel = (y * w as usize + x) as u64;
+                let mut sum = DVec3::ZERO;
+                for s in 0..settings.spp {
+                    let mut rng = Rng::new(
+                        settings.seed,
+                        Domain::Camera,
+                        [pass as u64, pixel, s as u64],
+                    );
+                    let [jx, jy] = rng.uniform2();
+                    let dir = cam.ray_direction(x as f32 + jx, y as f32 + jy);
+                    let l = trace_path(scene, cam.position, dir, &mut rng, settings.roulette_depth);
+                    accumulate(&mut sum, l, &mut row_dropped);
+                }
+                *px = sum / settings.spp as f64;
+            }
+            dropped.fetch_add(row_dropped, Ordering::Relaxed);
+            progress(1);
+        });
+    PassOutput {
+        estimates,
+        dropped: dropped.into_inner(),
+        samples: w as u64 * h as u64 * settings.spp as u64,
+        stage_seconds: vec![("camera", start.elapsed().as_secs_f64())],
+        techniques: None,
+        photons_stored: 0,
+    }
+}
