@@ -1,0 +1,617 @@
+//! Validation of the parsed file and assembly of the [`Scene`]: every check names the dotted
+//! field it concerns.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use bdpm_bdf::Bdf;
+use bdpm_geometry::{Geometry, GeometryError, TriangleMesh};
+use bdpm_integrator::{Mode, RenderSettings, default_radius};
+use bdpm_scene::{Camera, Material, PointLight, Scene, SceneError};
+use glam::{Mat4, Vec3};
+
+use crate::gltf_mesh::{Origin, load_gltf};
+use crate::schema::{CameraDef, MaterialDef, RenderDef, SceneFile, ShapeDef, Triple};
+use crate::shapes::{BOX_FACES, push_box, push_sphere, sphere_triangle_count};
+use crate::{LoadError, LoadReport, LoadedScene, limits};
+
+/// The file being loaded: the source of every message's prefix.
+struct Ctx<'a> {
+    file: &'a Path,
+}
+
+impl Ctx<'_> {
+    fn bad(&self, field: impl Into<String>, message: impl Into<String>) -> LoadError {
+        LoadError::Invalid {
+            path: self.file.to_path_buf(),
+            field: field.into(),
+            message: message.into(),
+        }
+    }
+
+    fn required<T>(&self, field: &str, value: Option<T>, what: &str) -> Result<T, LoadError> {
+        value.ok_or_else(|| self.bad(field, format!("missing (required: {what})")))
+    }
+
+    fn finite(&self, field: &str, v: Vec3) -> Result<Vec3, LoadError> {
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(self.bad(field, format!("{v} is not finite (NaN or infinite)")))
+        }
+    }
+
+    fn positive(&self, field: &str, v: f32, unit: &str) -> Result<f32, LoadError> {
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            Err(self.bad(field, format!("{v} must be a finite number > 0 ({unit})")))
+        }
+    }
+
+    fn count<T: PartialOrd + std::fmt::Display>(
+        &self,
+        field: &str,
+        v: T,
+        lo: T,
+        hi: T,
+    ) -> Result<T, LoadError> {
+        if v >= lo && v <= hi {
+            Ok(v)
+        } else {
+            Err(self.bad(field, format!("{v} is outside [{lo}, {hi}]")))
+        }
+    }
+
+    /// Every channel of `t` finite and in [lo, hi].
+    fn channels(
+        &self,
+        field: &str,
+        t: Triple,
+        lo: f32,
+        hi: Option<f32>,
+    ) -> Result<Vec3, LoadError> {
+        let range = match hi {
+            Some(hi) => format!("is outside [{lo}, {hi}]"),
+            None => format!("must be >= {lo}"),
+        };
+        let channels = t.value.to_array().into_iter().zip(["red", "green", "blue"]);
+        for (c, name) in channels {
+            if c.is_finite() && c >= lo && hi.is_none_or(|hi| c <= hi) {
+                continue;
+            }
+            let message = if t.scalar {
+                format!("{c} {range}")
+            } else if !c.is_finite() {
+                format!("{name} channel {c} is not finite (in {})", t.value)
+            } else {
+                format!("{name} channel {c} {range} (in {})", t.value)
+            };
+            return Err(self.bad(field, message));
+        }
+        Ok(t.value)
+    }
+
+    /// `scale` (non-zero finite per axis) then `translate` as one matrix.
+    fn placement(
+        &self,
+        prefix: &str,
+        scale: Option<Triple>,
+        translate: Option<Vec3>,
+    ) -> Result<Mat4, LoadError> {
+        let s = scale.map_or(Vec3::ONE, |s| s.value);
+        if !(s.is_finite() && s.cmpne(Vec3::ZERO).all()) {
+            return Err(self.bad(
+                format!("{prefix}.scale"),
+                format!("{s} must be finite and non-zero on every axis"),
+            ));
+        }
+        let t = self.finite(
+            &format!("{prefix}.translate"),
+            translate.unwrap_or(Vec3::ZERO),
+        )?;
+        Ok(Mat4::from_translation(t) * Mat4::from_scale(s))
+    }
+}
+
+/// The scene's materials: TOML ones first (sorted by name), then those made from glTF files.
+pub(crate) struct Materials {
+    list: Vec<Material>,
+    by_name: HashMap<String, u32>,
+    gltf_default: Option<u32>,
+}
+
+impl Materials {
+    /// Index of the TOML material `name`.
+    pub(crate) fn lookup(&self, name: &str) -> Option<u32> {
+        self.by_name.get(name).copied()
+    }
+
+    /// Adds a Lambert material made from a glTF file (not reachable by name from shapes).
+    pub(crate) fn add_lambert(&mut self, name: String, kd: Vec3) -> Result<u32, String> {
+        let bdf = Bdf::lambert(kd).map_err(|e| e.to_string())?;
+        self.list.push(Material { name, bdf });
+        Ok(self.list.len() as u32 - 1)
+    }
+
+    /// The material of glTF primitives without one: Lambert, kd = 0.8 in every channel.
+    pub(crate) fn gltf_default(&mut self) -> Result<u32, LoadError> {
+        if let Some(m) = self.gltf_default {
+            return Ok(m);
+        }
+        let m = self
+            .add_lambert("gltf:default".into(), Vec3::splat(crate::GLTF_DEFAULT_KD))
+            .map_err(|e| LoadError::Invalid {
+                path: PathBuf::new(),
+                field: "gltf:default".into(),
+                message: e,
+            })?;
+        self.gltf_default = Some(m);
+        Ok(m)
+    }
+}
+
+pub(crate) fn build(
+    file: SceneFile,
+    base_dir: &Path,
+    display_path: &Path,
+) -> Result<LoadedScene, LoadError> {
+    let ctx = Ctx { file: display_path };
+    let mut report = LoadReport::default();
+
+    let (mut settings, output) = render_settings(&ctx, file.render.unwrap_or_default())?;
+    let mut materials = materials(&ctx, &file.material)?;
+
+    let mut lights = Vec::with_capacity(file.light.len());
+    for (i, l) in file.light.iter().enumerate() {
+        let field = format!("light[{i}]");
+        let position = ctx.required(
+            &format!("{field}.position"),
+            l.position,
+            "[x, y, z] in metres",
+        )?;
+        let position = ctx.finite(&format!("{field}.position"), position)?;
+        let flux = ctx.required(
+            &format!("{field}.flux"),
+            l.flux,
+            "watts per RGB channel, a number or [r, g, b]",
+        )?;
+        let flux = ctx.channels(&format!("{field}.flux"), flux, 0.0, None)?;
+        lights.push(PointLight { position, flux });
+    }
+
+    let mut parts: Vec<TriangleMesh> = Vec::with_capacity(file.shape.len());
+    let mut total_triangles: u64 = 0;
+    for (i, shape) in file.shape.iter().enumerate() {
+        let prefix = format!("shape[{i}]");
+        let mut mesh = TriangleMesh::default();
+        match shape {
+            ShapeDef::Quad(q) => {
+                let material = shape_material(
+                    &ctx,
+                    &prefix,
+                    q.material.as_deref(),
+                    &materials,
+                    shape.type_name(),
+                )?;
+                let field = format!("{prefix}.vertices");
+                let v = ctx.required(&field, q.vertices.as_ref(), "4 points [x, y, z]")?;
+                let v: [Vec3; 4] = v.as_slice().try_into().map_err(|_| {
+                    ctx.bad(&field, format!("{} points given; a quad has 4", v.len()))
+                })?;
+                for (k, p) in v.iter().enumerate() {
+                    let _ = ctx.finite(&format!("{field}[{k}]"), *p)?;
+                }
+                let m = ctx.placement(&prefix, q.scale, q.translate)?;
+                mesh.push_quad(v.map(|p| m.transform_point3(p)), material);
+            }
+            ShapeDef::Box(b) => {
+                let material = shape_material(
+                    &ctx,
+                    &prefix,
+                    b.material.as_deref(),
+                    &materials,
+                    shape.type_name(),
+                )?;
+                let lo = ctx.finite(
+                    &format!("{prefix}.min"),
+                    ctx.required(&format!("{prefix}.min"), b.min, "[x, y, z] in metres")?,
+                )?;
+                let hi = ctx.finite(
+                    &format!("{prefix}.max"),
+                    ctx.required(&format!("{prefix}.max"), b.max, "[x, y, z] in metres")?,
+                )?;
+                if !hi.cmpgt(lo).all() {
+                    return Err(ctx.bad(
+                        format!("{prefix}.max"),
+                        format!("{hi} must exceed min = {lo} on every axis"),
+                    ));
+                }
+                let mut keep = [true; 6];
+                for (k, face) in b.open.iter().enumerate() {
+                    let j = BOX_FACES.iter().position(|f| f.0 == face).ok_or_else(|| {
+                        ctx.bad(
+                            format!("{prefix}.open[{k}]"),
+                            format!(
+                                "unknown face '{face}'; expected one of +x, -x, +y, -y, +z, -z"
+                            ),
+                        )
+                    })?;
+                    keep[j] = false;
+                }
+                let inward = facing(&ctx, &prefix, b.facing.as_deref())?;
+                let m = ctx.placement(&prefix, b.scale, b.translate)?;
+                let (a, c) = (m.transform_point3(lo), m.transform_point3(hi));
+                // A negative scale swaps min and max; the box stays the same set of points.
+                push_box(&mut mesh, a.min(c), a.max(c), keep, inward, material);
+            }
+            ShapeDef::Sphere(s) => {
+                let material = shape_material(
+                    &ctx,
+                    &prefix,
+                    s.material.as_deref(),
+                    &materials,
+                    shape.type_name(),
+                )?;
+                let center =
+                    ctx.finite(&format!("{prefix}.center"), s.center.unwrap_or(Vec3::ZERO))?;
+                let radius = ctx.required(&format!("{prefix}.radius"), s.radius, "metres")?;
+                let radius = ctx.positive(&format!("{prefix}.radius"), radius, "metres")?;
+                let freq = ctx.count(
+                    &format!("{prefix}.subdivisions"),
+                    s.subdivisions
+                        .unwrap_or(limits::SPHERE_SUBDIVISIONS_DEFAULT),
+                    1,
+                    limits::SPHERE_SUBDIVISIONS_MAX,
+                )?;
+                total_triangles += sphere_triangle_count(freq);
+                if total_triangles > limits::MAX_BUILTIN_TRIANGLES {
+                    return Err(ctx.bad(
+                        format!("{prefix}.subdivisions"),
+                        format!(
+                            "the built-in shapes would exceed {} triangles",
+                            limits::MAX_BUILTIN_TRIANGLES
+                        ),
+                    ));
+                }
+                let inward = facing(&ctx, &prefix, s.facing.as_deref())?;
+                push_sphere(&mut mesh, center, radius, freq, inward, material);
+            }
+            ShapeDef::Mesh(g) => {
+                let override_material = match g.material.as_deref() {
+                    Some(name) => Some(shape_material(
+                        &ctx,
+                        &prefix,
+                        Some(name),
+                        &materials,
+                        "mesh",
+                    )?),
+                    None => None,
+                };
+                let field = format!("{prefix}.file");
+                let written = ctx.required(
+                    &field,
+                    g.file.as_ref(),
+                    "path of a .gltf or .glb file, relative to the scene file",
+                )?;
+                let path = base_dir.join(written);
+                let post = ctx.placement(&prefix, g.scale, g.translate)?;
+                let origin = Origin {
+                    path: &path,
+                    field: &field,
+                    written,
+                };
+                let part = load_gltf(&origin, post, override_material, &mut materials)?;
+                report.gltf_files.push(path.clone());
+                report.skipped_primitives += part.skipped_primitives;
+                report.skipped_lights += part.skipped_lights;
+                report.flat_primitives += part.flat_primitives;
+                lights.extend(part.lights);
+                mesh = part.mesh;
+            }
+        }
+        if let Some(k) = mesh.positions.iter().position(|p| !p.is_finite()) {
+            return Err(ctx.bad(
+                &prefix,
+                format!("vertex {k} is not finite after scale and translate (overflow?)"),
+            ));
+        }
+        // The BVH builder (obvhs 0.4) panics when squared extents overflow f32, which happens
+        // near 1e19 m; a far smaller bound costs no real scene anything.
+        if let Some((k, p)) = mesh
+            .positions
+            .iter()
+            .enumerate()
+            .find(|(_, p)| p.abs().max_element() > limits::MAX_COORDINATE)
+        {
+            return Err(ctx.bad(
+                &prefix,
+                format!(
+                    "vertex {k} at {p} m is beyond ±{:e} m on some axis",
+                    limits::MAX_COORDINATE
+                ),
+            ));
+        }
+        parts.push(mesh);
+    }
+
+    let mesh = merge(&ctx, parts)?;
+    let geometry = Geometry::new(mesh).map_err(|e| match e {
+        GeometryError::Empty => ctx.bad("shape", "the scene has no triangle with positive area"),
+        other => ctx.bad("shape", other.to_string()),
+    })?;
+
+    let (lo, hi) = geometry.bounds();
+    let extent = (hi - lo).max_element();
+    let radius = match settings.radius {
+        Some(r) => r,
+        None => {
+            let r = default_radius(extent);
+            if !(r.is_finite() && r > 0.0) {
+                return Err(ctx.bad(
+                    "render.radius",
+                    format!("cannot derive a default from the scene extent {extent} m; give one"),
+                ));
+            }
+            r
+        }
+    };
+    settings.radius = Some(radius);
+
+    let camera = camera(&ctx, file.camera, settings.width, settings.height)?;
+
+    report.triangles = geometry.triangle_count();
+    report.degenerate_triangles = geometry.degenerate_count();
+    report.materials = materials.list.len();
+    report.lights = lights.len();
+
+    let light_count = lights.len();
+    let scene = Scene::new(geometry, materials.list, lights, camera).map_err(|e| match e {
+        SceneError::NoLight if light_count == 0 => ctx.bad(
+            "light",
+            "the scene has no light; add a [[light]] with position and flux",
+        ),
+        SceneError::NoLight => ctx.bad(
+            "light",
+            "every light has zero flux; the image would be black",
+        ),
+        SceneError::BadLight { index } => ctx.bad(format!("light[{index}]"), e.to_string()),
+        SceneError::BadCamera(why) => ctx.bad("camera", why),
+        SceneError::MissingMaterial { .. } => ctx.bad("shape", e.to_string()),
+    })?;
+    Ok(LoadedScene {
+        scene,
+        settings,
+        output,
+        report,
+    })
+}
+
+/// `facing = "outside" | "inside"`: true for inside.
+fn facing(ctx: &Ctx<'_>, prefix: &str, v: Option<&str>) -> Result<bool, LoadError> {
+    match v {
+        None | Some("outside") => Ok(false),
+        Some("inside") => Ok(true),
+        Some(other) => Err(ctx.bad(
+            format!("{prefix}.facing"),
+            format!("unknown value '{other}'; expected \"outside\" or \"inside\""),
+        )),
+    }
+}
+
+fn shape_material(
+    ctx: &Ctx<'_>,
+    prefix: &str,
+    name: Option<&str>,
+    materials: &Materials,
+    kind: &str,
+) -> Result<u32, LoadError> {
+    let field = format!("{prefix}.material");
+    let name = ctx.required(
+        &field,
+        name,
+        &format!("the name of a [material.NAME] for this {kind}"),
+    )?;
+    materials.lookup(name).ok_or_else(|| {
+        let mut known: Vec<&str> = materials.by_name.keys().map(String::as_str).collect();
+        known.sort_unstable();
+        let known = if known.is_empty() {
+            "none are defined".to_string()
+        } else {
+            format!("defined: {}", known.join(", "))
+        };
+        ctx.bad(field, format!("unknown material '{name}' ({known})"))
+    })
+}
+
+fn materials(
+    ctx: &Ctx<'_>,
+    defs: &std::collections::BTreeMap<String, MaterialDef>,
+) -> Result<Materials, LoadError> {
+    let mut out = Materials {
+        list: Vec::with_capacity(defs.len()),
+        by_name: HashMap::new(),
+        gltf_default: None,
+    };
+    for (name, def) in defs {
+        let prefix = format!("material.{name}");
+        let kd = ctx.required(
+            &format!("{prefix}.kd"),
+            def.kd,
+            "Lambert albedo, a number or [r, g, b] in [0, 1]",
+        )?;
+        let kd = ctx.channels(&format!("{prefix}.kd"), kd, 0.0, Some(1.0))?;
+        let gr = match def.gr {
+            Some(gr) => ctx.channels(&format!("{prefix}.gr"), gr, 0.0, Some(1.0))?,
+            None => Vec3::ZERO,
+        };
+        let sum = kd + gr;
+        if sum.max_element() > 1.0 + 1e-6 {
+            return Err(ctx.bad(&prefix, format!("kd + gr = {sum} exceeds 1 (kd = {kd}, gr = {gr}); the surface would create energy")));
+        }
+        let bdf = if gr == Vec3::ZERO {
+            if let Some(d) = def.delta {
+                // A lobe width without a lobe is harmless but still must be a number.
+                let _ = ctx.count(
+                    &format!("{prefix}.delta"),
+                    d,
+                    limits::DELTA_MIN_DEGREES,
+                    limits::DELTA_MAX_DEGREES,
+                )?;
+            }
+            Bdf::lambert(kd)
+        } else {
+            let delta = ctx.required(
+                &format!("{prefix}.delta"),
+                def.delta,
+                "lobe width in degrees, needed because gr > 0",
+            )?;
+            let delta = ctx.count(
+                &format!("{prefix}.delta"),
+                delta,
+                limits::DELTA_MIN_DEGREES,
+                limits::DELTA_MAX_DEGREES,
+            )?;
+            Bdf::new(kd, gr, delta.to_radians())
+        }
+        .map_err(|e| ctx.bad(&prefix, e.to_string()))?;
+        let _ = out.by_name.insert(name.clone(), out.list.len() as u32);
+        out.list.push(Material {
+            name: name.clone(),
+            bdf,
+        });
+    }
+    Ok(out)
+}
+
+fn render_settings(
+    ctx: &Ctx<'_>,
+    r: RenderDef,
+) -> Result<(RenderSettings, Option<PathBuf>), LoadError> {
+    let d = RenderSettings::default();
+    let [width, height] = r.resolution.unwrap_or([d.width, d.height]);
+    let _ = ctx.count("render.resolution[0]", width, 1, limits::MAX_RESOLUTION)?;
+    let _ = ctx.count("render.resolution[1]", height, 1, limits::MAX_RESOLUTION)?;
+    let mode = match r.mode {
+        None => d.mode,
+        Some(name) => Mode::parse(&name).ok_or_else(|| {
+            ctx.bad(
+                "render.mode",
+                format!(
+                    "unknown mode '{name}'; expected one of {}",
+                    Mode::names().join(", ")
+                ),
+            )
+        })?,
+    };
+    let radius = match r.radius {
+        None => None,
+        Some(v) => Some(ctx.positive("render.radius", v, "metres")?),
+    };
+    let threshold_radius = match r.threshold_radius {
+        None => d.threshold_radius,
+        Some(v) => ctx.positive("render.threshold_radius", v, "metres")?,
+    };
+    let settings = RenderSettings {
+        width,
+        height,
+        passes: ctx.count("render.passes", r.passes.unwrap_or(d.passes), 1, u32::MAX)?,
+        photons: ctx.count(
+            "render.photons",
+            r.photons.unwrap_or(d.photons),
+            1,
+            limits::MAX_PHOTONS,
+        )?,
+        spp: ctx.count("render.spp", r.spp.unwrap_or(d.spp), 1, u32::MAX)?,
+        radius,
+        seed: r.seed.unwrap_or(d.seed),
+        mode,
+        threshold_radius,
+        cache_bins: ctx.count(
+            "render.cache_bins",
+            r.cache_bins.unwrap_or(d.cache_bins),
+            1,
+            limits::MAX_CACHE_BINS,
+        )?,
+        pixel_table_rays: ctx.count(
+            "render.pixel_table_rays",
+            r.pixel_table_rays.unwrap_or(d.pixel_table_rays),
+            1,
+            u32::MAX,
+        )?,
+        clamp_weights: r.clamp_weights.unwrap_or(d.clamp_weights),
+        roulette_depth: r.roulette_depth.unwrap_or(d.roulette_depth),
+    };
+    if let Some(out) = &r.output
+        && out.as_os_str().is_empty()
+    {
+        return Err(ctx.bad(
+            "render.output",
+            "empty path; leave the key out for no default output",
+        ));
+    }
+    Ok((settings, r.output))
+}
+
+fn camera(
+    ctx: &Ctx<'_>,
+    def: Option<CameraDef>,
+    width: u32,
+    height: u32,
+) -> Result<Camera, LoadError> {
+    let def =
+        def.ok_or_else(|| ctx.bad("camera", "missing [camera] table (position, look_at, vfov)"))?;
+    let position = ctx.finite(
+        "camera.position",
+        ctx.required("camera.position", def.position, "[x, y, z] in metres")?,
+    )?;
+    let look_at = ctx.finite(
+        "camera.look_at",
+        ctx.required("camera.look_at", def.look_at, "[x, y, z] in metres")?,
+    )?;
+    let up = ctx.finite("camera.up", def.up.unwrap_or(Vec3::Y))?;
+    let vfov = ctx.required("camera.vfov", def.vfov, "vertical field of view in degrees")?;
+    if !(vfov.is_finite() && vfov > 0.0 && vfov < 179.0) {
+        return Err(ctx.bad("camera.vfov", format!("{vfov} is outside (0, 179) degrees")));
+    }
+    if position == look_at {
+        return Err(ctx.bad(
+            "camera.look_at",
+            "equals camera.position, so there is no viewing direction",
+        ));
+    }
+    Camera::look_at(position, look_at, up, vfov, width, height).map_err(|e| match e {
+        SceneError::BadCamera(why) if why.contains("up") => ctx.bad("camera.up", why),
+        other => ctx.bad("camera", other.to_string()),
+    })
+}
+
+/// Joins the parts into one mesh. Normals are kept per vertex (zero = flat) if any part has
+/// them, so the result does not depend on the order of the shapes.
+fn merge(ctx: &Ctx<'_>, parts: Vec<TriangleMesh>) -> Result<TriangleMesh, LoadError> {
+    let vertices: usize = parts.iter().map(|p| p.positions.len()).sum();
+    if vertices > u32::MAX as usize {
+        return Err(ctx.bad(
+            "shape",
+            format!("{vertices} vertices in total; at most 2^32 - 1 are supported"),
+        ));
+    }
+    let any_normals = parts.iter().any(|p| !p.normals.is_empty());
+    let mut out = TriangleMesh::default();
+    for p in parts {
+        let base = out.positions.len() as u32;
+        if any_normals {
+            if p.normals.is_empty() {
+                out.normals
+                    .extend(std::iter::repeat_n(Vec3::ZERO, p.positions.len()));
+            } else {
+                out.normals.extend_from_slice(&p.normals);
+            }
+        }
+        out.positions.extend_from_slice(&p.positions);
+        out.indices
+            .extend(p.indices.iter().map(|t| t.map(|k| k + base)));
+        out.materials.extend_from_slice(&p.materials);
+    }
+    Ok(out)
+}

@@ -1,0 +1,52 @@
+//! The one error type of the loader: every variant names the file, and where it can the
+//! field, so that a message fits on one line and points at the fix.
+
+use std::path::PathBuf;
+
+/// Why a scene could not be loaded.
+///
+/// `Display` gives one line of the form `FILE: FIELD: WHAT`, for example
+/// `scenes/x.toml: material.red.kd: 1.2 is outside [0, 1]`.
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    /// The scene file itself could not be read.
+    #[error("{path}: cannot read: {source}")]
+    Read {
+        /// The scene file.
+        path: PathBuf,
+        /// The operating-system error.
+        source: std::io::Error,
+    },
+    /// The TOML is malformed, a key is unknown, or a value has the wrong type.
+    #[error("{path}: line {line}, column {column}: {message}")]
+    Syntax {
+        /// The scene file.
+        path: PathBuf,
+        /// 1-based line of the offending text.
+        line: usize,
+        /// 1-based column (in characters) of the offending text.
+        column: usize,
+        /// What the TOML parser or the schema objected to.
+        message: String,
+    },
+    /// A value is well-formed TOML but not acceptable (out of range, missing, unknown name).
+    #[error("{path}: {field}: {message}")]
+    Invalid {
+        /// The scene file.
+        path: PathBuf,
+        /// Dotted path of the field, such as `material.red.kd` or `shape[3].radius`.
+        field: String,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// A glTF file referenced by a shape could not be read or is not acceptable.
+    #[error("{path} (from {field}): {message}")]
+    Gltf {
+        /// The glTF file (or the external buffer it names).
+        path: PathBuf,
+        /// The scene-file field that referenced it, such as `shape[2].file`.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+}

@@ -1,0 +1,488 @@
+//! glTF 2.0 (.gltf with external or data-URI buffers, and .glb) → triangles, materials and
+//! point lights.
+//!
+//! The `gltf` crate parses and validates the JSON; buffers are resolved here (its `import`
+//! feature would pull in image decoding). Every accessor is checked against its buffer before
+//! the crate's reader touches it, because that reader trusts the file: a zero count, a stride
+//! shorter than the element or a type mismatch would otherwise panic or misread.
+
+use std::collections::HashMap;
+use std::f32::consts::PI;
+use std::path::{Path, PathBuf};
+
+use base64::Engine;
+use bdpm_geometry::TriangleMesh;
+use bdpm_scene::PointLight;
+use glam::{Mat3, Mat4, Vec3};
+use gltf::accessor::{DataType, Dimensions};
+use gltf::json::extensions::scene::khr_lights_punctual::Type as LightType;
+use gltf::json::validation::Checked;
+use gltf::mesh::Mode;
+use gltf::{Accessor, Node, Semantic};
+
+use crate::LoadError;
+use crate::build::Materials;
+
+/// Deepest node nesting accepted. glTF forbids cycles but the parser does not check for them,
+/// so the walk stops here instead of running forever.
+const MAX_DEPTH: usize = 256;
+/// Most node visits accepted (a node reachable along many paths is visited once per path).
+const MAX_VISITS: usize = 1_000_000;
+
+/// What one glTF file contributes to the scene.
+#[derive(Debug, Default)]
+pub(crate) struct GltfPart {
+    /// Triangles; `normals` is either one per vertex (zero = flat) or empty.
+    pub(crate) mesh: TriangleMesh,
+    pub(crate) lights: Vec<PointLight>,
+    /// Primitives that are not triangle lists (points, lines, strips, fans): skipped.
+    pub(crate) skipped_primitives: usize,
+    /// Spot and directional lights: skipped (bdpm has isotropic point lights only).
+    pub(crate) skipped_lights: usize,
+    /// Triangle primitives without normals, shaded flat as glTF requires.
+    pub(crate) flat_primitives: usize,
+}
+
+/// Where the file came from, for messages.
+pub(crate) struct Origin<'a> {
+    /// The file to open (already joined to the scene file's directory).
+    pub(crate) path: &'a Path,
+    /// The field that named it, such as `shape[2].file`.
+    pub(crate) field: &'a str,
+    /// The file as written in the scene file, used in generated material names.
+    pub(crate) written: &'a Path,
+}
+
+impl Origin<'_> {
+    fn err(&self, message: impl Into<String>) -> LoadError {
+        LoadError::Gltf {
+            path: self.path.to_path_buf(),
+            field: self.field.to_string(),
+            message: message.into(),
+        }
+    }
+}
+
+/// Loads every triangle primitive and KHR_lights_punctual point light of the default scene
+/// (or the first scene, or every root node when there is no scene). `post` is applied after
+/// each node's world matrix; `material` replaces every glTF material when given.
+pub(crate) fn load_gltf(
+    origin: &Origin<'_>,
+    post: Mat4,
+    material: Option<u32>,
+    materials: &mut Materials,
+) -> Result<GltfPart, LoadError> {
+    let bytes = std::fs::read(origin.path).map_err(|e| origin.err(format!("cannot read: {e}")))?;
+    let invalid = |e: gltf::Error| origin.err(format!("not a valid glTF 2.0 file: {e}"));
+    let raw = gltf::Gltf::from_slice_without_validation(&bytes).map_err(invalid)?;
+    // gltf-json 1.4's validator indexes the accessor list with a primitive's POSITION index
+    // before checking it (mesh.rs, primitive_validate_hook), so that case is checked first.
+    let json = raw.document.into_json();
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            for (semantic, index) in &prim.attributes {
+                if index.value() >= json.accessors.len() {
+                    return Err(origin.err(format!(
+                        "not a valid glTF 2.0 file: meshes[{m}].primitives[{p}].attributes: {semantic:?} names accessor {}, which does not exist",
+                        index.value()
+                    )));
+                }
+            }
+        }
+    }
+    let gltf = gltf::Gltf {
+        document: gltf::Document::from_json(json).map_err(invalid)?,
+        blob: raw.blob,
+    };
+    let buffers = load_buffers(origin, &gltf)?;
+    let doc = &gltf.document;
+
+    let roots: Vec<Node<'_>> = match doc.default_scene().or_else(|| doc.scenes().next()) {
+        Some(scene) => scene.nodes().collect(),
+        None => {
+            let mut is_child = vec![false; doc.nodes().len()];
+            for node in doc.nodes() {
+                for child in node.children() {
+                    if let Some(flag) = is_child.get_mut(child.index()) {
+                        *flag = true;
+                    }
+                }
+            }
+            doc.nodes()
+                .filter(|n| !is_child.get(n.index()).copied().unwrap_or(false))
+                .collect()
+        }
+    };
+
+    let mut part = GltfPart::default();
+    let mut material_map: HashMap<usize, u32> = HashMap::new();
+    let mut stack: Vec<(Node<'_>, Mat4, usize)> =
+        roots.into_iter().rev().map(|n| (n, post, 0)).collect();
+    let mut visits = 0;
+    while let Some((node, parent, depth)) = stack.pop() {
+        visits += 1;
+        if depth > MAX_DEPTH || visits > MAX_VISITS {
+            return Err(origin.err(format!(
+                "node hierarchy deeper than {MAX_DEPTH} or larger than {MAX_VISITS} visits (a cycle?)"
+            )));
+        }
+        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+        let world = parent * local;
+        if !world.is_finite() {
+            return Err(origin.err(format!("node {}: transform is not finite", node.index())));
+        }
+        if let Some(mesh) = node.mesh() {
+            for prim in mesh.primitives() {
+                let what = format!("mesh {} primitive {}", mesh.index(), prim.index());
+                if prim.mode() != Mode::Triangles {
+                    part.skipped_primitives += 1;
+                    continue;
+                }
+                let m = match material {
+                    Some(m) => m,
+                    None => primitive_material(origin, &prim, &mut material_map, materials)?,
+                };
+                add_primitive(origin, &what, &prim, &buffers, world, m, &mut part)?;
+            }
+        }
+        if let Some(light) = node_light(doc, &node) {
+            match light.type_ {
+                Checked::Valid(LightType::Point) => {
+                    let flux = 4.0 * PI * light.intensity * Vec3::from_array(light.color);
+                    let position = world.transform_point3(Vec3::ZERO);
+                    if !(flux.is_finite() && flux.min_element() >= 0.0) {
+                        return Err(origin.err(format!(
+                            "node {}: point light has intensity {} and color {:?}; need finite values >= 0",
+                            node.index(),
+                            light.intensity,
+                            light.color
+                        )));
+                    }
+                    if !position.is_finite() {
+                        return Err(origin.err(format!(
+                            "node {}: light position is not finite",
+                            node.index()
+                        )));
+                    }
+                    part.lights.push(PointLight { position, flux });
+                }
+                _ => part.skipped_lights += 1,
+            }
+        }
+        for child in node.children() {
+            stack.push((child, world, depth + 1));
+        }
+    }
+    Ok(part)
+}
+
+/// The KHR_lights_punctual light a node carries, read from the JSON directly: the crate's
+/// `Node::light` unwraps indices and spot parameters that a malformed file may lack.
+fn node_light<'a>(
+    doc: &'a gltf::Document,
+    node: &Node<'_>,
+) -> Option<&'a gltf::json::extensions::scene::khr_lights_punctual::Light> {
+    let json = doc.as_json();
+    let index = json
+        .nodes
+        .get(node.index())?
+        .extensions
+        .as_ref()?
+        .khr_lights_punctual
+        .as_ref()?
+        .light
+        .value();
+    json.extensions
+        .as_ref()?
+        .khr_lights_punctual
+        .as_ref()?
+        .lights
+        .get(index)
+}
+
+/// The scene material of a primitive: the TOML material of the same name if there is one,
+/// otherwise a Lambert material from the base colour, or the shared default (kd = 0.8) when
+/// the primitive has none.
+fn primitive_material(
+    origin: &Origin<'_>,
+    prim: &gltf::Primitive<'_>,
+    map: &mut HashMap<usize, u32>,
+    materials: &mut Materials,
+) -> Result<u32, LoadError> {
+    let mat = prim.material();
+    let Some(index) = mat.index() else {
+        return materials.gltf_default();
+    };
+    if let Some(&m) = map.get(&index) {
+        return Ok(m);
+    }
+    let m = if let Some(m) = mat.name().and_then(|name| materials.lookup(name)) {
+        m
+    } else {
+        let name = match mat.name() {
+            Some(name) => name.to_string(),
+            None => format!("gltf:{}#{index}", origin.written.display()),
+        };
+        let [r, g, b, _] = mat.pbr_metallic_roughness().base_color_factor();
+        let kd = Vec3::new(r, g, b);
+        if !(kd.is_finite() && kd.min_element() >= 0.0 && kd.max_element() <= 1.0) {
+            return Err(origin.err(format!(
+                "material {index} ('{name}'): baseColorFactor {kd} has a channel outside [0, 1]"
+            )));
+        }
+        materials
+            .add_lambert(name, kd)
+            .map_err(|e| origin.err(format!("material {index}: {e}")))?
+    };
+    let _ = map.insert(index, m);
+    Ok(m)
+}
+
+/// Appends one triangle primitive, transformed by `world`, to `part`.
+fn add_primitive(
+    origin: &Origin<'_>,
+    what: &str,
+    prim: &gltf::Primitive<'_>,
+    buffers: &[Vec<u8>],
+    world: Mat4,
+    material: u32,
+    part: &mut GltfPart,
+) -> Result<(), LoadError> {
+    let err = |m: String| origin.err(format!("{what}: {m}"));
+    let get = |b: gltf::Buffer<'_>| buffers.get(b.index()).map(Vec::as_slice);
+    let reader = prim.reader(get);
+
+    let pos_acc = prim
+        .get(&Semantic::Positions)
+        .ok_or_else(|| err("has no POSITION attribute".into()))?;
+    check_accessor(&pos_acc, &[DataType::F32], Dimensions::Vec3, buffers)
+        .map_err(|m| err(format!("POSITION: {m}")))?;
+    let positions: Vec<Vec3> = if pos_acc.count() == 0 {
+        Vec::new()
+    } else {
+        reader
+            .read_positions()
+            .ok_or_else(|| err("POSITION cannot be read".into()))?
+            .map(|p| world.transform_point3(Vec3::from_array(p)))
+            .collect()
+    };
+    if let Some(k) = positions.iter().position(|p| !p.is_finite()) {
+        return Err(err(format!(
+            "vertex {k} is not finite (after the node transforms)"
+        )));
+    }
+
+    let normals: Vec<Vec3> = match prim.get(&Semantic::Normals) {
+        Some(acc) if acc.count() > 0 => {
+            check_accessor(&acc, &[DataType::F32], Dimensions::Vec3, buffers)
+                .map_err(|m| err(format!("NORMAL: {m}")))?;
+            if acc.count() != positions.len() {
+                return Err(err(format!(
+                    "{} normals for {} positions",
+                    acc.count(),
+                    positions.len()
+                )));
+            }
+            // Normals transform by the inverse transpose; a singular matrix flattens the mesh,
+            // whose triangles are then degenerate anyway, so zero (= flat) normals serve.
+            let linear = Mat3::from_mat4(world);
+            let normal_matrix = if linear.determinant() != 0.0 {
+                linear.inverse().transpose()
+            } else {
+                Mat3::ZERO
+            };
+            let read = reader
+                .read_normals()
+                .ok_or_else(|| err("NORMAL cannot be read".into()))?;
+            read.map(|n| {
+                let n = normal_matrix * Vec3::from_array(n);
+                if n.is_finite() {
+                    n.normalize_or_zero()
+                } else {
+                    Vec3::ZERO
+                }
+            })
+            .collect()
+        }
+        _ => Vec::new(),
+    };
+
+    let indices: Vec<u32> = match prim.indices() {
+        Some(acc) => {
+            check_accessor(
+                &acc,
+                &[DataType::U8, DataType::U16, DataType::U32],
+                Dimensions::Scalar,
+                buffers,
+            )
+            .map_err(|m| err(format!("indices: {m}")))?;
+            if acc.count() == 0 {
+                Vec::new()
+            } else {
+                let read = reader
+                    .read_indices()
+                    .ok_or_else(|| err("indices cannot be read".into()))?;
+                read.into_u32().collect()
+            }
+        }
+        None => (0..positions.len() as u32).collect(),
+    };
+    if !indices.len().is_multiple_of(3) {
+        return Err(err(format!(
+            "{} indices is not a multiple of 3",
+            indices.len()
+        )));
+    }
+    if let Some(&bad) = indices.iter().find(|&&i| i as usize >= positions.len()) {
+        return Err(err(format!(
+            "index {bad} is out of range ({} vertices)",
+            positions.len()
+        )));
+    }
+
+    let mesh = &mut part.mesh;
+    let base = mesh.positions.len();
+    if base + positions.len() > u32::MAX as usize {
+        return Err(err("too many vertices (more than 2^32 in total)".into()));
+    }
+    let base = base as u32;
+    // A mirroring transform turns counter-clockwise into clockwise; glTF asks to keep the
+    // front face, so the winding is reversed.
+    let mirror = Mat3::from_mat4(world).determinant() < 0.0;
+    for t in indices.chunks_exact(3) {
+        let (a, b, c) = (t[0] + base, t[1] + base, t[2] + base);
+        mesh.indices
+            .push(if mirror { [a, c, b] } else { [a, b, c] });
+        mesh.materials.push(material);
+    }
+    if normals.is_empty() {
+        part.flat_primitives += 1;
+        if !mesh.normals.is_empty() {
+            mesh.normals
+                .extend(std::iter::repeat_n(Vec3::ZERO, positions.len()));
+        }
+    } else {
+        if mesh.normals.len() < mesh.positions.len() {
+            mesh.normals.resize(mesh.positions.len(), Vec3::ZERO);
+        }
+        mesh.normals.extend_from_slice(&normals);
+    }
+    mesh.positions.extend_from_slice(&positions);
+    Ok(())
+}
+
+/// Checks that reading `acc` stays inside its buffer and has the expected layout, so the
+/// `gltf` reader can neither panic nor read garbage.
+fn check_accessor(
+    acc: &Accessor<'_>,
+    types: &[DataType],
+    dims: Dimensions,
+    buffers: &[Vec<u8>],
+) -> Result<(), String> {
+    if acc.sparse().is_some() {
+        return Err(format!(
+            "accessor {} is sparse, which is not supported",
+            acc.index()
+        ));
+    }
+    if !types.contains(&acc.data_type()) || acc.dimensions() != dims || acc.normalized() {
+        return Err(format!(
+            "accessor {} is {:?} {:?}{}; expected {:?} of {:?}",
+            acc.index(),
+            acc.dimensions(),
+            acc.data_type(),
+            if acc.normalized() {
+                " (normalized)"
+            } else {
+                ""
+            },
+            dims,
+            types
+        ));
+    }
+    if acc.count() == 0 {
+        return Ok(());
+    }
+    let view = acc
+        .view()
+        .ok_or_else(|| format!("accessor {} has no bufferView", acc.index()))?;
+    let size = acc.size();
+    let stride = view.stride().unwrap_or(size);
+    if stride < size {
+        return Err(format!(
+            "bufferView {} has stride {stride}, shorter than its {size}-byte elements",
+            view.index()
+        ));
+    }
+    let end = stride
+        .checked_mul(acc.count() - 1)
+        .and_then(|x| x.checked_add(size))
+        .and_then(|x| x.checked_add(acc.offset()));
+    if end.is_none_or(|end| end > view.length()) {
+        return Err(format!(
+            "accessor {} reaches past the end of bufferView {}",
+            acc.index(),
+            view.index()
+        ));
+    }
+    let buffer_len = buffers.get(view.buffer().index()).map_or(0, Vec::len);
+    if view
+        .offset()
+        .checked_add(view.length())
+        .is_none_or(|end| end > buffer_len)
+    {
+        return Err(format!(
+            "bufferView {} reaches past the end of buffer {}",
+            view.index(),
+            view.buffer().index()
+        ));
+    }
+    Ok(())
+}
+
+/// Resolves every buffer: the GLB binary chunk, a base64 `data:` URI, or a file relative to
+/// the glTF file.
+fn load_buffers(origin: &Origin<'_>, gltf: &gltf::Gltf) -> Result<Vec<Vec<u8>>, LoadError> {
+    let mut out = Vec::new();
+    for buffer in gltf.buffers() {
+        let i = buffer.index();
+        let data = match buffer.source() {
+            gltf::buffer::Source::Bin => gltf.blob.clone().ok_or_else(|| {
+                origin.err(format!(
+                    "buffer {i} refers to a GLB binary chunk, which is missing"
+                ))
+            })?,
+            gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
+                let (header, payload) = uri
+                    .split_once(',')
+                    .ok_or_else(|| origin.err(format!("buffer {i}: malformed data URI")))?;
+                if !header.ends_with(";base64") {
+                    return Err(
+                        origin.err(format!("buffer {i}: only base64 data URIs are supported"))
+                    );
+                }
+                base64::engine::general_purpose::STANDARD
+                    .decode(payload)
+                    .map_err(|e| origin.err(format!("buffer {i}: bad base64 in data URI: {e}")))?
+            }
+            gltf::buffer::Source::Uri(uri) => {
+                let dir = origin.path.parent().unwrap_or(Path::new(""));
+                let file: PathBuf = dir.join(uri);
+                std::fs::read(&file).map_err(|e| LoadError::Gltf {
+                    path: file.clone(),
+                    field: format!("{}, buffer {i} of {}", origin.field, origin.path.display()),
+                    message: format!("cannot read: {e}"),
+                })?
+            }
+        };
+        if data.len() < buffer.length() {
+            return Err(origin.err(format!(
+                "buffer {i} has {} bytes but declares byteLength {}",
+                data.len(),
+                buffer.length()
+            )));
+        }
+        out.push(data);
+    }
+    Ok(out)
+}

@@ -1,0 +1,197 @@
+//! The scene file as written: serde types that mirror the TOML one to one.
+//!
+//! Everything is optional at this level, so that a missing value is reported by the
+//! validation in `build.rs` with its full dotted path (serde would only name the key).
+//! Every table denies unknown keys, so that a typo is an error rather than a silent default.
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::path::PathBuf;
+
+use glam::Vec3;
+use serde::Deserialize;
+use serde::de::{self, Deserializer, SeqAccess, Visitor};
+
+/// The whole file.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SceneFile {
+    pub(crate) render: Option<RenderDef>,
+    pub(crate) camera: Option<CameraDef>,
+    #[serde(default)]
+    pub(crate) light: Vec<LightDef>,
+    /// Sorted by name, which fixes the material indices independently of the file's order.
+    #[serde(default)]
+    pub(crate) material: BTreeMap<String, MaterialDef>,
+    #[serde(default)]
+    pub(crate) shape: Vec<ShapeDef>,
+}
+
+/// `[render]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RenderDef {
+    pub(crate) resolution: Option<[u32; 2]>,
+    pub(crate) passes: Option<u32>,
+    pub(crate) photons: Option<u64>,
+    pub(crate) spp: Option<u32>,
+    pub(crate) radius: Option<f32>,
+    pub(crate) seed: Option<u64>,
+    pub(crate) mode: Option<String>,
+    pub(crate) output: Option<PathBuf>,
+    pub(crate) threshold_radius: Option<f32>,
+    pub(crate) cache_bins: Option<u32>,
+    pub(crate) pixel_table_rays: Option<u32>,
+    pub(crate) clamp_weights: Option<bool>,
+    pub(crate) roulette_depth: Option<u32>,
+}
+
+/// `[camera]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct CameraDef {
+    pub(crate) position: Option<Vec3>,
+    pub(crate) look_at: Option<Vec3>,
+    pub(crate) up: Option<Vec3>,
+    pub(crate) vfov: Option<f32>,
+}
+
+/// One `[[light]]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct LightDef {
+    pub(crate) position: Option<Vec3>,
+    pub(crate) flux: Option<Triple>,
+}
+
+/// One `[material.NAME]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct MaterialDef {
+    pub(crate) kd: Option<Triple>,
+    pub(crate) gr: Option<Triple>,
+    pub(crate) delta: Option<f32>,
+}
+
+/// One `[[shape]]`, told apart by its `type` key.
+#[derive(Debug, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase")]
+pub(crate) enum ShapeDef {
+    Quad(QuadDef),
+    Box(BoxDef),
+    Sphere(SphereDef),
+    #[serde(alias = "gltf")]
+    Mesh(MeshDef),
+}
+
+impl ShapeDef {
+    pub(crate) fn type_name(&self) -> &'static str {
+        match self {
+            ShapeDef::Quad(_) => "quad",
+            ShapeDef::Box(_) => "box",
+            ShapeDef::Sphere(_) => "sphere",
+            ShapeDef::Mesh(_) => "mesh",
+        }
+    }
+}
+
+/// `type = "quad"`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct QuadDef {
+    pub(crate) vertices: Option<Vec<Vec3>>,
+    pub(crate) material: Option<String>,
+    pub(crate) scale: Option<Triple>,
+    pub(crate) translate: Option<Vec3>,
+}
+
+/// `type = "box"`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct BoxDef {
+    pub(crate) min: Option<Vec3>,
+    pub(crate) max: Option<Vec3>,
+    pub(crate) material: Option<String>,
+    #[serde(default)]
+    pub(crate) open: Vec<String>,
+    pub(crate) facing: Option<String>,
+    pub(crate) scale: Option<Triple>,
+    pub(crate) translate: Option<Vec3>,
+}
+
+/// `type = "sphere"`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SphereDef {
+    pub(crate) center: Option<Vec3>,
+    pub(crate) radius: Option<f32>,
+    pub(crate) subdivisions: Option<u32>,
+    pub(crate) material: Option<String>,
+    pub(crate) facing: Option<String>,
+}
+
+/// `type = "mesh"` (alias `"gltf"`).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct MeshDef {
+    pub(crate) file: Option<PathBuf>,
+    pub(crate) material: Option<String>,
+    pub(crate) scale: Option<Triple>,
+    pub(crate) translate: Option<Vec3>,
+}
+
+/// Three numbers written either as `[a, b, c]` or as one number `a` meaning `[a, a, a]`
+/// (colours, fluxes, scale factors).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Triple {
+    pub(crate) value: Vec3,
+    /// True when written as one number, so that messages can quote it as written.
+    pub(crate) scalar: bool,
+}
+
+impl<'de> Deserialize<'de> for Triple {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct TripleVisitor;
+
+        impl<'de> Visitor<'de> for TripleVisitor {
+            type Value = Triple;
+
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a number or an array of 3 numbers")
+            }
+
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Triple, E> {
+                Ok(Triple {
+                    value: Vec3::splat(v as f32),
+                    scalar: true,
+                })
+            }
+
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Triple, E> {
+                self.visit_f64(v as f64)
+            }
+
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Triple, E> {
+                self.visit_f64(v as f64)
+            }
+
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Triple, A::Error> {
+                let mut c = [0.0f32; 3];
+                for (k, slot) in c.iter_mut().enumerate() {
+                    *slot = seq
+                        .next_element::<f32>()?
+                        .ok_or_else(|| de::Error::invalid_length(k, &self))?;
+                }
+                if seq.next_element::<de::IgnoredAny>()?.is_some() {
+                    return Err(de::Error::invalid_length(4, &self));
+                }
+                Ok(Triple {
+                    value: Vec3::from_array(c),
+                    scalar: false,
+                })
+            }
+        }
+
+        d.deserialize_any(TripleVisitor)
+    }
+}

@@ -1,0 +1,323 @@
+//! Bad input is rejected with a one-line message naming the file and the field.
+
+use std::path::Path;
+
+use bdpm_load::load_scene_str;
+
+const GOOD: &str = r#"
+[render]
+resolution = [32, 32]
+passes = 1
+
+[camera]
+position = [0.0, 0.0, -3.0]
+look_at = [0.0, 0.0, 0.0]
+vfov = 40.0
+
+[[light]]
+position = [0.0, 0.5, 0.0]
+flux = 1.0
+
+[material.red]
+kd = [0.6, 0.1, 0.1]
+
+[[shape]]
+type = "box"
+min = [-1.0, -1.0, -1.0]
+max = [1.0, 1.0, 1.0]
+facing = "inside"
+material = "red"
+"#;
+
+/// Loads `text` as `scenes/bad.toml` and returns the error message, which must be one line
+/// naming that file.
+fn error_of(text: &str) -> String {
+    match load_scene_str(text, Path::new("scenes"), Path::new("scenes/bad.toml")) {
+        Ok(_) => panic!("accepted:\n{text}"),
+        Err(e) => {
+            let msg = e.to_string();
+            assert!(msg.starts_with("scenes/bad.toml: "), "{msg}");
+            assert!(!msg.contains('\n'), "{msg}");
+            msg
+        }
+    }
+}
+
+fn with(from: &str, to: &str) -> String {
+    assert!(GOOD.contains(from), "{from}");
+    GOOD.replacen(from, to, 1)
+}
+
+#[test]
+fn the_base_scene_loads() {
+    let s = load_scene_str(GOOD, Path::new("scenes"), Path::new("scenes/bad.toml")).expect("valid");
+    assert_eq!(s.report.triangles, 12);
+    assert_eq!(s.settings.passes, 1);
+    assert_eq!(
+        s.settings.photons,
+        bdpm_integrator::RenderSettings::default().photons
+    );
+}
+
+#[test]
+fn missing_vfov() {
+    let msg = error_of(&with("vfov = 40.0\n", ""));
+    assert!(msg.contains("camera.vfov: missing"), "{msg}");
+}
+
+#[test]
+fn missing_camera() {
+    let text = GOOD.replace(
+        "[camera]\nposition = [0.0, 0.0, -3.0]\nlook_at = [0.0, 0.0, 0.0]\nvfov = 40.0\n",
+        "",
+    );
+    let msg = error_of(&text);
+    assert!(msg.contains(": camera: missing [camera]"), "{msg}");
+}
+
+#[test]
+fn negative_albedo() {
+    let msg = error_of(&with("kd = [0.6, 0.1, 0.1]", "kd = [0.6, -0.1, 0.1]"));
+    assert!(
+        msg.contains("material.red.kd: green channel -0.1 is outside [0, 1]"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn albedo_above_one() {
+    let msg = error_of(&with("kd = [0.6, 0.1, 0.1]", "kd = 1.2"));
+    assert!(
+        msg.ends_with("material.red.kd: 1.2 is outside [0, 1]"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn kd_plus_gr_above_one() {
+    let msg = error_of(&with(
+        "kd = [0.6, 0.1, 0.1]",
+        "kd = [0.6, 0.1, 0.1]\ngr = 0.5\ndelta = 3",
+    ));
+    assert!(msg.contains("material.red: kd + gr"), "{msg}");
+    assert!(msg.contains("exceeds 1"), "{msg}");
+}
+
+#[test]
+fn lobe_without_width() {
+    let msg = error_of(&with("kd = [0.6, 0.1, 0.1]", "kd = 0.2\ngr = 0.5"));
+    assert!(msg.contains("material.red.delta: missing"), "{msg}");
+}
+
+#[test]
+fn lobe_width_out_of_range() {
+    let msg = error_of(&with(
+        "kd = [0.6, 0.1, 0.1]",
+        "kd = 0.2\ngr = 0.5\ndelta = 0.01",
+    ));
+    assert!(
+        msg.contains("material.red.delta: 0.01 is outside [0.05, 90]"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn unknown_key_is_a_typo() {
+    let msg = error_of(&with("passes = 1", "pases = 1"));
+    assert!(
+        msg.contains("line 4, column 1: unknown field `pases`, expected one of"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn unknown_key_in_a_shape() {
+    let msg = error_of(&with(
+        "facing = \"inside\"",
+        "facing = \"inside\"\nradius = 2.0",
+    ));
+    assert!(msg.contains("unknown field `radius`"), "{msg}");
+    assert!(msg.contains("line "), "{msg}");
+}
+
+#[test]
+fn unknown_shape_type() {
+    let msg = error_of(&with("type = \"box\"", "type = \"cube\""));
+    assert!(msg.contains("unknown variant `cube`"), "{msg}");
+}
+
+#[test]
+fn unknown_mode() {
+    let msg = error_of(&with("passes = 1", "passes = 1\nmode = \"fast\""));
+    assert!(
+        msg.contains("render.mode: unknown mode 'fast'; expected one of path, "),
+        "{msg}"
+    );
+}
+
+#[test]
+fn unknown_material_reference() {
+    let msg = error_of(&with("material = \"red\"", "material = \"blue\""));
+    assert!(
+        msg.contains("shape[0].material: unknown material 'blue' (defined: red)"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn nan_position() {
+    let msg = error_of(&with(
+        "position = [0.0, 0.5, 0.0]",
+        "position = [0.0, nan, 0.0]",
+    ));
+    assert!(
+        msg.contains("light[0].position: [0, NaN, 0] is not finite"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn infinite_box_corner() {
+    let msg = error_of(&with("max = [1.0, 1.0, 1.0]", "max = [1.0, inf, 1.0]"));
+    assert!(msg.contains("shape[0].max: "), "{msg}");
+    assert!(msg.contains("not finite"), "{msg}");
+}
+
+#[test]
+fn infinite_camera_position() {
+    let msg = error_of(&with(
+        "position = [0.0, 0.0, -3.0]",
+        "position = [0.0, 0.0, -inf]",
+    ));
+    assert!(msg.contains("camera.position: "), "{msg}");
+}
+
+#[test]
+fn resolution_zero() {
+    let msg = error_of(&with("resolution = [32, 32]", "resolution = [32, 0]"));
+    assert!(
+        msg.contains("render.resolution[1]: 0 is outside [1, 16384]"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn zero_passes_photons_spp() {
+    for (key, field) in [
+        ("passes = 0", "render.passes"),
+        ("photons = 0", "render.photons"),
+        ("spp = 0", "render.spp"),
+    ] {
+        let msg = error_of(&with(
+            "passes = 1",
+            &format!("passes = 1\n{key}").replace("passes = 1\npasses = 0", "passes = 0"),
+        ));
+        assert!(
+            msg.contains(&format!("{field}: 0 is outside [1, ")),
+            "{msg}"
+        );
+    }
+}
+
+#[test]
+fn negative_or_nan_radius() {
+    for v in ["-0.1", "0.0", "nan", "inf"] {
+        let msg = error_of(&with("passes = 1", &format!("passes = 1\nradius = {v}")));
+        assert!(msg.contains("render.radius: "), "{msg}");
+    }
+}
+
+#[test]
+fn vfov_out_of_range() {
+    for v in ["0.0", "179.0", "-5", "nan"] {
+        let msg = error_of(&with("vfov = 40.0", &format!("vfov = {v}")));
+        assert!(msg.contains("camera.vfov: "), "{msg}");
+    }
+}
+
+#[test]
+fn negative_flux() {
+    let msg = error_of(&with("flux = 1.0", "flux = [1.0, -1.0, 1.0]"));
+    assert!(
+        msg.contains("light[0].flux: green channel -1 must be >= 0"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn far_away_vertex() {
+    let msg = error_of(&with("max = [1.0, 1.0, 1.0]", "max = [1.0, 1e30, 1.0]"));
+    assert!(msg.contains("shape[0]: vertex "), "{msg}");
+    assert!(msg.contains("is beyond"), "{msg}");
+}
+
+#[test]
+fn no_light() {
+    let msg = error_of(&with(
+        "[[light]]\nposition = [0.0, 0.5, 0.0]\nflux = 1.0\n",
+        "",
+    ));
+    assert!(msg.contains(": light: the scene has no light"), "{msg}");
+}
+
+#[test]
+fn sphere_radius_and_subdivisions() {
+    let sphere = "type = \"sphere\"\nradius = R\nsubdivisions = S\nmaterial = \"red\"\n[[shape]]\ntype = \"box\"";
+    let msg = error_of(&with(
+        "type = \"box\"",
+        &sphere.replace('R', "-1.0").replace('S', "4"),
+    ));
+    assert!(
+        msg.contains("shape[0].radius: -1 must be a finite number > 0"),
+        "{msg}"
+    );
+    let msg = error_of(&with(
+        "type = \"box\"",
+        &sphere.replace('R', "1.0").replace('S', "100000"),
+    ));
+    assert!(
+        msg.contains("shape[0].subdivisions: 100000 is outside [1, 256]"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn quad_with_three_vertices() {
+    let quad = "type = \"quad\"\nmaterial = \"red\"\nvertices = [[0,0,0],[1,0,0],[1,1,0]]\n[[shape]]\ntype = \"box\"";
+    let msg = error_of(&with("type = \"box\"", quad));
+    assert!(
+        msg.contains("shape[0].vertices: 3 points given; a quad has 4"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn quad_with_nan_vertex() {
+    let quad = "type = \"quad\"\nmaterial = \"red\"\nvertices = [[0,0,0],[1,0,0],[1,nan,0],[0,1,0]]\n[[shape]]\ntype = \"box\"";
+    let msg = error_of(&with("type = \"box\"", quad));
+    assert!(msg.contains("shape[0].vertices[2]: "), "{msg}");
+}
+
+#[test]
+fn wrong_type_gives_line_and_column() {
+    let msg = error_of(&with("passes = 1", "passes = \"many\""));
+    assert!(msg.contains("line 4, column 10: "), "{msg}");
+}
+
+#[test]
+fn garbage_never_panics() {
+    // Every prefix of a valid file, and a few byte flips, give Ok or an error, never a panic.
+    for end in (0..GOOD.len()).filter(|&i| GOOD.is_char_boundary(i)) {
+        let _ = load_scene_str(&GOOD[..end], Path::new("."), Path::new("x.toml"));
+    }
+    let bytes = GOOD.as_bytes();
+    for i in 0..bytes.len() {
+        for b in [b'0', b'-', b'[', b'"', b'e', b'\n'] {
+            let mut v = bytes.to_vec();
+            v[i] = b;
+            if let Ok(text) = String::from_utf8(v) {
+                let _ = load_scene_str(&text, Path::new("."), Path::new("x.toml"));
+            }
+        }
+    }
+}

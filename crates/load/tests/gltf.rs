@@ -1,0 +1,368 @@
+//! glTF 2.0 input: transforms, normals, materials, the TOML override, KHR_lights_punctual,
+//! the three ways of storing buffers, and errors that name the file.
+
+use std::f32::consts::PI;
+use std::path::{Path, PathBuf};
+
+use base64::Engine;
+use bdpm_load::{LoadError, LoadedScene, load_scene};
+use glam::Vec3;
+
+/// A fresh directory for one test.
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("bdpm-load-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+/// The binary buffer: a unit quad's positions (48 bytes), tilted normals (48 bytes) and
+/// u16 indices (12 bytes).
+fn buffer_bytes() -> Vec<u8> {
+    let mut b = Vec::new();
+    for p in [
+        [0.0f32, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+    ] {
+        p.iter().for_each(|c| b.extend_from_slice(&c.to_le_bytes()));
+    }
+    let s = 0.5f32.sqrt();
+    for _ in 0..4 {
+        [s, 0.0f32, s]
+            .iter()
+            .for_each(|c| b.extend_from_slice(&c.to_le_bytes()));
+    }
+    for i in [0u16, 1, 2, 0, 2, 3] {
+        b.extend_from_slice(&i.to_le_bytes());
+    }
+    assert_eq!(b.len(), 108);
+    b
+}
+
+/// glTF JSON whose buffer 0 is `buffer` (a `"uri": ...` member, or empty for a GLB chunk).
+/// `count0` is the vertex count of accessor 0 (4 is valid).
+fn gltf_json(buffer: &str, count0: usize) -> String {
+    let sep = if buffer.is_empty() { "" } else { ", " };
+    format!(
+        r#"{{
+  "asset": {{ "version": "2.0" }},
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {{ "KHR_lights_punctual": {{ "lights": [
+    {{ "type": "point", "color": [1.0, 0.5, 0.25], "intensity": 2.0 }},
+    {{ "type": "spot", "spot": {{ "outerConeAngle": 0.7 }} }}
+  ] }} }},
+  "buffers": [ {{ "byteLength": 108{sep}{buffer} }} ],
+  "bufferViews": [
+    {{ "buffer": 0, "byteOffset": 0, "byteLength": 48 }},
+    {{ "buffer": 0, "byteOffset": 48, "byteLength": 48 }},
+    {{ "buffer": 0, "byteOffset": 96, "byteLength": 12 }}
+  ],
+  "accessors": [
+    {{ "bufferView": 0, "componentType": 5126, "count": {count0}, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0] }},
+    {{ "bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3" }},
+    {{ "bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR" }},
+    {{ "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0] }}
+  ],
+  "materials": [
+    {{ "name": "painted", "pbrMetallicRoughness": {{ "baseColorFactor": [0.2, 0.4, 0.6, 1.0] }} }},
+    {{ "name": "red", "pbrMetallicRoughness": {{ "baseColorFactor": [0.0, 1.0, 0.0, 1.0] }} }},
+    {{ "pbrMetallicRoughness": {{ "baseColorFactor": [0.3, 0.3, 0.3, 1.0] }} }}
+  ],
+  "meshes": [
+    {{ "primitives": [ {{ "attributes": {{ "POSITION": 0, "NORMAL": 1 }}, "indices": 2, "material": 0 }} ] }},
+    {{ "primitives": [ {{ "attributes": {{ "POSITION": 0 }}, "indices": 2, "material": 1 }} ] }},
+    {{ "primitives": [
+      {{ "attributes": {{ "POSITION": 3 }} }},
+      {{ "attributes": {{ "POSITION": 0 }}, "mode": 1 }}
+    ] }},
+    {{ "primitives": [ {{ "attributes": {{ "POSITION": 0 }}, "indices": 2, "material": 2 }} ] }}
+  ],
+  "nodes": [
+    {{ "mesh": 0, "translation": [1, 2, 3], "scale": [2, 1, 1] }},
+    {{ "mesh": 1, "translation": [0, 0, 5], "children": [2] }},
+    {{ "translation": [0, 1, 0], "extensions": {{ "KHR_lights_punctual": {{ "light": 0 }} }} }},
+    {{ "mesh": 2 }},
+    {{ "extensions": {{ "KHR_lights_punctual": {{ "light": 1 }} }} }},
+    {{ "mesh": 3, "translation": [10, 0, 0] }}
+  ],
+  "scenes": [ {{ "nodes": [0, 1, 3, 4, 5] }} ],
+  "scene": 0
+}}"#
+    )
+}
+
+/// A scene file that places `file` with scale 0.5 and translation (0, 0, 1), and defines a
+/// TOML material "red" that overrides the glTF one of that name.
+fn scene_toml(file: &str) -> String {
+    format!(
+        r#"
+[camera]
+position = [0.5, 0.5, -3.0]
+look_at = [0.5, 0.5, 0.0]
+vfov = 40
+
+[material.red]
+kd = [0.9, 0.1, 0.1]
+
+[[shape]]
+type = "gltf"
+file = "{file}"
+scale = 0.5
+translate = [0.0, 0.0, 1.0]
+"#
+    )
+}
+
+fn write_scene(dir: &Path, gltf_name: &str, gltf: &[u8]) -> PathBuf {
+    std::fs::write(dir.join(gltf_name), gltf).expect("write gltf");
+    let toml = dir.join("scene.toml");
+    std::fs::write(&toml, scene_toml(gltf_name)).expect("write toml");
+    toml
+}
+
+fn data_uri_json() -> String {
+    let b64 = base64::engine::general_purpose::STANDARD.encode(buffer_bytes());
+    gltf_json(
+        &format!(r#""uri": "data:application/octet-stream;base64,{b64}""#),
+        4,
+    )
+}
+
+fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
+    let mut json = json.as_bytes().to_vec();
+    while !json.len().is_multiple_of(4) {
+        json.push(b' ');
+    }
+    let mut bin = bin.to_vec();
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut out = b"glTF".to_vec();
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    out
+}
+
+fn close(a: Vec3, b: Vec3, tol: f32) -> bool {
+    (a - b).abs().max_element() <= tol
+}
+
+/// Everything the test file encodes, checked on a loaded scene.
+fn check(s: &LoadedScene, gltf_path: &Path) {
+    let g = &s.scene.geometry;
+    // Mesh 0 (2) + mesh 1 (2) + mesh 2's triangle (1) + mesh 3 (2); the line primitive is skipped.
+    assert_eq!(s.report.triangles, 7);
+    assert_eq!(s.report.skipped_primitives, 1);
+    assert_eq!(s.report.skipped_lights, 1);
+    assert_eq!(s.report.flat_primitives, 3);
+    assert_eq!(s.report.computed_normals, 0);
+    assert_eq!(s.report.gltf_files, vec![gltf_path.to_path_buf()]);
+    // TOML "red", glTF "painted", the default, and the unnamed material 2.
+    assert_eq!(s.report.materials, 4);
+
+    // Node 0: T(1,2,3)·S(2,1,1), then the TOML placement p·0.5 + (0,0,1).
+    let v = g.vertices(0);
+    assert!(close(v[2], Vec3::new(1.5, 1.5, 2.5), 1e-6), "{v:?}");
+    let hit = g
+        .intersect(Vec3::new(1.0, 1.25, 0.0), Vec3::Z, f32::INFINITY)
+        .expect("node 0 quad");
+    assert!((hit.p.z - 2.5).abs() < 1e-6);
+    let m = &s.scene.materials[hit.material as usize];
+    assert_eq!(m.name, "painted");
+    assert_eq!(m.bdf.kd(), Vec3::new(0.2, 0.4, 0.6));
+    // Normal (1,0,1)/√2 under scale (2,1,1): the inverse transpose gives (0.5,0,1) normalised.
+    assert!(
+        close(hit.ns, Vec3::new(0.5, 0.0, 1.0).normalize(), 1e-5),
+        "ns {}",
+        hit.ns
+    );
+
+    // Node 1 uses glTF material "red", overridden by the TOML definition.
+    let hit = g
+        .intersect(Vec3::new(0.1, 0.4, 0.0), Vec3::Z, f32::INFINITY)
+        .expect("node 1 quad");
+    assert!((hit.p.z - 3.5).abs() < 1e-6);
+    let m = &s.scene.materials[hit.material as usize];
+    assert_eq!(m.name, "red");
+    assert_eq!(m.bdf.kd(), Vec3::new(0.9, 0.1, 0.1));
+    assert_eq!(hit.ns, hit.ng, "no normals in the file: flat");
+
+    // Node 3: a non-indexed triangle without material: the default Lambert 0.8.
+    let hit = g
+        .intersect(Vec3::new(0.4, 0.1, 0.0), Vec3::Z, f32::INFINITY)
+        .expect("node 3 triangle");
+    assert!((hit.p.z - 1.0).abs() < 1e-6);
+    let m = &s.scene.materials[hit.material as usize];
+    assert_eq!(m.name, "gltf:default");
+    assert_eq!(m.bdf.kd(), Vec3::splat(0.8));
+
+    // Node 5: an unnamed material gets a generated name.
+    let hit = g
+        .intersect(Vec3::new(5.25, 0.25, 0.0), Vec3::Z, f32::INFINITY)
+        .expect("node 5 quad");
+    let m = &s.scene.materials[hit.material as usize];
+    assert!(
+        m.name.starts_with("gltf:") && m.name.ends_with("#2"),
+        "{}",
+        m.name
+    );
+    assert_eq!(m.bdf.kd(), Vec3::splat(0.3));
+
+    // The point light of node 2 (child of node 1): (0,1,0) + (0,0,5), then the placement.
+    assert_eq!(s.scene.lights.len(), 1);
+    let light = s.scene.lights[0];
+    assert!(
+        close(light.position, Vec3::new(0.0, 0.5, 3.5), 1e-6),
+        "{}",
+        light.position
+    );
+    let expected = 4.0 * PI * 2.0 * Vec3::new(1.0, 0.5, 0.25);
+    assert!(close(light.flux, expected, 1e-5), "{}", light.flux);
+}
+
+#[test]
+fn gltf_with_data_uri_buffer() {
+    let dir = temp_dir("data-uri");
+    let toml = write_scene(&dir, "t.gltf", data_uri_json().as_bytes());
+    let s = load_scene(&toml).unwrap_or_else(|e| panic!("{e}"));
+    check(&s, &dir.join("t.gltf"));
+}
+
+#[test]
+fn gltf_with_external_buffer() {
+    let dir = temp_dir("external");
+    std::fs::create_dir_all(dir.join("meshes")).expect("dir");
+    std::fs::write(dir.join("meshes/t.bin"), buffer_bytes()).expect("write bin");
+    let toml = write_scene(
+        &dir,
+        "meshes/t.gltf",
+        gltf_json(r#""uri": "t.bin""#, 4).as_bytes(),
+    );
+    let s = load_scene(&toml).unwrap_or_else(|e| panic!("{e}"));
+    check(&s, &dir.join("meshes/t.gltf"));
+}
+
+#[test]
+fn gltf_binary_glb() {
+    let dir = temp_dir("glb");
+    let toml = write_scene(&dir, "t.glb", &glb(&gltf_json("", 4), &buffer_bytes()));
+    let s = load_scene(&toml).unwrap_or_else(|e| panic!("{e}"));
+    check(&s, &dir.join("t.glb"));
+}
+
+fn error_of(dir: &Path, toml: &Path) -> (LoadError, String) {
+    let e = match load_scene(toml) {
+        Ok(_) => panic!("accepted {}", toml.display()),
+        Err(e) => e,
+    };
+    let msg = e.to_string();
+    assert!(!msg.contains('\n'), "{msg}");
+    assert!(msg.contains(&dir.display().to_string()), "{msg}");
+    (e, msg)
+}
+
+#[test]
+fn missing_gltf_file() {
+    let dir = temp_dir("missing");
+    let toml = dir.join("scene.toml");
+    std::fs::write(&toml, scene_toml("meshes/a.gltf")).expect("write");
+    let (_, msg) = error_of(&dir, &toml);
+    assert!(
+        msg.contains("meshes/a.gltf (from shape[0].file): cannot read: "),
+        "{msg}"
+    );
+}
+
+#[test]
+fn missing_external_buffer() {
+    let dir = temp_dir("missing-bin");
+    let toml = write_scene(
+        &dir,
+        "t.gltf",
+        gltf_json(r#""uri": "gone.bin""#, 4).as_bytes(),
+    );
+    let (_, msg) = error_of(&dir, &toml);
+    assert!(
+        msg.contains("gone.bin (from shape[0].file, buffer 0 of "),
+        "{msg}"
+    );
+    assert!(msg.contains("cannot read"), "{msg}");
+}
+
+#[test]
+fn garbage_gltf_file() {
+    let dir = temp_dir("garbage");
+    let bytes: Vec<u8> = (0..4096u32)
+        .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8)
+        .collect();
+    let toml = write_scene(&dir, "t.gltf", &bytes);
+    let (e, msg) = error_of(&dir, &toml);
+    assert!(matches!(e, LoadError::Gltf { .. }), "{msg}");
+    assert!(
+        msg.contains("t.gltf (from shape[0].file): not a valid glTF 2.0 file"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn bad_json() {
+    let dir = temp_dir("bad-json");
+    let toml = write_scene(
+        &dir,
+        "t.gltf",
+        br#"{ "asset": { "version": "2.0" }, "nodes": [ "#,
+    );
+    let (_, msg) = error_of(&dir, &toml);
+    assert!(
+        msg.contains("t.gltf (from shape[0].file): not a valid glTF 2.0 file"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn accessor_out_of_range() {
+    let dir = temp_dir("accessor");
+    let b64 = base64::engine::general_purpose::STANDARD.encode(buffer_bytes());
+    let json = gltf_json(
+        &format!(r#""uri": "data:application/octet-stream;base64,{b64}""#),
+        100,
+    );
+    let toml = write_scene(&dir, "t.gltf", json.as_bytes());
+    let (_, msg) = error_of(&dir, &toml);
+    assert!(
+        msg.contains(
+            "t.gltf (from shape[0].file): mesh 0 primitive 0: POSITION: accessor 0 reaches past"
+        ),
+        "{msg}"
+    );
+}
+
+#[test]
+fn truncated_and_corrupted_files_never_panic() {
+    let dir = temp_dir("fuzz");
+    let json = data_uri_json();
+    let binary = glb(&gltf_json("", 4), &buffer_bytes());
+    for source in [json.as_bytes(), binary.as_slice()] {
+        for cut in (0..source.len()).step_by(97) {
+            let toml = write_scene(&dir, "t.gltf", &source[..cut]);
+            let _ = load_scene(&toml);
+        }
+        for i in (0..source.len()).step_by(3) {
+            for b in [b'0', b'9', b'-', b'"', b'}', 0xff, 0] {
+                let mut v = source.to_vec();
+                v[i] = b;
+                let toml = write_scene(&dir, "t.gltf", &v);
+                let _ = load_scene(&toml);
+            }
+        }
+    }
+}
