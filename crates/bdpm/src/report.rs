@@ -1,0 +1,204 @@
+//! The JSON run report and the EXR header attributes: what ran, with which settings, and what
+//! each stage cost.
+use std::path::Path;
+
+use bdpm_integrator::{Film, RenderSettings, Renderer};
+use bdpm_load::LoadReport;
+use serde::Serialize;
+
+use crate::output::Outputs;
+
+/// Everything the report is made from.
+pub(crate) struct RunFacts<'a> {
+    pub(crate) scene_path: &'a Path,
+    pub(crate) settings: &'a RenderSettings,
+    pub(crate) renderer: &'a Renderer<'a>,
+    pub(crate) load: &'a LoadReport,
+    pub(crate) film: &'a Film,
+    pub(crate) threads: usize,
+    pub(crate) samples: u64,
+    pub(crate) load_seconds: f64,
+    pub(crate) prepare_seconds: f64,
+    pub(crate) render_seconds: f64,
+    pub(crate) pass_stages: &'a [(&'static str, f64)],
+    pub(crate) outputs: &'a Outputs,
+    pub(crate) interrupted: bool,
+}
+
+#[derive(Serialize)]
+struct Stage {
+    name: String,
+    seconds: f64,
+    bytes: u64,
+    detail: String,
+}
+
+#[derive(Serialize)]
+struct SettingsOut {
+    mode: String,
+    width: u32,
+    height: u32,
+    passes: u32,
+    photons_per_pass: u64,
+    spp: u32,
+    radius_m: Option<f32>,
+    seed: u64,
+    threshold_radius_m: f32,
+    cache_bins: u32,
+    pixel_table_rays: u32,
+    clamp_weights: bool,
+}
+
+#[derive(Serialize)]
+struct SceneOut {
+    path: String,
+    triangles: usize,
+    degenerate_triangles: usize,
+    materials: usize,
+    lights: usize,
+}
+
+#[derive(Serialize)]
+struct Timing {
+    load_s: f64,
+    prepare_s: f64,
+    render_s: f64,
+    samples_per_second: f64,
+    pass_stages: Vec<Stage>,
+}
+
+/// The run report written as OUT.json.
+#[derive(Serialize)]
+pub(crate) struct RunReport {
+    version: &'static str,
+    scene: SceneOut,
+    settings: SettingsOut,
+    threads: usize,
+    passes_done: u32,
+    interrupted: bool,
+    camera_samples: u64,
+    dropped_samples: u64,
+    prepared_stages: Vec<Stage>,
+    timing: Timing,
+    mean_radiance: [f64; 3],
+    mean_noise_sqrt_v: [f64; 3],
+    outputs: [String; 3],
+}
+
+fn mean_of(v: &[glam::DVec3]) -> [f64; 3] {
+    let s: glam::DVec3 = v.iter().copied().sum();
+    (s / v.len().max(1) as f64).to_array()
+}
+
+fn settings_out(s: &RenderSettings) -> SettingsOut {
+    SettingsOut {
+        mode: s.mode.name().to_string(),
+        width: s.width,
+        height: s.height,
+        passes: s.passes,
+        photons_per_pass: s.photons,
+        spp: s.spp,
+        radius_m: s.radius,
+        seed: s.seed,
+        threshold_radius_m: s.threshold_radius,
+        cache_bins: s.cache_bins,
+        pixel_table_rays: s.pixel_table_rays,
+        clamp_weights: s.clamp_weights,
+    }
+}
+
+impl RunReport {
+    pub(crate) fn new(f: RunFacts<'_>) -> RunReport {
+        let noise: Vec<glam::DVec3> = f
+            .film
+            .pass_variance()
+            .into_iter()
+            .map(|v| v.map(f64::sqrt))
+            .collect();
+        RunReport {
+            version: env!("CARGO_PKG_VERSION"),
+            scene: SceneOut {
+                path: f.scene_path.display().to_string(),
+                triangles: f.load.triangles,
+                degenerate_triangles: f.load.degenerate_triangles,
+                materials: f.load.materials,
+                lights: f.load.lights,
+            },
+            settings: settings_out(f.renderer.settings()),
+            threads: f.threads,
+            passes_done: f.film.passes(),
+            interrupted: f.interrupted,
+            camera_samples: f.samples,
+            dropped_samples: f.film.dropped(),
+            prepared_stages: f
+                .renderer
+                .stages()
+                .iter()
+                .map(|s| Stage {
+                    name: s.name.into(),
+                    seconds: s.seconds,
+                    bytes: s.bytes,
+                    detail: s.detail.clone(),
+                })
+                .collect(),
+            timing: Timing {
+                load_s: f.load_seconds,
+                prepare_s: f.prepare_seconds,
+                render_s: f.render_seconds,
+                samples_per_second: f.samples as f64 / f.render_seconds.max(1e-9),
+                pass_stages: f
+                    .pass_stages
+                    .iter()
+                    .map(|(n, s)| Stage {
+                        name: (*n).into(),
+                        seconds: *s,
+                        bytes: 0,
+                        detail: String::new(),
+                    })
+                    .collect(),
+            },
+            mean_radiance: mean_of(&f.film.mean()),
+            mean_noise_sqrt_v: mean_of(&noise),
+            outputs: [
+                f.outputs.exr.display().to_string(),
+                f.outputs.png.display().to_string(),
+                f.outputs.json.display().to_string(),
+            ],
+        }
+        .with_settings(f.settings)
+    }
+
+    fn with_settings(mut self, s: &RenderSettings) -> RunReport {
+        self.settings = settings_out(s);
+        self
+    }
+
+    pub(crate) fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+    }
+}
+
+/// The settings as EXR header attributes (`bdpm.mode`, `bdpm.seed`, …).
+pub(crate) fn header_attributes(s: &RenderSettings, r: &Renderer<'_>) -> Vec<(String, String)> {
+    let mut v = vec![
+        ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
+        ("mode".into(), s.mode.name().into()),
+        ("seed".into(), s.seed.to_string()),
+        ("passes".into(), s.passes.to_string()),
+        ("photons_per_pass".into(), s.photons.to_string()),
+        ("spp".into(), s.spp.to_string()),
+        (
+            "radius_m".into(),
+            s.radius
+                .map(|r| r.to_string())
+                .unwrap_or_else(|| "default".into()),
+        ),
+    ];
+    for st in r.stages() {
+        v.push((
+            format!("stage.{}", st.name.replace(' ', "_")),
+            format!("{:.3} s", st.seconds),
+        ));
+    }
+    v
+}
