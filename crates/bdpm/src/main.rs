@@ -166,6 +166,12 @@ fn thread_pool(threads: Option<usize>) -> CliResult<rayon::ThreadPool> {
         .map_err(|e| format!("cannot start worker threads: {e}"))
 }
 
+/// Mean over pixels of one pass's estimates, per channel.
+fn image_mean(estimates: &[glam::DVec3]) -> [f64; 3] {
+    let sum: glam::DVec3 = estimates.iter().copied().sum();
+    (sum / estimates.len().max(1) as f64).to_array()
+}
+
 fn default_output(scene: &Path) -> PathBuf {
     let stem = scene.file_stem().map(|s| s.to_string_lossy().into_owned());
     PathBuf::from("out").join(format!("{}.exr", stem.unwrap_or_else(|| "render".into())))
@@ -210,12 +216,14 @@ fn render(args: RenderArgs) -> CliResult<()> {
     };
     let mut film = Film::new(settings.width, settings.height);
     let mut samples = 0u64;
+    let mut pass_means = Vec::new();
     let mut stage_totals: Vec<(&'static str, f64)> = Vec::new();
     let t_render = Instant::now();
     for pass in 0..settings.passes {
         bar.set_message(format!("{}/{}", pass + 1, settings.passes));
         let out = pool.install(|| renderer.render_pass(pass, &|n| bar.inc(n)));
         film.add_pass(&out.estimates, out.dropped);
+        pass_means.push(image_mean(&out.estimates));
         samples += out.samples;
         for (name, secs) in out.stage_seconds {
             match stage_totals.iter_mut().find(|(n, _)| *n == name) {
@@ -247,6 +255,7 @@ fn render(args: RenderArgs) -> CliResult<()> {
         pass_stages: &stage_totals,
         outputs: &outputs,
         interrupted: false,
+        pass_means: &pass_means,
     });
     output::write_atomic(&outputs.json, run.to_json().as_bytes())
         .map_err(|e| format!("{}: {e}", outputs.json.display()))?;

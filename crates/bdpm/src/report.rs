@@ -23,6 +23,7 @@ pub(crate) struct RunFacts<'a> {
     pub(crate) pass_stages: &'a [(&'static str, f64)],
     pub(crate) outputs: &'a Outputs,
     pub(crate) interrupted: bool,
+    pub(crate) pass_means: &'a [[f64; 3]],
 }
 
 #[derive(Serialize)]
@@ -81,13 +82,32 @@ pub(crate) struct RunReport {
     prepared_stages: Vec<Stage>,
     timing: Timing,
     mean_radiance: [f64; 3],
+    /// Standard error of the image mean from the spread of the per-pass image means (this
+    /// accounts for correlations between pixels within a pass).
+    mean_radiance_standard_error: [f64; 3],
     mean_noise_sqrt_v: [f64; 3],
+    pass_image_means: Vec<[f64; 3]>,
     outputs: [String; 3],
 }
 
 fn mean_of(v: &[glam::DVec3]) -> [f64; 3] {
     let s: glam::DVec3 = v.iter().copied().sum();
     (s / v.len().max(1) as f64).to_array()
+}
+
+/// Standard error of the mean of `samples` (per channel); 0 with fewer than two.
+fn standard_error_of_mean(samples: &[[f64; 3]]) -> [f64; 3] {
+    let n = samples.len() as f64;
+    if samples.len() < 2 {
+        return [0.0; 3];
+    }
+    let mut out = [0.0; 3];
+    for (c, o) in out.iter_mut().enumerate() {
+        let mean = samples.iter().map(|s| s[c]).sum::<f64>() / n;
+        let var = samples.iter().map(|s| (s[c] - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        *o = (var / n).sqrt();
+    }
+    out
 }
 
 fn settings_out(s: &RenderSettings) -> SettingsOut {
@@ -158,6 +178,8 @@ impl RunReport {
                     .collect(),
             },
             mean_radiance: mean_of(&f.film.mean()),
+            mean_radiance_standard_error: standard_error_of_mean(f.pass_means),
+            pass_image_means: f.pass_means.to_vec(),
             mean_noise_sqrt_v: mean_of(&noise),
             outputs: [
                 f.outputs.exr.display().to_string(),

@@ -11,6 +11,7 @@
 
 pub mod bdpm;
 mod film;
+mod light;
 pub mod path;
 mod render;
 mod settings;

@@ -214,6 +214,9 @@ impl<'a> Renderer<'a> {
     pub fn render_pass(&self, pass: u32, progress: &(dyn Fn(u64) + Sync)) -> PassOutput {
         match self.settings.mode {
             Mode::Path => render_path_pass(self.scene, &self.settings, pass, progress),
+            Mode::Light => {
+                crate::light::render_light_pass(self.scene, &self.settings, pass, progress)
+            }
             Mode::Bdpm(h) => self.render_bdpm_pass(h, pass, progress),
         }
     }

@@ -7,24 +7,28 @@ use bdpm_mis::Heuristic;
 pub enum Mode {
     /// Unidirectional path tracing with next-event estimation (the reference).
     Path,
+    /// Exact direct light plus light tracing connected to the camera (a second, independent
+    /// reference that converges fast around small bright secondary sources).
+    Light,
     /// The BDD=0/BDD=1 photon-mapping mix weighted by a heuristic.
     Bdpm(Heuristic),
 }
 
 impl Mode {
-    /// Every mode name the parser accepts, `path` first.
+    /// Every mode name the parser accepts, the references (`path`, `light`) first.
     pub fn names() -> Vec<&'static str> {
-        std::iter::once("path")
+        ["path", "light"]
+            .into_iter()
             .chain(Heuristic::ALL_NAMES.iter().copied())
             .collect()
     }
 
     /// Parses a mode name (`path`, `bdd0`, `bdd1`, `threshold`, …).
     pub fn parse(name: &str) -> Option<Mode> {
-        if name == "path" {
-            Some(Mode::Path)
-        } else {
-            Heuristic::parse(name).map(Mode::Bdpm)
+        match name {
+            "path" => Some(Mode::Path),
+            "light" => Some(Mode::Light),
+            _ => Heuristic::parse(name).map(Mode::Bdpm),
         }
     }
 
@@ -32,6 +36,7 @@ impl Mode {
     pub fn name(&self) -> &'static str {
         match self {
             Mode::Path => "path",
+            Mode::Light => "light",
             Mode::Bdpm(h) => h.name(),
         }
     }

@@ -91,6 +91,15 @@ impl Camera {
         (self.forward + self.right * sx + self.up * sy).normalize()
     }
 
+    /// Area of one pixel on the image plane at unit distance from the pinhole (dimensionless:
+    /// m² per m²). A pixel's value is the mean radiance over this area, so a light-tracing
+    /// splat divides by it.
+    pub fn pixel_area(&self) -> f32 {
+        let aspect = self.width as f32 / self.height as f32;
+        (2.0 * self.tan_half * aspect / self.width as f32)
+            * (2.0 * self.tan_half / self.height as f32)
+    }
+
     /// The image point (x, y) in pixels where a world point projects, if it is in front of the
     /// camera and inside the image.
     pub fn project(&self, p: Vec3) -> Option<(f32, f32)> {

@@ -1,0 +1,116 @@
+//! The `light` reference: exact direct light at the camera's first vertex plus light tracing
+//! for everything else (every photon arrival after ≥ 1 scattering is connected to the camera).
+//! It is unbiased and independent of the BDPM code paths, and it converges fast where a small
+//! bright secondary source (the Cornell ceiling spot) makes `path` slow (method.md §10).
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use bdpm_geometry::{Domain, Rng};
+use bdpm_photon::{TraceOptions, trace_photons};
+use bdpm_scene::Scene;
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+
+use crate::render::{PassOutput, accumulate};
+use crate::settings::RenderSettings;
+
+/// Renders one pass of the `light` reference.
+pub(crate) fn render_light_pass(
+    scene: &Scene,
+    settings: &RenderSettings,
+    pass: u32,
+    progress: &(dyn Fn(u64) + Sync),
+) -> PassOutput {
+    let (w, h) = (settings.width as usize, settings.height as usize);
+    let cam = &scene.camera;
+    let t_camera = std::time::Instant::now();
+    let dropped = AtomicU64::new(0);
+    let mut estimates = vec![DVec3::ZERO; w * h];
+    estimates
+        .par_chunks_mut(w)
+        .enumerate()
+        .for_each(|(y, row)| {
+            let mut row_dropped = 0;
+            for (x, px) in row.iter_mut().enumerate() {
+                let pixel = (y * w + x) as u64;
+                let mut sum = DVec3::ZERO;
+                for k in 0..settings.spp {
+                    let mut rng = Rng::new(
+                        settings.seed,
+                        Domain::Camera,
+                        [pass as u64, pixel, k as u64],
+                    );
+                    let [jx, jy] = rng.uniform2();
+                    let dir = cam.ray_direction(x as f32 + jx, y as f32 + jy);
+                    let l = match scene.geometry.intersect(cam.position, dir, f32::INFINITY) {
+                        Some(hit) => scene.direct(&scene.shade(&hit, -dir), -dir),
+                        None => Vec3::ZERO,
+                    };
+                    accumulate(&mut sum, l, &mut row_dropped);
+                }
+                *px = sum / settings.spp as f64;
+            }
+            dropped.fetch_add(row_dropped, Ordering::Relaxed);
+            progress(1);
+        });
+    let camera_seconds = t_camera.elapsed().as_secs_f64();
+
+    let t_light = std::time::Instant::now();
+    let options = TraceOptions {
+        photons: settings.photons,
+        seed: settings.seed,
+        domain: Domain::Photon,
+        pass,
+        light_visibility: false,
+        max_depth: 1024,
+    };
+    let k = 1.0 / cam.pixel_area();
+    // Splats come back in photon order, so the sums below do not depend on the thread count.
+    let splats: Vec<(u32, Vec3)> = trace_photons(scene, &options, |arrival, out| {
+        if arrival.vertex.depth == 0 {
+            return;
+        }
+        let sh = &arrival.shading;
+        let to_cam = cam.position - sh.p;
+        let d2 = to_cam.length_squared();
+        if d2 <= 0.0 || sh.ng.dot(to_cam) <= 0.0 {
+            return;
+        }
+        let wc = to_cam / d2.sqrt();
+        let Some((fx, fy)) = cam.project(sh.p) else {
+            return;
+        };
+        let cos_cam = cam.forward.dot(-wc);
+        let cos_x = sh.frame.n.dot(wc);
+        if cos_cam <= 0.0 || cos_x <= 0.0 {
+            return;
+        }
+        let f = scene.eval(sh, wc, arrival.vertex.incoming);
+        if f == Vec3::ZERO || scene.geometry.occluded(scene.spawn(sh, wc), cam.position) {
+            return;
+        }
+        // Radiance averaged over the pixel's image-plane area: dA_plane = dω/cos³θ_c and
+        // dω = cos_x dA/d², so a photon adds f·E_p·cos_x/(d²·cos³θ_c·a_pixel).
+        let value = f * arrival.power * (cos_x * k / (d2 * cos_cam * cos_cam * cos_cam));
+        let pixel = fy as u32 * w as u32 + fx as u32;
+        out.push((pixel, value));
+    });
+    let mut light = vec![DVec3::ZERO; w * h];
+    let mut light_dropped = 0;
+    for (pixel, value) in splats {
+        accumulate(&mut light[pixel as usize], value, &mut light_dropped);
+    }
+    for (e, l) in estimates.iter_mut().zip(&light) {
+        *e += *l;
+    }
+    PassOutput {
+        estimates,
+        dropped: dropped.into_inner() + light_dropped,
+        samples: (w * h) as u64 * settings.spp as u64,
+        stage_seconds: vec![
+            ("camera", camera_seconds),
+            ("light tracing", t_light.elapsed().as_secs_f64()),
+        ],
+        techniques: None,
+        photons_stored: 0,
+    }
+}
