@@ -16,9 +16,11 @@ pub mod path;
 mod render;
 mod settings;
 mod table;
+mod weightmap;
 
 pub use bdpm::{Techniques, scene_default_radius};
 pub use film::Film;
 pub use render::{PassOutput, RenderError, Renderer, StageReport, render_path_pass};
 pub use settings::{Mode, RenderSettings, default_radius};
 pub use table::PixelTable;
+pub use weightmap::{WeightMap, WeightTarget};

@@ -167,7 +167,7 @@ impl<'a> Renderer<'a> {
     }
 
     /// The mix of mode `h` with this renderer's constants.
-    fn mix(&self, heuristic: Heuristic) -> Mix<'_> {
+    pub(crate) fn mix(&self, heuristic: Heuristic) -> Mix<'_> {
         Mix {
             scene: self.scene,
             heuristic,
@@ -192,6 +192,11 @@ impl<'a> Renderer<'a> {
     pub fn with_camera_x1_weighting(mut self, on: bool) -> Self {
         self.camera_x1_weighting = on;
         self
+    }
+
+    /// The scene this renderer draws.
+    pub fn scene(&self) -> &Scene {
+        self.scene
     }
 
     /// The merge radius r in use, metres.

@@ -4,7 +4,7 @@ use bdpm_geometry::{Domain, Rng};
 use bdpm_mis::{PixelTerms, w1_partial};
 use rayon::prelude::*;
 
-use crate::bdpm::{Mix, WeightVertex, light_mask};
+use crate::bdpm::{FirstVertex, Mix, WeightVertex, light_mask};
 
 /// A, B per pixel (luminances), row-major; frozen before rendering.
 #[derive(Clone, Debug)]
@@ -31,6 +31,51 @@ impl PixelTable {
     }
 }
 
+/// A and B for one first vertex: `rays` BDF-sampled directions from the stream keyed by
+/// (seed, `key`, ray).
+pub(crate) fn pixel_terms(
+    mix: &Mix<'_>,
+    x0: &FirstVertex<'_>,
+    rays: u32,
+    seed: u64,
+    key: u64,
+) -> PixelTerms {
+    let scene = mix.scene;
+    let (mut a, mut b) = (0.0f64, 0.0f64);
+    for j in 0..rays {
+        let mut rng = Rng::new(seed, Domain::PixelTable, [key, j as u64, 0]);
+        let Some(s) = x0.bdf.sample(x0.u_local, rng.uniform3()) else {
+            continue;
+        };
+        let v = x0.sh.frame.to_world(s.wi);
+        if x0.sh.ng.dot(v) <= 0.0 || s.pdf <= 0.0 {
+            continue;
+        }
+        let Some(hit1) = scene
+            .geometry
+            .intersect(scene.spawn(&x0.sh, v), v, f32::INFINITY)
+        else {
+            continue;
+        };
+        let sh1 = scene.shade(&hit1, -v);
+        let x1 = WeightVertex {
+            p: sh1.p,
+            n: sh1.ng,
+            material: sh1.material,
+            prim: sh1.prim,
+            lights: light_mask(scene, &sh1),
+        };
+        let pair = mix.pair(x0, &x1, v, s.f);
+        let l = pair.direct + pair.indirect;
+        let w1 = w1_partial(&mix.budget, pair.f_tilde, l, pair.b);
+        let cos_over_pdf = (s.wi.z / s.pdf) as f64;
+        a += w1 * pair.f_tilde * l * cos_over_pdf;
+        b += w1 * l * cos_over_pdf;
+    }
+    let n = rays.max(1) as f64;
+    PixelTerms { a: a / n, b: b / n }
+}
+
 /// Builds the table: for each pixel, the primary ray through its centre finds x₀, then `rays`
 /// directions v are sampled from the BDF at x₀ (no absorption) and
 /// A += W₁ f̃ L cos/p, B += W₁ L cos/p with L = L₀(x₁→x₀) + L_d(x₁→x₀), divided by `rays`.
@@ -51,40 +96,7 @@ pub(crate) fn build(mix: &Mix<'_>, width: u32, height: u32, rays: u32, seed: u64
                 let Some(x0) = mix.first_vertex(&hit0, -dir) else {
                     continue;
                 };
-                let (mut a, mut b) = (0.0f64, 0.0f64);
-                for j in 0..rays {
-                    let mut rng = Rng::new(seed, Domain::PixelTable, [pixel, j as u64, 0]);
-                    let Some(s) = x0.bdf.sample(x0.u_local, rng.uniform3()) else {
-                        continue;
-                    };
-                    let v = x0.sh.frame.to_world(s.wi);
-                    if x0.sh.ng.dot(v) <= 0.0 || s.pdf <= 0.0 {
-                        continue;
-                    }
-                    let Some(hit1) =
-                        scene
-                            .geometry
-                            .intersect(scene.spawn(&x0.sh, v), v, f32::INFINITY)
-                    else {
-                        continue;
-                    };
-                    let sh1 = scene.shade(&hit1, -v);
-                    let x1 = WeightVertex {
-                        p: sh1.p,
-                        n: sh1.ng,
-                        material: sh1.material,
-                        prim: sh1.prim,
-                        lights: light_mask(scene, &sh1),
-                    };
-                    let pair = mix.pair(&x0, &x1, v, s.f);
-                    let l = pair.direct + pair.indirect;
-                    let w1 = w1_partial(&mix.budget, pair.f_tilde, l, pair.b);
-                    let cos_over_pdf = (s.wi.z / s.pdf) as f64;
-                    a += w1 * pair.f_tilde * l * cos_over_pdf;
-                    b += w1 * l * cos_over_pdf;
-                }
-                let n = rays.max(1) as f64;
-                *out = PixelTerms { a: a / n, b: b / n };
+                *out = pixel_terms(mix, &x0, rays, seed, pixel);
             }
         });
     PixelTable { width, terms }

@@ -1,0 +1,162 @@
+//! What every subcommand shares: the setting overrides, loading a scene with them, the thread
+//! pool and the user-facing error type.
+use std::path::{Path, PathBuf};
+
+use bdpm_integrator::{Mode, RenderSettings};
+use bdpm_load::{LoadReport, load_scene};
+use bdpm_scene::Scene;
+use clap::Args;
+
+/// An error for the user: one line, no backtrace.
+pub(crate) type CliResult<T> = Result<T, String>;
+
+/// Settings that override the scene file's `[render]` table.
+#[derive(Args, Debug, Clone, Default)]
+pub(crate) struct Overrides {
+    /// Integrator and weight mode: path, bdd0, bdd1, threshold, algebraic-direct, algebraic,
+    /// optimal, balance, power.
+    #[arg(long)]
+    pub(crate) mode: Option<String>,
+    /// Number of passes.
+    #[arg(long)]
+    pub(crate) passes: Option<u32>,
+    /// Image size as WxH, e.g. 256x256.
+    #[arg(long, value_parser = parse_resolution)]
+    pub(crate) resolution: Option<(u32, u32)>,
+    /// Photons emitted per pass (N_F).
+    #[arg(long)]
+    pub(crate) photons: Option<u64>,
+    /// Camera samples per pixel per pass (N_B).
+    #[arg(long)]
+    pub(crate) spp: Option<u32>,
+    /// Merge radius, metres.
+    #[arg(long)]
+    pub(crate) radius: Option<f32>,
+    /// Master seed of all random streams.
+    #[arg(long)]
+    pub(crate) seed: Option<u64>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub(crate) threads: Option<usize>,
+}
+
+pub(crate) fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("'{s}' is not WxH"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad width in '{s}'"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad height in '{s}'"))?;
+    if w == 0 || h == 0 || w > 16384 || h > 16384 {
+        return Err(format!(
+            "resolution '{s}' must be between 1x1 and 16384x16384"
+        ));
+    }
+    Ok((w, h))
+}
+
+/// Applies command-line overrides to the settings loaded from the scene file.
+pub(crate) fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> CliResult<()> {
+    if let Some(name) = &o.mode {
+        settings.mode = Mode::parse(name).ok_or_else(|| {
+            format!(
+                "--mode: unknown mode '{name}'; expected one of {}",
+                Mode::names().join(", ")
+            )
+        })?;
+    }
+    if let Some(p) = o.passes {
+        if p == 0 {
+            return Err("--passes must be at least 1".into());
+        }
+        settings.passes = p;
+    }
+    if let Some((w, h)) = o.resolution {
+        settings.width = w;
+        settings.height = h;
+    }
+    if let Some(n) = o.photons {
+        if n == 0 {
+            return Err("--photons must be at least 1".into());
+        }
+        settings.photons = n;
+    }
+    if let Some(n) = o.spp {
+        if n == 0 {
+            return Err("--spp must be at least 1".into());
+        }
+        settings.spp = n;
+    }
+    if let Some(r) = o.radius {
+        if !(r.is_finite() && r > 0.0) {
+            return Err(format!(
+                "--radius must be a positive number of metres, not {r}"
+            ));
+        }
+        settings.radius = Some(r);
+    }
+    if let Some(s) = o.seed {
+        settings.seed = s;
+    }
+    Ok(())
+}
+
+pub(crate) fn thread_pool(threads: Option<usize>) -> CliResult<rayon::ThreadPool> {
+    let mut b = rayon::ThreadPoolBuilder::new();
+    if let Some(t) = threads {
+        if t == 0 {
+            return Err("--threads must be at least 1".into());
+        }
+        b = b.num_threads(t);
+    }
+    b.build()
+        .map_err(|e| format!("cannot start worker threads: {e}"))
+}
+
+/// Mean over pixels of one pass's estimates, per channel.
+pub(crate) fn image_mean(estimates: &[glam::DVec3]) -> [f64; 3] {
+    let sum: glam::DVec3 = estimates.iter().copied().sum();
+    (sum / estimates.len().max(1) as f64).to_array()
+}
+
+pub(crate) fn default_output(scene: &Path) -> PathBuf {
+    let stem = scene.file_stem().map(|s| s.to_string_lossy().into_owned());
+    PathBuf::from("out").join(format!("{}.exr", stem.unwrap_or_else(|| "render".into())))
+}
+
+/// A scene loaded from `path` with `overrides` applied (the camera resized to match).
+pub(crate) struct Prepared {
+    /// The scene, camera at the final resolution.
+    pub(crate) scene: Scene,
+    /// The final settings.
+    pub(crate) settings: RenderSettings,
+    /// The scene file's `output`, if any.
+    pub(crate) output: Option<PathBuf>,
+    /// Facts from loading.
+    pub(crate) report: LoadReport,
+}
+
+/// Loads a scene file and applies the overrides.
+pub(crate) fn prepare(path: &Path, overrides: &Overrides) -> CliResult<Prepared> {
+    let loaded = load_scene(path).map_err(|e| e.to_string())?;
+    let mut scene = loaded.scene;
+    let mut settings = loaded.settings;
+    apply_overrides(&mut settings, overrides)?;
+    if (scene.camera.width, scene.camera.height) != (settings.width, settings.height) {
+        scene.camera = scene
+            .camera
+            .with_resolution(settings.width, settings.height)
+            .map_err(|e| format!("--resolution: {e}"))?;
+    }
+    Ok(Prepared {
+        scene,
+        settings,
+        output: loaded.output,
+        report: loaded.report,
+    })
+}

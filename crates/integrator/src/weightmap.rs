@@ -1,0 +1,137 @@
+//! The weight map of the preprint's Fig. 5: for a fixed first vertex x₀ (seen by the camera),
+//! w₀ = 1 − w₁(x₀, x₁) of a mode as a function of x₁ over every surface point the camera sees.
+use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::bdpm::{WeightVertex, light_mask};
+use crate::render::{RenderError, Renderer};
+use crate::settings::Mode;
+use crate::table::pixel_terms;
+
+/// Where x₀ is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum WeightTarget {
+    /// The surface point the camera sees in the direction of this world point (metres); it
+    /// must lie within 1 mm + 0.1% of its distance of that point.
+    Point(Vec3),
+    /// The surface point seen through the centre of this pixel (x, y; row 0 at the top).
+    Pixel(u32, u32),
+}
+
+/// A map of w₀ per pixel: the value for x₁ = the point seen through the pixel's centre.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WeightMap {
+    /// Width, pixels.
+    pub width: u32,
+    /// Height, pixels.
+    pub height: u32,
+    /// w₀ = 1 − w₁ per pixel, row-major; NaN where the pixel sees no surface.
+    pub w0: Vec<f64>,
+    /// The position of x₀, metres.
+    pub x0: Vec3,
+    /// The pixel in which the camera sees x₀.
+    pub x0_pixel: (u32, u32),
+}
+
+impl Renderer<'_> {
+    /// Computes the weight map of this renderer's mode for x₀ at `target`. The `path` and
+    /// `light` modes have no weights and give an error.
+    pub fn weight_map(&self, target: WeightTarget) -> Result<WeightMap, RenderError> {
+        let Mode::Bdpm(h) = self.settings().mode else {
+            return Err(RenderError::Settings(format!(
+                "mode '{}' has no weights",
+                self.settings().mode
+            )));
+        };
+        if h.needs().densities {
+            return Err(RenderError::Settings(format!(
+                "mode '{}' weighs each light path by its incoming direction at x1, so it has no map over x1 alone",
+                h.name()
+            )));
+        }
+        let scene = self.scene();
+        let cam = &scene.camera;
+        let dir = match target {
+            WeightTarget::Point(p) => (p - cam.position).normalize_or_zero(),
+            WeightTarget::Pixel(x, y) => {
+                if x >= cam.width || y >= cam.height {
+                    return Err(RenderError::Settings(format!(
+                        "pixel ({x}, {y}) is outside the {}x{} image",
+                        cam.width, cam.height
+                    )));
+                }
+                cam.ray_direction(x as f32 + 0.5, y as f32 + 0.5)
+            }
+        };
+        let hit = scene
+            .geometry
+            .intersect(cam.position, dir, f32::INFINITY)
+            .ok_or_else(|| RenderError::Settings("the camera sees no surface towards x0".into()))?;
+        if let WeightTarget::Point(p) = target {
+            let d = (p - cam.position).length();
+            if (hit.p - p).length() > 1e-3 + 1e-3 * d {
+                return Err(RenderError::Settings(format!(
+                    "x0 {p} is not visible from the camera (the camera sees {} in its direction)",
+                    hit.p
+                )));
+            }
+        }
+        let mix = self.mix(h);
+        let x0 = mix
+            .first_vertex(&hit, -dir)
+            .ok_or_else(|| RenderError::Settings("x0 faces away from the camera".into()))?;
+        let s = self.settings();
+        let pixel = if h.needs().pixel_table {
+            Some(pixel_terms(&mix, &x0, s.pixel_table_rays, s.seed, u64::MAX))
+        } else {
+            None
+        };
+        let (w, hgt) = (cam.width as usize, cam.height as usize);
+        let mut w0 = vec![f64::NAN; w * hgt];
+        w0.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+            for (x, out) in row.iter_mut().enumerate() {
+                let d = cam.ray_direction(x as f32 + 0.5, y as f32 + 0.5);
+                let Some(hit1) = scene.geometry.intersect(cam.position, d, f32::INFINITY) else {
+                    continue;
+                };
+                let to = hit1.p - x0.sh.p;
+                let dist = to.length();
+                if dist <= 0.0 {
+                    continue;
+                }
+                let v = to / dist;
+                let sh1 = scene.shade(&hit1, -v);
+                let x1 = WeightVertex {
+                    p: sh1.p,
+                    n: sh1.ng,
+                    material: sh1.material,
+                    prim: sh1.prim,
+                    lights: light_mask(scene, &sh1),
+                };
+                // Behind x₀'s tangent plane no path x₁→x₀ exists; the map shows the weight the
+                // formula gives with v mirrored into x₀'s hemisphere (for Lambert f̃ = 1/π for every
+                // x₁, as in the preprint's Fig. 5) rather than a meaningless w₀ = 1.
+                let n0 = x0.sh.ng;
+                let v_eval = if n0.dot(v) < 0.0 {
+                    v - 2.0 * n0.dot(v) * n0
+                } else {
+                    v
+                };
+                let f0 = scene.eval(&x0.sh, x0.u, v_eval);
+                let pair = mix.pair(&x0, &x1, v, f0);
+                *out = h.weight(&mix.budget, &pair, pixel.as_ref()).w0();
+            }
+        });
+        let x0_pixel = cam
+            .project(x0.sh.p)
+            .map(|(x, y)| (x as u32, y as u32))
+            .unwrap_or((0, 0));
+        Ok(WeightMap {
+            width: cam.width,
+            height: cam.height,
+            w0,
+            x0: x0.sh.p,
+            x0_pixel,
+        })
+    }
+}
