@@ -32,5 +32,7 @@ mod rng;
 pub mod sampling;
 
 pub use frame::Frame;
-pub use mesh::{Geometry, GeometryError, Hit, SurfaceSample, TriangleMesh, spawn_offset};
+pub use mesh::{
+    Geometry, GeometryError, Hit, MAX_COORDINATE, SurfaceSample, TriangleMesh, spawn_offset,
+};
 pub use rng::{Domain, Rng};

@@ -38,15 +38,19 @@ impl TriangleMesh {
         self.materials.extend_from_slice(&[material, material]);
     }
 
-    /// Appends another mesh; its normals are kept only if both meshes have them (otherwise the
-    /// result is flat shaded where normals are missing).
+    /// Appends another mesh. Where only one of the two has vertex normals, the other's vertices
+    /// get zero normals, which [`Geometry`] reads as "use the face normal": the result does not
+    /// depend on the order in which meshes are appended.
     pub fn append(&mut self, other: &TriangleMesh) {
         let base = self.positions.len() as u32;
-        let self_has = !self.normals.is_empty() || self.positions.is_empty();
-        if self_has && !other.normals.is_empty() {
+        let self_smooth = !self.normals.is_empty();
+        let other_smooth = !other.normals.is_empty();
+        if other_smooth && !self_smooth {
+            self.normals = vec![Vec3::ZERO; self.positions.len()];
+        }
+        if other_smooth {
             self.normals.extend_from_slice(&other.normals);
-        } else if !self.normals.is_empty() {
-            // Mixed: fill the new vertices with zero normals, which mean "use the face normal".
+        } else if self_smooth {
             self.normals
                 .extend(std::iter::repeat_n(Vec3::ZERO, other.positions.len()));
         }
@@ -71,6 +75,12 @@ impl TriangleMesh {
 pub enum GeometryError {
     /// A position is NaN or infinite.
     NonFinitePosition {
+        /// Index of the offending vertex.
+        vertex: usize,
+    },
+    /// A coordinate is beyond ±[`MAX_COORDINATE`] m, where f32 spacing makes ray tests
+    /// meaningless (and the BVH builder's quantisation breaks).
+    PositionTooLarge {
         /// Index of the offending vertex.
         vertex: usize,
     },
@@ -105,6 +115,10 @@ impl fmt::Display for GeometryError {
             Self::NonFinitePosition { vertex } => {
                 write!(f, "vertex {vertex} has a NaN or infinite position")
             }
+            Self::PositionTooLarge { vertex } => write!(
+                f,
+                "vertex {vertex} lies beyond ±{MAX_COORDINATE} m of the origin; scale the scene to metres"
+            ),
             Self::IndexOutOfRange { triangle, index } => {
                 write!(
                     f,
@@ -203,6 +217,9 @@ impl fmt::Debug for Geometry {
 
 const MIN_AREA: f32 = 1e-20;
 
+/// Largest accepted coordinate magnitude, metres.
+pub const MAX_COORDINATE: f32 = 1e6;
+
 /// A triangle laid out for the ray test: one vertex and two edges.
 #[derive(Clone, Copy, Debug)]
 struct LeafTri {
@@ -283,6 +300,13 @@ impl Geometry {
         }
         if let Some(vertex) = mesh.positions.iter().position(|p| !p.is_finite()) {
             return Err(GeometryError::NonFinitePosition { vertex });
+        }
+        if let Some(vertex) = mesh
+            .positions
+            .iter()
+            .position(|p| p.abs().max_element() > MAX_COORDINATE)
+        {
+            return Err(GeometryError::PositionTooLarge { vertex });
         }
         let mut tris = Vec::with_capacity(mesh.indices.len());
         let mut degenerate = 0;
@@ -625,7 +649,30 @@ mod tests {
     }
 
     #[test]
+    fn append_keeps_normals_whatever_the_order() {
+        let mut flat = TriangleMesh::default();
+        flat.push_quad([Vec3::ZERO, Vec3::X, Vec3::new(1.0, 0.0, 1.0), Vec3::Z], 0);
+        let mut smooth = flat.clone();
+        smooth.normals = vec![Vec3::Y; 4];
+        let mut a = flat.clone();
+        a.append(&smooth);
+        let mut b = smooth.clone();
+        b.append(&flat);
+        assert_eq!(a.normals.len(), 8);
+        assert_eq!(b.normals.len(), 8);
+        assert_eq!(&a.normals[4..], &[Vec3::Y; 4]);
+        assert_eq!(&b.normals[..4], &[Vec3::Y; 4]);
+        assert_eq!(&a.normals[..4], &[Vec3::ZERO; 4]);
+    }
+
+    #[test]
     fn bad_meshes_are_errors() {
+        let mut m = unit_box();
+        m.positions[1] = Vec3::new(1e31, 0.0, 0.0);
+        assert_eq!(
+            Geometry::new(m).unwrap_err(),
+            GeometryError::PositionTooLarge { vertex: 1 }
+        );
         let mut m = unit_box();
         m.positions[3] = Vec3::new(f32::NAN, 0.0, 0.0);
         assert_eq!(
