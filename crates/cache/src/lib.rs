@@ -8,6 +8,12 @@
 //! - **Bins** are K equal-solid-angle bins over the hemisphere: the equal-area concentric map
 //!   takes a direction to the unit square, which is split into a √K × √K grid
 //!   (so K is rounded to a square; each bin spans 2π/K sr).
+//! - **Bin values** are cosine-weighted averages over the bin: the luminance of the energy
+//!   scattered into the bin divided by (cell area × the bin's projected solid angle ∫cos dω).
+//!   method.md §5 divides each photon by its cos and the bin by its solid angle ω instead,
+//!   which estimates the plain average but has infinite variance (E[1/cos²] diverges under
+//!   cosine-weighted scattering): one grazing scatter could double a cell. Both converge to
+//!   L_d as the bins shrink, and a Lambert cell's single bin is exact either way.
 //! - **Filling** uses a photon pass of its own random stream (`Domain::CachePhoton`), frozen
 //!   before rendering, so the weights never depend on the photons they weight.
 //! - **Lambert-only scenes** get one bin per cell and no b (b = (kd/π)·L_d there, method.md §7).
@@ -69,7 +75,24 @@ pub struct RadianceCache {
     grid: u32,
     ld: Vec<f32>,
     b: Vec<f32>,
+    /// Photon arrivals per (cell, side).
+    arrivals: Vec<u32>,
     stats: CacheStats,
+}
+
+/// One side of one cell, as [`RadianceCache::cells`] reports it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CellSummary {
+    /// Triangle the cell lies on.
+    pub prim: u32,
+    /// Which side (0 = the winding's front, 1 = the back).
+    pub side: u8,
+    /// Cell area, m².
+    pub area: f64,
+    /// Photon arrivals accumulated into it.
+    pub arrivals: u32,
+    /// L_d averaged over its bins (luminance), W·m⁻²·sr⁻¹.
+    pub mean_ld: f64,
 }
 
 /// Inverse of the equal-area concentric square → hemisphere map: a unit direction with z ≥ 0
@@ -95,6 +118,50 @@ fn hemisphere_to_square(d: Vec3) -> Vec2 {
         a = -(phi - 3.0 * PI / 2.0) * b / (PI / 4.0);
     }
     Vec2::new((a + 1.0) * 0.5, (b + 1.0) * 0.5).clamp(Vec2::ZERO, Vec2::splat(1.0 - 1e-7))
+}
+
+/// ∫ cos θ dω over each bin of a `grid` × `grid` split of the equal-area square: the bin's
+/// projected solid angle, sr (they sum to π).
+///
+/// In the concentric map's coordinates (a, b) ∈ [−1, 1]² the disk radius is max(|a|, |b|) and
+/// the equal-area hemisphere has cos θ = 1 − r², so the integral over b is done in closed form
+/// and the one over a by a fine midpoint rule.
+fn projected_solid_angles(grid: u32) -> Vec<f64> {
+    const Q: u32 = 512;
+    // ∫_{b0}^{b1} max(a², b²) db for a fixed a.
+    let inner = |a: f64, b0: f64, b1: f64| -> f64 {
+        let (lo, hi) = ((-a.abs()).max(b0), a.abs().min(b1));
+        let flat = if hi > lo { a * a * (hi - lo) } else { 0.0 };
+        let cube = |x: f64| x * x * x / 3.0;
+        // The parts of [b0, b1] outside [−|a|, |a|], where max = b².
+        let below = if b0 < -a.abs() {
+            cube(b1.min(-a.abs())) - cube(b0)
+        } else {
+            0.0
+        };
+        let above = if b1 > a.abs() {
+            cube(b1) - cube(b0.max(a.abs()))
+        } else {
+            0.0
+        };
+        flat + below + above
+    };
+    let g = grid as f64;
+    let mut out = Vec::with_capacity((grid * grid) as usize);
+    for by in 0..grid {
+        for bx in 0..grid {
+            let (a0, a1) = (2.0 * bx as f64 / g - 1.0, 2.0 * (bx + 1) as f64 / g - 1.0);
+            let (b0, b1) = (2.0 * by as f64 / g - 1.0, 2.0 * (by + 1) as f64 / g - 1.0);
+            let h = (a1 - a0) / Q as f64;
+            let r2: f64 = (0..Q)
+                .map(|i| inner(a0 + (i as f64 + 0.5) * h, b0, b1) * h)
+                .sum();
+            let area = (a1 - a0) * (b1 - b0);
+            // The [−1, 1]² square (area 4) maps to 2π sr: dω = (π/2)·da·db.
+            out.push(std::f64::consts::FRAC_PI_2 * (area - r2));
+        }
+    }
+    out
 }
 
 impl RadianceCache {
@@ -143,6 +210,7 @@ impl RadianceCache {
             } else {
                 vec![0.0; slots]
             },
+            arrivals: vec![0; cells as usize * 2],
             stats: CacheStats {
                 cells: cells as usize,
                 bins: side_bins as u32,
@@ -175,8 +243,7 @@ impl RadianceCache {
             }
             let Some(sc) = arrival.scatter else { return };
             let vx = &arrival.vertex;
-            let cos = sc.direction.dot(vx.normal);
-            if cos <= 0.0 {
+            if sc.direction.dot(vx.normal) <= 0.0 {
                 return;
             }
             let Some(cell_side) = this.cell_side(vx.prim, vx.position, vx.normal) else {
@@ -185,22 +252,22 @@ impl RadianceCache {
             let local = Frame::from_normal(vx.normal).to_local(sc.direction);
             let slot = (cell_side * this.side_bins + this.bin(local)) as u32;
             let e_s = luminance(arrival.power * sc.weight);
-            out.push((slot, e_s / cos, e_s * luminance(sc.f) / cos));
+            out.push((slot, e_s, e_s * luminance(sc.f)));
         });
         let mut ld = vec![0f64; self.ld.len()];
         let mut b = vec![0f64; self.b.len()];
-        let mut hit = vec![false; self.stats.cells * 2];
         for &(slot, l, bb) in &records {
             let slot = slot as usize;
             ld[slot] += l as f64;
             if !b.is_empty() {
                 b[slot] += bb as f64;
             }
-            hit[slot / self.side_bins] = true;
+            self.arrivals[slot / self.side_bins] += 1;
         }
         self.stats.arrivals = records.len() as u64;
-        // Divide by cell area s and bin solid angle ω = 2π/K.
-        let omega = 2.0 * std::f64::consts::PI / self.side_bins as f64;
+        // Divide by cell area s and the bin's projected solid angle ∫_bin cos dω (see the crate
+        // doc for why not by ω with a 1/cos per photon).
+        let projected = projected_solid_angles(self.grid);
         for (prim, &n) in self.subdivision.iter().enumerate() {
             let cell_area = self.triangle_area(prim) / (n as f64 * n as f64);
             if cell_area <= 0.0 {
@@ -210,18 +277,19 @@ impl RadianceCache {
             for cell in first..first + n as usize * n as usize {
                 for side in 0..2 {
                     let base = (cell * 2 + side) * self.side_bins;
-                    for k in base..base + self.side_bins {
-                        self.ld[k] = (ld[k] / (cell_area * omega)) as f32;
+                    for (k, omega_cos) in (base..base + self.side_bins).zip(&projected) {
+                        self.ld[k] = (ld[k] / (cell_area * omega_cos)) as f32;
                         if !b.is_empty() {
-                            self.b[k] = (b[k] / (cell_area * omega)) as f32;
+                            self.b[k] = (b[k] / (cell_area * omega_cos)) as f32;
                         }
                     }
                 }
             }
         }
-        self.stats.filled_fraction =
-            hit.iter().filter(|h| **h).count() as f64 / hit.len().max(1) as f64;
+        self.stats.filled_fraction = self.arrivals.iter().filter(|a| **a > 0).count() as f64
+            / self.arrivals.len().max(1) as f64;
         self.stats.bytes = ((self.ld.len() + self.b.len()) * 4
+            + self.arrivals.len() * 4
             + self.first_cell.len() * 4
             + self.subdivision.len() * 2
             + self.tri.len() * std::mem::size_of::<([Vec3; 3], Vec3)>())
@@ -290,6 +358,30 @@ impl RadianceCache {
         (self.ld[slot], self.b.get(slot).copied().unwrap_or(0.0))
     }
 
+    /// Every (cell, side) with its area, arrivals and bin-averaged L_d (for checks and tools).
+    pub fn cells(&self) -> Vec<CellSummary> {
+        let mut out = Vec::with_capacity(self.arrivals.len());
+        for (prim, &n) in self.subdivision.iter().enumerate() {
+            let area = self.triangle_area(prim) / (n as f64 * n as f64);
+            let first = self.first_cell[prim] as usize;
+            for cell in first..first + n as usize * n as usize {
+                for side in 0..2 {
+                    let cs = cell * 2 + side;
+                    let bins = &self.ld[cs * self.side_bins..(cs + 1) * self.side_bins];
+                    out.push(CellSummary {
+                        prim: prim as u32,
+                        side: side as u8,
+                        area,
+                        arrivals: self.arrivals[cs],
+                        mean_ld: bins.iter().map(|v| *v as f64).sum::<f64>()
+                            / self.side_bins as f64,
+                    });
+                }
+            }
+        }
+        out
+    }
+
     /// Facts for the run report.
     pub fn stats(&self) -> &CacheStats {
         &self.stats
@@ -301,6 +393,19 @@ mod tests {
     use super::*;
     use bdpm_geometry::Rng;
     use bdpm_geometry::sampling::uniform_sphere;
+
+    #[test]
+    fn projected_solid_angles_sum_to_pi() {
+        for grid in [1, 3, 10] {
+            let p = projected_solid_angles(grid);
+            let sum: f64 = p.iter().sum();
+            assert!(
+                (sum - std::f64::consts::PI).abs() < 1e-4,
+                "grid {grid}: {sum}"
+            );
+        }
+        assert!((projected_solid_angles(1)[0] - std::f64::consts::PI).abs() < 1e-4);
+    }
 
     #[test]
     fn square_map_is_equal_area_and_in_range() {

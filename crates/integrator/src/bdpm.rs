@@ -33,6 +33,27 @@ impl Techniques {
     }
 }
 
+/// Counts of weight evaluations, for the run report (method.md §4 asks that clamped c·B and
+/// weights outside [0, 1] be reported).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct WeightStats {
+    /// Weights evaluated.
+    pub evaluations: u64,
+    /// Weights whose w₁ fell outside [0, 1] (before any optional clamp).
+    pub outside_unit: u64,
+    /// Optimal weights whose c·B was clamped to 1 − ε.
+    pub clamped_cb: u64,
+}
+
+impl WeightStats {
+    /// Adds another set of counts.
+    pub fn add(&mut self, o: &WeightStats) {
+        self.evaluations += o.evaluations;
+        self.outside_unit += o.outside_unit;
+        self.clamped_cb += o.clamped_cb;
+    }
+}
+
 /// Everything that weights need to know about a candidate second vertex x₁ (the camera's own
 /// x₁, or a photon's previous vertex y_p), described identically for both so that the two
 /// techniques evaluate the same function w₁(x₀, x₁) (method.md §2).
@@ -209,8 +230,12 @@ impl<'a> Mix<'a> {
         (self.scene.light_probability(light) / (4.0 * PI) * cos / d2) as f64
     }
 
-    fn w1(&self, pair: &Pair, pixel: Option<&PixelTerms>) -> f64 {
-        self.heuristic.weight(&self.budget, pair, pixel).w1
+    fn w1(&self, pair: &Pair, pixel: Option<&PixelTerms>, stats: &mut WeightStats) -> f64 {
+        let w = self.heuristic.weight(&self.budget, pair, pixel);
+        stats.evaluations += 1;
+        stats.outside_unit += w.outside_unit as u64;
+        stats.clamped_cb += w.clamped_cb as u64;
+        w.w1
     }
 
     /// One camera sample through image point (x, y): the value split by technique.
@@ -221,6 +246,7 @@ impl<'a> Mix<'a> {
         y: f32,
         rng: &mut Rng,
         pixel: Option<&PixelTerms>,
+        stats: &mut WeightStats,
     ) -> Techniques {
         let scene = self.scene;
         let cam = &scene.camera;
@@ -238,10 +264,10 @@ impl<'a> Mix<'a> {
         // The camera's x₁ is sampled first: the test-only variant needs its weight at x₀.
         let mut camera_w1 = None;
         if self.needs.second_vertex {
-            camera_w1 = self.second_vertex(&x0, map, rng, pixel, &mut t);
+            camera_w1 = self.second_vertex(&x0, map, rng, pixel, stats, &mut t);
         }
         if self.needs.photons_at_x0 {
-            self.merge_at_x0(&x0, map, pixel, camera_w1, &mut t);
+            self.merge_at_x0(&x0, map, pixel, camera_w1, stats, &mut t);
         }
         t
     }
@@ -254,6 +280,7 @@ impl<'a> Mix<'a> {
         map: &PhotonMap,
         rng: &mut Rng,
         pixel: Option<&PixelTerms>,
+        stats: &mut WeightStats,
         t: &mut Techniques,
     ) -> Option<f64> {
         let scene = self.scene;
@@ -283,10 +310,13 @@ impl<'a> Mix<'a> {
         let mut direct_raw = Vec3::ZERO;
         let mut direct_weighted = Vec3::ZERO;
         let per_light = self.needs.densities;
+        let pure = matches!(self.heuristic, Heuristic::Bdd1);
         let w_const = if per_light {
             0.0
+        } else if pure {
+            1.0
         } else {
-            self.w1(&pair, pixel)
+            self.w1(&pair, pixel, stats)
         };
         for (l, light) in scene.lights.iter().enumerate() {
             let c = scene.direct_from(&sh1, wo1, light);
@@ -304,7 +334,7 @@ impl<'a> Mix<'a> {
                     emission_density: self.emission_density(l, &x1),
                     ..pair
                 };
-                self.w1(&pair, pixel)
+                self.w1(&pair, pixel, stats)
             } else {
                 w_const
             };
@@ -331,7 +361,7 @@ impl<'a> Mix<'a> {
                     light_density: pl,
                     ..pair
                 };
-                self.w1(&pair, pixel)
+                self.w1(&pair, pixel, stats)
             } else {
                 w_const
             };
@@ -350,6 +380,7 @@ impl<'a> Mix<'a> {
         map: &PhotonMap,
         pixel: Option<&PixelTerms>,
         camera_w1: Option<f64>,
+        stats: &mut WeightStats,
         t: &mut Techniques,
     ) {
         let scene = self.scene;
@@ -388,7 +419,7 @@ impl<'a> Mix<'a> {
                         pair.emission_density = self.emission_density(prev.light as usize, &y);
                     }
                 }
-                1.0 - self.w1(&pair, pixel)
+                1.0 - self.w1(&pair, pixel, stats)
             };
             weighted += c * w0 as f32;
         });

@@ -18,7 +18,7 @@ mod settings;
 mod table;
 mod weightmap;
 
-pub use bdpm::{Techniques, scene_default_radius};
+pub use bdpm::{Techniques, WeightStats, scene_default_radius};
 pub use film::Film;
 pub use render::{PassOutput, RenderError, Renderer, StageReport, render_path_pass};
 pub use settings::{Mode, RenderSettings, default_radius};

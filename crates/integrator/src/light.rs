@@ -112,5 +112,7 @@ pub(crate) fn render_light_pass(
         ],
         techniques: None,
         photons_stored: 0,
+        photon_map_bytes: 0,
+        weights: Default::default(),
     }
 }

@@ -10,7 +10,7 @@ use bdpm_cache::{CacheSettings, RadianceCache};
 use bdpm_mis::{Budget, CB_EPSILON, Heuristic};
 use bdpm_photon::{PhotonMap, TraceOptions};
 
-use crate::bdpm::{Mix, Techniques, scene_default_radius};
+use crate::bdpm::{Mix, Techniques, WeightStats, scene_default_radius};
 use crate::path::trace_path;
 use crate::settings::{Mode, RenderSettings};
 use crate::table::{self, PixelTable};
@@ -266,11 +266,13 @@ impl Renderer<'_> {
         let t_camera = std::time::Instant::now();
         let (w, h) = (s.width as usize, s.height as usize);
         let dropped = AtomicU64::new(0);
+        let weight_stats = std::sync::Mutex::new(WeightStats::default());
         let mut estimates = vec![DVec3::ZERO; w * h];
         let mut techniques = vec![Techniques::default(); if self.techniques { w * h } else { 0 }];
         let record = self.techniques;
         let render_row = |y: usize, row: &mut [DVec3], mut trow: Option<&mut [Techniques]>| {
             let mut row_dropped = 0;
+            let mut row_stats = WeightStats::default();
             for (x, px) in row.iter_mut().enumerate() {
                 let pixel = (y * w + x) as u64;
                 let mut sum = DVec3::ZERO;
@@ -279,7 +281,14 @@ impl Renderer<'_> {
                     let mut rng = Rng::new(s.seed, Domain::Camera, [pass as u64, pixel, k as u64]);
                     let [jx, jy] = rng.uniform2();
                     let terms = table.map(|t| t.get(x as u32, y as u32));
-                    let t = mix.sample(&map, x as f32 + jx, y as f32 + jy, &mut rng, terms);
+                    let t = mix.sample(
+                        &map,
+                        x as f32 + jx,
+                        y as f32 + jy,
+                        &mut rng,
+                        terms,
+                        &mut row_stats,
+                    );
                     let value = t.total();
                     if value.is_finite() {
                         sum += value;
@@ -307,6 +316,11 @@ impl Renderer<'_> {
                 }
             }
             dropped.fetch_add(row_dropped, Ordering::Relaxed);
+            // Integer sums: the total does not depend on the order rows finish in.
+            weight_stats
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .add(&row_stats);
             progress(1);
         };
         if record {
@@ -331,6 +345,8 @@ impl Renderer<'_> {
             ],
             techniques: if record { Some(techniques) } else { None },
             photons_stored: map.photons.len() as u64,
+            photon_map_bytes: map.memory_bytes(),
+            weights: weight_stats.into_inner().unwrap_or_else(|e| e.into_inner()),
         }
     }
 }
@@ -351,6 +367,10 @@ pub struct PassOutput {
     pub techniques: Option<Vec<Techniques>>,
     /// Photons stored in this pass's map (0 for `path`).
     pub photons_stored: u64,
+    /// Memory of this pass's photon map, bytes (0 without one).
+    pub photon_map_bytes: u64,
+    /// Weight evaluations and their anomalies (BDPM modes).
+    pub weights: WeightStats,
 }
 
 /// Adds a sample to a pixel sum unless it is non-finite, in which case it is counted.
@@ -408,5 +428,7 @@ pub fn render_path_pass(
         stage_seconds: vec![("camera", start.elapsed().as_secs_f64())],
         techniques: None,
         photons_stored: 0,
+        photon_map_bytes: 0,
+        weights: WeightStats::default(),
     }
 }
