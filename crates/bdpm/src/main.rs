@@ -3,10 +3,13 @@
 //! this binary is the IO boundary.
 
 mod bench;
+mod colormap;
 mod common;
+mod font;
 mod output;
 mod render;
 mod report;
+mod signal;
 mod study;
 mod weights;
 
@@ -24,7 +27,9 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
-    /// Render a scene to OUT.exr, with OUT.png (preview) and OUT.json (run report) beside it.
+    /// Render a scene to OUT.exr, with OUT.png (preview), OUT-noise.png (noise map) and OUT.json
+    /// (run report) beside it. An interrupt stops after the pass in flight, writes what was
+    /// rendered and exits with code 130; a second interrupt quits without writing.
     Render(render::RenderArgs),
     /// Map the weight w₀ = 1 − w₁ over every visible x₁ for a fixed x₀ (the preprint's Fig. 5).
     Weights(weights::WeightsArgs),
@@ -36,14 +41,15 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let success = |()| ExitCode::SUCCESS;
     let result = match cli.command {
         Command::Render(args) => render::run(args),
-        Command::Weights(args) => weights::run(args),
-        Command::Study(args) => study::run(args),
-        Command::Bench(args) => bench::run(args),
+        Command::Weights(args) => weights::run(args).map(success),
+        Command::Study(args) => study::run(args).map(success),
+        Command::Bench(args) => bench::run(args).map(success),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => code,
         Err(message) => {
             eprintln!("bdpm: error: {message}");
             ExitCode::FAILURE

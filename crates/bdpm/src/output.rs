@@ -11,22 +11,37 @@ use exr::prelude::{
 };
 use glam::DVec3;
 
-/// The three files of one render, with the same stem.
+use crate::colormap::{Legend, compose, linear_ticks, viridis};
+
+/// The files of one render, with the same stem.
 #[derive(Clone, Debug)]
 pub(crate) struct Outputs {
     pub(crate) exr: PathBuf,
     pub(crate) png: PathBuf,
+    /// OUT-noise.png: the false-colour noise map.
+    pub(crate) noise_png: PathBuf,
     pub(crate) json: PathBuf,
 }
 
 impl Outputs {
-    /// OUT.exr, OUT.png and OUT.json for a requested OUT(.exr).
+    /// OUT.exr, OUT.png, OUT-noise.png and OUT.json for a requested OUT(.exr).
     pub(crate) fn beside(exr: &Path) -> Outputs {
+        let exr = exr.with_extension("exr");
+        let stem = exr
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
         Outputs {
-            exr: exr.with_extension("exr"),
             png: exr.with_extension("png"),
+            noise_png: exr.with_file_name(format!("{stem}-noise.png")),
             json: exr.with_extension("json"),
+            exr,
         }
+    }
+
+    /// Every path, in the order the render writes them.
+    pub(crate) fn all(&self) -> [&Path; 4] {
+        [&self.exr, &self.png, &self.noise_png, &self.json]
     }
 }
 
@@ -94,6 +109,16 @@ pub(crate) fn write_exr(
     film: &Film,
     attributes: &[(String, String)],
 ) -> Result<(), String> {
+    write_exr_with_layers(path, film, attributes, &[])
+}
+
+/// [`write_exr`] plus `extra` RGB layers (name, per-pixel values), e.g. the technique layers.
+pub(crate) fn write_exr_with_layers(
+    path: &Path,
+    film: &Film,
+    attributes: &[(String, String)],
+    extra: &[(&str, Vec<DVec3>)],
+) -> Result<(), String> {
     let mean = film.mean();
     let noise: Vec<DVec3> = film
         .pass_variance()
@@ -105,6 +130,31 @@ pub(crate) fn write_exr(
     rgb_channels("", &mean, &mut channels);
     rgb_channels("noise", &noise, &mut channels);
     rgb_channels("stderr", &stderr, &mut channels);
+    for (name, data) in extra {
+        rgb_channels(name, data, &mut channels);
+    }
+    write_channels(path, (film.width, film.height), channels, attributes)
+}
+
+/// Writes a float32 EXR with one channel, e.g. the weight map's `w0`.
+pub(crate) fn write_exr_single(
+    path: &Path,
+    size: (u32, u32),
+    name: &str,
+    values: &[f64],
+    attributes: &[(String, String)],
+) -> Result<(), String> {
+    let channels = vec![channel(name, values.iter().map(|v| *v as f32))];
+    write_channels(path, size, channels, attributes)
+}
+
+/// Writes `channels` as one EXR layer with `attributes` as `bdpm.*` text header attributes.
+fn write_channels(
+    path: &Path,
+    (width, height): (u32, u32),
+    channels: Vec<AnyChannel<FlatSamples>>,
+    attributes: &[(String, String)],
+) -> Result<(), String> {
     let mut attrs = LayerAttributes::named("bdpm");
     for (k, v) in attributes {
         attrs.other.insert(
@@ -112,9 +162,8 @@ pub(crate) fn write_exr(
             AttributeValue::Text(Text::from(v.as_str())),
         );
     }
-    let size = (film.width as usize, film.height as usize);
     let layer = Layer::new(
-        size,
+        (width as usize, height as usize),
         attrs,
         Encoding::FAST_LOSSLESS,
         AnyChannels::sort(SmallVec::from_vec(channels)),
@@ -154,16 +203,17 @@ fn auto_exposure(mean: &[DVec3]) -> f64 {
     if p > 0.0 { 1.0 / p } else { 1.0 }
 }
 
-/// Writes an 8-bit RGB image.
+/// Writes an 8-bit RGB image. It is encoded in memory first, so that an encoder error cannot
+/// leave a half-written temporary file, and a write error is reported (not lost in a drop).
 pub(crate) fn write_png_rgb8(
     path: &Path,
     width: u32,
     height: u32,
     rgb: &[u8],
 ) -> Result<(), String> {
-    write_via_temp(path, |tmp| {
-        let file = fs::File::create(tmp).map_err(|e| format!("cannot create: {e}"))?;
-        let mut enc = png::Encoder::new(io::BufWriter::new(file), width, height);
+    let mut bytes = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut bytes, width, height);
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
         let mut w = enc
@@ -171,8 +221,9 @@ pub(crate) fn write_png_rgb8(
             .map_err(|e| format!("cannot write PNG: {e}"))?;
         w.write_image_data(rgb)
             .map_err(|e| format!("cannot write PNG: {e}"))?;
-        w.finish().map_err(|e| format!("cannot write PNG: {e}"))
-    })
+        w.finish().map_err(|e| format!("cannot write PNG: {e}"))?;
+    }
+    write_atomic(path, &bytes)
 }
 
 /// Writes the tonemapped preview of the mean: auto exposure, clamp, sRGB.
@@ -185,4 +236,56 @@ pub(crate) fn write_png(path: &Path, film: &Film) -> Result<(), String> {
         .map(|v| (srgb(v * k) * 255.0 + 0.5) as u8)
         .collect();
     write_png_rgb8(path, film.width, film.height, &rgb)
+}
+
+/// Rec. 709 luminance of a linear RGB value.
+pub(crate) fn luminance(c: DVec3) -> f64 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
+/// The 99th percentile of the finite positive values (0 if there are none): the top of a
+/// colour scale that a few hot pixels cannot stretch.
+pub(crate) fn robust_max(values: &[f64]) -> f64 {
+    let mut v: Vec<f64> = values
+        .iter()
+        .copied()
+        .filter(|x| x.is_finite() && *x > 0.0)
+        .collect();
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    v[((v.len() - 1) as f64 * 0.99).round() as usize]
+}
+
+/// Writes the noise map: `noise` (√V of the pixel luminance per pass, W·m⁻²·sr⁻¹) in viridis
+/// on a linear scale from 0 to its 99th percentile (brighter pixels clamp to the top colour),
+/// with the colour bar and its scale drawn on the image. With fewer than two passes V is
+/// unknown; the map is then flat and the legend says so.
+pub(crate) fn write_noise_png(
+    path: &Path,
+    (width, height): (u32, u32),
+    noise: &[f64],
+    passes: u32,
+) -> Result<(), String> {
+    let max = robust_max(noise);
+    let colours: Vec<[u8; 3]> = noise
+        .iter()
+        .map(|v| viridis(if max > 0.0 { v / max } else { 0.0 }))
+        .collect();
+    let mut title = vec![
+        "noise sqrt V".to_string(),
+        "W m-2 sr-1".into(),
+        "linear, max p99".into(),
+    ];
+    if passes < 2 {
+        title.push(format!("{passes} pass: V unknown"));
+    }
+    let legend = Legend {
+        title,
+        ticks: linear_ticks(max),
+    };
+    let layout = compose(width, height, &colours, &legend, viridis);
+    let c = &layout.canvas;
+    write_png_rgb8(path, c.width, c.height, &c.rgb)
 }

@@ -1,14 +1,20 @@
-//! `bdpm render`: passes with a progress bar, then the EXR, PNG and JSON report.
+//! `bdpm render`: passes with a progress bar, then the EXR, PNG preview, noise map and JSON
+//! report. An interrupt (SIGINT/SIGTERM) stops the render after the pass in flight and writes
+//! what was accumulated (see [`crate::signal`]).
 use std::path::PathBuf;
+use std::process::ExitCode;
 use std::time::Instant;
 
-use bdpm_integrator::{Film, Renderer};
+use bdpm_integrator::{Film, Mode, Renderer, Techniques};
 use clap::Args;
+use glam::DVec3;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::common::{CliResult, Overrides, default_output, image_mean, prepare, thread_pool};
-use crate::{output, report};
+use crate::output::luminance;
+use crate::{output, report, signal};
 
+/// Arguments of this subcommand.
 #[derive(Args, Debug)]
 pub(crate) struct RenderArgs {
     /// Scene file (TOML).
@@ -21,13 +27,99 @@ pub(crate) struct RenderArgs {
     /// Do not draw a progress bar.
     #[arg(long)]
     quiet: bool,
+    /// Also write the image split by technique as EXR layers direct, x0_raw, x0_weighted,
+    /// x1_raw, x1_weighted (BDPM modes only; direct + x0_weighted + x1_weighted = the image).
+    #[arg(long)]
+    techniques: bool,
 }
 
-pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
+/// Per-pixel sums of the pass luminance and its square: the noise map shows √V of the
+/// luminance itself, which the film's per-channel variances cannot give (they lack the
+/// covariances between channels).
+struct LuminanceFilm {
+    sum: Vec<f64>,
+    sum_sq: Vec<f64>,
+    passes: u32,
+}
+
+impl LuminanceFilm {
+    fn new(pixels: usize) -> LuminanceFilm {
+        LuminanceFilm {
+            sum: vec![0.0; pixels],
+            sum_sq: vec![0.0; pixels],
+            passes: 0,
+        }
+    }
+
+    fn add_pass(&mut self, estimates: &[DVec3]) {
+        for ((s, q), e) in self.sum.iter_mut().zip(&mut self.sum_sq).zip(estimates) {
+            let l = luminance(*e);
+            *s += l;
+            *q += l * l;
+        }
+        self.passes += 1;
+    }
+
+    /// √(unbiased per-pass variance) per pixel; zero with fewer than two passes.
+    fn noise(&self) -> Vec<f64> {
+        if self.passes < 2 {
+            return vec![0.0; self.sum.len()];
+        }
+        let k = self.passes as f64;
+        self.sum
+            .iter()
+            .zip(&self.sum_sq)
+            .map(|(s, q)| ((q - s * s / k) / (k - 1.0)).max(0.0).sqrt())
+            .collect()
+    }
+}
+
+/// Sums of the technique layers over passes.
+struct TechniqueSums {
+    sums: Vec<Techniques>,
+}
+
+impl TechniqueSums {
+    fn add_pass(&mut self, pass: &[Techniques]) {
+        for (s, t) in self.sums.iter_mut().zip(pass) {
+            s.direct += t.direct;
+            s.x0_raw += t.x0_raw;
+            s.x0_weighted += t.x0_weighted;
+            s.x1_raw += t.x1_raw;
+            s.x1_weighted += t.x1_weighted;
+        }
+    }
+
+    /// The named layers: means over `passes`.
+    fn layers(&self, passes: u32) -> Vec<(&'static str, Vec<DVec3>)> {
+        let k = passes.max(1) as f64;
+        let layer = |f: fn(&Techniques) -> DVec3| self.sums.iter().map(|t| f(t) / k).collect();
+        vec![
+            ("direct", layer(|t| t.direct)),
+            ("x0_raw", layer(|t| t.x0_raw)),
+            ("x0_weighted", layer(|t| t.x0_weighted)),
+            ("x1_raw", layer(|t| t.x1_raw)),
+            ("x1_weighted", layer(|t| t.x1_weighted)),
+        ]
+    }
+}
+
+/// Runs the subcommand. Exit code 0 after a complete render, [`signal::EXIT_INTERRUPTED`]
+/// after an interrupted one (whose outputs hold the passes done, if any).
+pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
+    // Installed first, so that an interrupt during loading and preparation also stops the
+    // render cleanly (before its first pass) rather than killing it.
+    signal::install()?;
     let t_start = Instant::now();
     let loaded = prepare(&args.scene, &args.overrides)?;
     let load_seconds = t_start.elapsed().as_secs_f64();
     let (scene, settings) = (loaded.scene, loaded.settings);
+    if args.techniques && matches!(settings.mode, Mode::Path | Mode::Light) {
+        return Err(format!(
+            "--techniques: mode '{}' is a single technique with no layers to split; use a BDPM mode (e.g. --mode optimal)",
+            settings.mode
+        ));
+    }
     let exr_path = args
         .output
         .or(loaded.output)
@@ -38,7 +130,8 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
     let t_prepare = Instant::now();
     let renderer = pool
         .install(|| Renderer::new(&scene, &settings))
-        .map_err(|e| format!("{}: {e}", args.scene.display()))?;
+        .map_err(|e| format!("{}: {e}", args.scene.display()))?
+        .with_technique_layers(args.techniques);
     let prepare_seconds = t_prepare.elapsed().as_secs_f64();
 
     let bar = if args.quiet {
@@ -52,15 +145,27 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
         bar.set_style(style);
         bar
     };
+    let pixels = settings.width as usize * settings.height as usize;
     let mut film = Film::new(settings.width, settings.height);
+    let mut luma = LuminanceFilm::new(pixels);
+    let mut techniques = args.techniques.then(|| TechniqueSums {
+        sums: vec![Techniques::default(); pixels],
+    });
     let mut samples = 0u64;
     let mut pass_means = Vec::new();
     let mut stage_totals: Vec<(&'static str, f64)> = Vec::new();
     let t_render = Instant::now();
     for pass in 0..settings.passes {
+        if signal::requested() {
+            break;
+        }
         bar.set_message(format!("{}/{}", pass + 1, settings.passes));
         let out = pool.install(|| renderer.render_pass(pass, &|n| bar.inc(n)));
         film.add_pass(&out.estimates, out.dropped);
+        luma.add_pass(&out.estimates);
+        if let (Some(sums), Some(t)) = (&mut techniques, &out.techniques) {
+            sums.add_pass(t);
+        }
         pass_means.push(image_mean(&out.estimates));
         samples += out.samples;
         for (name, secs) in out.stage_seconds {
@@ -72,13 +177,35 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
     }
     let render_seconds = t_render.elapsed().as_secs_f64();
     bar.finish_and_clear();
+    signal::begin_writing();
+    let interrupted = signal::requested();
+    if interrupted && film.passes() == 0 {
+        eprintln!(
+            "bdpm: interrupted before the first pass finished: nothing was written ({})",
+            args.scene.display()
+        );
+        return Ok(ExitCode::from(signal::EXIT_INTERRUPTED));
+    }
 
     let outputs = output::Outputs::beside(&exr_path);
-    let header = report::header_attributes(&settings, &renderer);
-    output::write_exr(&outputs.exr, &film, &header)
+    let mut header = report::header_attributes(&settings, &renderer);
+    header.push(("passes_done".into(), film.passes().to_string()));
+    header.push(("interrupted".into(), interrupted.to_string()));
+    let layers = techniques
+        .as_ref()
+        .map(|t| t.layers(film.passes()))
+        .unwrap_or_default();
+    output::write_exr_with_layers(&outputs.exr, &film, &header, &layers)
         .map_err(|e| format!("{}: {e}", outputs.exr.display()))?;
     output::write_png(&outputs.png, &film)
         .map_err(|e| format!("{}: {e}", outputs.png.display()))?;
+    output::write_noise_png(
+        &outputs.noise_png,
+        (settings.width, settings.height),
+        &luma.noise(),
+        film.passes(),
+    )
+    .map_err(|e| format!("{}: {e}", outputs.noise_png.display()))?;
     let run = report::RunReport::new(report::RunFacts {
         scene_path: &args.scene,
         settings: &settings,
@@ -92,11 +219,18 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
         render_seconds,
         pass_stages: &stage_totals,
         outputs: &outputs,
-        interrupted: false,
+        interrupted,
         pass_means: &pass_means,
     });
     output::write_atomic(&outputs.json, run.to_json().as_bytes())
         .map_err(|e| format!("{}: {e}", outputs.json.display()))?;
+    if interrupted {
+        println!(
+            "interrupted after {} of {} passes; the outputs hold those passes",
+            film.passes(),
+            settings.passes
+        );
+    }
     println!(
         "rendered {} ({}x{}, mode {}, {} passes) in {:.2} s: {:.3} M samples/s on {} threads",
         args.scene.display(),
@@ -114,11 +248,15 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<()> {
             film.dropped()
         );
     }
-    println!(
-        "wrote {}, {}, {}",
-        outputs.exr.display(),
-        outputs.png.display(),
-        outputs.json.display()
-    );
-    Ok(())
+    let written: Vec<String> = outputs
+        .all()
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect();
+    println!("wrote {}", written.join(", "));
+    Ok(if interrupted {
+        ExitCode::from(signal::EXIT_INTERRUPTED)
+    } else {
+        ExitCode::SUCCESS
+    })
 }

@@ -42,7 +42,10 @@ struct SettingsOut {
     passes: u32,
     photons_per_pass: u64,
     spp: u32,
-    radius_m: Option<f32>,
+    /// The merge radius in use (the scene's default when none was given).
+    radius_m: f32,
+    /// Whether the radius was given (scene file or `--radius`) or is the scene default.
+    radius_given: bool,
     seed: u64,
     threshold_radius_m: f32,
     cache_bins: u32,
@@ -87,7 +90,8 @@ pub(crate) struct RunReport {
     mean_radiance_standard_error: [f64; 3],
     mean_noise_sqrt_v: [f64; 3],
     pass_image_means: Vec<[f64; 3]>,
-    outputs: [String; 3],
+    /// EXR, PNG preview, noise map PNG, JSON report.
+    outputs: [String; 4],
 }
 
 fn mean_of(v: &[glam::DVec3]) -> [f64; 3] {
@@ -110,7 +114,7 @@ fn standard_error_of_mean(samples: &[[f64; 3]]) -> [f64; 3] {
     out
 }
 
-fn settings_out(s: &RenderSettings) -> SettingsOut {
+fn settings_out(s: &RenderSettings, radius: f32) -> SettingsOut {
     SettingsOut {
         mode: s.mode.name().to_string(),
         width: s.width,
@@ -118,7 +122,8 @@ fn settings_out(s: &RenderSettings) -> SettingsOut {
         passes: s.passes,
         photons_per_pass: s.photons,
         spp: s.spp,
-        radius_m: s.radius,
+        radius_m: radius,
+        radius_given: s.radius.is_some(),
         seed: s.seed,
         threshold_radius_m: s.threshold_radius,
         cache_bins: s.cache_bins,
@@ -144,7 +149,7 @@ impl RunReport {
                 materials: f.load.materials,
                 lights: f.load.lights,
             },
-            settings: settings_out(f.renderer.settings()),
+            settings: settings_out(f.settings, f.renderer.radius()),
             threads: f.threads,
             passes_done: f.film.passes(),
             interrupted: f.interrupted,
@@ -181,18 +186,8 @@ impl RunReport {
             mean_radiance_standard_error: standard_error_of_mean(f.pass_means),
             pass_image_means: f.pass_means.to_vec(),
             mean_noise_sqrt_v: mean_of(&noise),
-            outputs: [
-                f.outputs.exr.display().to_string(),
-                f.outputs.png.display().to_string(),
-                f.outputs.json.display().to_string(),
-            ],
+            outputs: f.outputs.all().map(|p| p.display().to_string()),
         }
-        .with_settings(f.settings)
-    }
-
-    fn with_settings(mut self, s: &RenderSettings) -> RunReport {
-        self.settings = settings_out(s);
-        self
     }
 
     pub(crate) fn to_json(&self) -> String {
@@ -209,11 +204,16 @@ pub(crate) fn header_attributes(s: &RenderSettings, r: &Renderer<'_>) -> Vec<(St
         ("passes".into(), s.passes.to_string()),
         ("photons_per_pass".into(), s.photons.to_string()),
         ("spp".into(), s.spp.to_string()),
+        // The radius in use, also when the scene left it to the default.
+        ("radius_m".into(), r.radius().to_string()),
         (
-            "radius_m".into(),
-            s.radius
-                .map(|r| r.to_string())
-                .unwrap_or_else(|| "default".into()),
+            "radius_source".into(),
+            if s.radius.is_some() {
+                "given"
+            } else {
+                "default"
+            }
+            .into(),
         ),
     ];
     for st in r.stages() {

@@ -1,21 +1,268 @@
-//! `bdpm weights`: the weight map of the preprint's Fig. 5.
-use std::path::PathBuf;
+//! `bdpm weights`: the weight map of the preprint's Fig. 5. For a fixed first vertex x₀, the
+//! weight w₀ = 1 − w₁(x₀, x₁) of the chosen mode at every surface point x₁ the camera sees,
+//! written as a float EXR and as a false-colour PNG on a log scale with x₀ marked.
+use std::path::{Path, PathBuf};
 
-use clap::Args;
+use bdpm_integrator::{Mode, Renderer, WeightMap, WeightTarget};
+use clap::{ArgGroup, Args};
+use glam::Vec3;
 
-use crate::common::CliResult;
+use crate::colormap::{Canvas, Legend, compose, viridis};
+use crate::common::{CliResult, Overrides, prepare, thread_pool};
+use crate::output;
+
+/// Bottom of the PNG's colour scale: w₀ at or below it gets the bottom colour. 2⁻⁷, the
+/// smallest value the preprint's Fig. 5 scale distinguishes.
+const LOG_MIN: f64 = 0.008;
+/// Tick values of the colour bar: powers of two from 2⁻⁷ to 1, rounded as labels.
+const TICKS: [(f64, &str); 8] = [
+    (0.0078125, "0.008"),
+    (0.015625, "0.015"),
+    (0.03125, "0.03"),
+    (0.0625, "0.06"),
+    (0.125, "0.125"),
+    (0.25, "0.25"),
+    (0.5, "0.5"),
+    (1.0, "1"),
+];
+/// Colour of pixels that see no surface.
+const NO_SURFACE: [u8; 3] = [0, 0, 0];
+/// Colour of the cross that marks x₀: red, which viridis does not contain.
+const MARK: [u8; 3] = [255, 40, 40];
 
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]
+#[command(group(ArgGroup::new("target").required(true).args(["x0", "pixel"])))]
 pub(crate) struct WeightsArgs {
     /// Scene file (TOML).
     scene: PathBuf,
+    /// x₀ as a world point X,Y,Z in metres; the camera must see it (within 1 mm + 0.1% of its
+    /// distance).
+    #[arg(long, value_parser = parse_point, allow_negative_numbers = true)]
+    x0: Option<Vec3>,
+    /// x₀ as the surface point seen through the centre of pixel X,Y (row 0 at the top).
+    #[arg(long, value_parser = parse_pixel)]
+    pixel: Option<(u32, u32)>,
+    #[command(flatten)]
+    overrides: Overrides,
+    /// Output EXR path (default: out/<scene>-weights-<mode>.exr); the PNG goes beside it.
+    #[arg(short = 'o', long = "output")]
+    output: Option<PathBuf>,
+}
+
+/// Parses `X,Y,Z` (metres).
+fn parse_point(s: &str) -> Result<Vec3, String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|c| c.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("'{s}' is not X,Y,Z (three numbers in metres)"))?;
+    match v[..] {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Vec3::new(x, y, z)),
+        _ => Err(format!(
+            "'{s}' is not X,Y,Z (three finite numbers in metres)"
+        )),
+    }
+}
+
+/// Parses `X,Y` (pixel column and row).
+fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
+    let (x, y) = s
+        .split_once(',')
+        .ok_or_else(|| format!("'{s}' is not X,Y"))?;
+    let p = |c: &str| {
+        c.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("'{s}' is not X,Y (two pixel indices)"))
+    };
+    Ok((p(x)?, p(y)?))
+}
+
+/// out/<scene>-weights-<mode>.exr.
+fn default_output(scene: &Path, mode: Mode) -> PathBuf {
+    let stem = scene
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    PathBuf::from("out").join(format!("{stem}-weights-{}.exr", mode.name()))
+}
+
+/// Position of `w0` on the PNG's log colour scale, in [0, 1].
+fn log_position(w0: f64) -> f64 {
+    ((w0.max(LOG_MIN) / LOG_MIN).ln() / (1.0 / LOG_MIN).ln()).clamp(0.0, 1.0)
 }
 
 /// Runs the subcommand.
 pub(crate) fn run(args: WeightsArgs) -> CliResult<()> {
-    Err(format!(
-        "{}: this subcommand is not implemented yet",
-        args.scene.display()
-    ))
+    let loaded = prepare(&args.scene, &args.overrides)?;
+    let (scene, settings) = (loaded.scene, loaded.settings);
+    let mode = settings.mode;
+    // Where a mode error comes from: the flag if one was given, else the scene file.
+    let mode_source = if args.overrides.mode.is_some() {
+        format!("--mode {mode}")
+    } else {
+        format!("{}: render.mode = \"{mode}\"", args.scene.display())
+    };
+    if matches!(mode, Mode::Path | Mode::Light) {
+        // Checked before building anything: these modes have no weights, and the message
+        // should say where the mode came from.
+        let e = check_mode_via_library(&scene, &settings);
+        return Err(format!("{mode_source}: {e}"));
+    }
+    let (target, target_flag) = match (args.x0, args.pixel) {
+        (Some(p), _) => (WeightTarget::Point(p), "--x0"),
+        (None, Some((x, y))) => (WeightTarget::Pixel(x, y), "--pixel"),
+        (None, None) => return Err("give x0 as --x0 X,Y,Z or --pixel X,Y".into()),
+    };
+    let exr_path = args
+        .output
+        .unwrap_or_else(|| default_output(&args.scene, mode))
+        .with_extension("exr");
+    let png_path = exr_path.with_extension("png");
+    let pool = thread_pool(args.overrides.threads)?;
+
+    let renderer = pool
+        .install(|| Renderer::new(&scene, &settings))
+        .map_err(|e| format!("{}: {e}", args.scene.display()))?;
+    let map = pool.install(|| renderer.weight_map(target)).map_err(|e| {
+        let msg = e.to_string();
+        // The library names the mode in mode errors; anything else is about x₀.
+        if msg.contains(&format!("mode '{}'", mode.name())) {
+            format!("{mode_source}: {msg}")
+        } else {
+            format!("{target_flag}: {msg}")
+        }
+    })?;
+
+    let attributes = vec![
+        ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
+        ("scene".into(), args.scene.display().to_string()),
+        ("mode".into(), mode.name().into()),
+        (
+            "x0".into(),
+            format!("{} {} {}", map.x0.x, map.x0.y, map.x0.z),
+        ),
+        (
+            "x0_pixel".into(),
+            format!("{} {}", map.x0_pixel.0, map.x0_pixel.1),
+        ),
+        ("photons_per_pass".into(), settings.photons.to_string()),
+        ("spp".into(), settings.spp.to_string()),
+        ("radius_m".into(), renderer.radius().to_string()),
+        ("seed".into(), settings.seed.to_string()),
+    ];
+    output::write_exr_single(
+        &exr_path,
+        (map.width, map.height),
+        "w0",
+        &map.w0,
+        &attributes,
+    )
+    .map_err(|e| format!("{}: {e}", exr_path.display()))?;
+    let canvas = weight_png(&map);
+    output::write_png_rgb8(&png_path, canvas.width, canvas.height, &canvas.rgb)
+        .map_err(|e| format!("{}: {e}", png_path.display()))?;
+
+    println!(
+        "x0 = ({:.4}, {:.4}, {:.4}) m, seen in pixel ({}, {}); mode {}",
+        map.x0.x, map.x0.y, map.x0.z, map.x0_pixel.0, map.x0_pixel.1, mode
+    );
+    let mut w: Vec<f64> = map.w0.iter().copied().filter(|v| v.is_finite()).collect();
+    if w.is_empty() {
+        println!("no pixel sees a surface");
+    } else {
+        w.sort_by(f64::total_cmp);
+        let small = w.iter().filter(|v| **v <= 0.03).count();
+        println!(
+            "w0 over {} pixels with a surface: min {:.4}, median {:.4}, max {:.4}; {:.1}% at or below 0.03",
+            w.len(),
+            w[0],
+            w[w.len() / 2],
+            w[w.len() - 1],
+            100.0 * small as f64 / w.len() as f64
+        );
+    }
+    println!("wrote {}, {}", exr_path.display(), png_path.display());
+    Ok(())
+}
+
+/// The library's own message for a mode without weights (so the wording stays in one place).
+fn check_mode_via_library(
+    scene: &bdpm_scene::Scene,
+    settings: &bdpm_integrator::RenderSettings,
+) -> String {
+    // Path and light renderers prepare nothing, so building one to ask is cheap.
+    match Renderer::new(scene, settings).map(|r| r.weight_map(WeightTarget::Pixel(0, 0))) {
+        Ok(Err(e)) | Err(e) => e.to_string(),
+        Ok(Ok(_)) => format!("mode '{}' has no weights", settings.mode),
+    }
+}
+
+/// The PNG: w₀ on a log scale from 0.008 to 1 (viridis), black where no surface is seen, a red
+/// cross on x₀'s pixel, and the colour bar with its ticks.
+fn weight_png(map: &WeightMap) -> Canvas {
+    let colours: Vec<[u8; 3]> = map
+        .w0
+        .iter()
+        .map(|&w| {
+            if w.is_nan() {
+                NO_SURFACE
+            } else {
+                viridis(log_position(w))
+            }
+        })
+        .collect();
+    let legend = Legend {
+        title: vec![
+            "w0 = 1 - w1".into(),
+            "log scale".into(),
+            "+ marks x0".into(),
+        ],
+        ticks: TICKS
+            .iter()
+            .map(|(v, l)| (log_position(*v), (*l).to_string()))
+            .collect(),
+    };
+    let layout = compose(map.width, map.height, &colours, &legend, viridis);
+    let (cx, cy) = layout.centre(map.x0_pixel.0, map.x0_pixel.1);
+    let arm = (3 * layout.scale as i64).max(6);
+    let half = layout.scale as i64 / 3;
+    let mut canvas = layout.canvas;
+    // A black outline first, so the red cross stays visible on the bright w₀ ≈ 1 pixels that
+    // surround x₀.
+    for (colour, grow) in [(NO_SURFACE, 1), (MARK, 0)] {
+        for d in -arm - grow..=arm + grow {
+            for t in -half - grow..=half + grow {
+                canvas.set(cx + d, cy + t, colour);
+                canvas.set(cx + t, cy + d, colour);
+            }
+        }
+    }
+    canvas
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn arguments_parse() {
+        assert_eq!(
+            parse_point("1.05, 0.4125,-0.5"),
+            Ok(Vec3::new(1.05, 0.4125, -0.5))
+        );
+        assert!(parse_point("1,2").is_err());
+        assert!(parse_point("1,2,nan").is_err());
+        assert_eq!(parse_pixel("3,40"), Ok((3, 40)));
+        assert!(parse_pixel("3;40").is_err());
+    }
+
+    #[test]
+    fn log_scale_spans_the_ticks() {
+        assert_eq!(log_position(0.0), 0.0);
+        assert_eq!(log_position(0.008), 0.0);
+        assert!((log_position(1.0) - 1.0).abs() < 1e-12);
+        assert_eq!(log_position(7.0), 1.0);
+        assert!((log_position(0.0894427191) - 0.5).abs() < 1e-9);
+    }
 }

@@ -1,0 +1,538 @@
+//! Tests of the `bdpm` binary as a user runs it: the files `render` and `weights` write and
+//! what they contain, one-line errors (exit code 1, never a panic) for bad input, and an
+//! interrupted render that keeps its work.
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+/// A fresh directory under the system temp dir, removed when dropped.
+struct TempDir(PathBuf);
+
+impl TempDir {
+    fn new(tag: &str) -> TempDir {
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.as_nanos())
+            .unwrap_or(0);
+        let dir =
+            std::env::temp_dir().join(format!("bdpm-cli-{tag}-{}-{nanos}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("create temp dir");
+        TempDir(dir)
+    }
+
+    fn path(&self, name: &str) -> PathBuf {
+        self.0.join(name)
+    }
+
+    /// Files whose name starts with '.': the writers' temporary files, which must not survive.
+    fn hidden_files(&self) -> Vec<String> {
+        std::fs::read_dir(&self.0)
+            .expect("read temp dir")
+            .filter_map(|e| e.ok())
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with('.'))
+            .collect()
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn bdpm() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_bdpm"))
+}
+
+fn scene(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes")
+        .join(name)
+}
+
+fn run(cmd: &mut Command) -> Output {
+    cmd.output().expect("run bdpm")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+fn assert_success(out: &Output) {
+    assert!(
+        out.status.success(),
+        "bdpm failed ({:?}):\nstdout: {}\nstderr: {}",
+        out.status,
+        text(&out.stdout),
+        text(&out.stderr)
+    );
+}
+
+/// An EXR read back: its channels by name and its `bdpm.*` text attributes.
+struct Exr {
+    width: usize,
+    height: usize,
+    channels: HashMap<String, Vec<f32>>,
+    attributes: HashMap<String, String>,
+}
+
+impl Exr {
+    fn read(path: &Path) -> Exr {
+        let image = exr::prelude::read_all_flat_layers_from_file(path)
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert_eq!(image.layer_data.len(), 1, "one layer");
+        let layer = &image.layer_data[0];
+        let mut channels = HashMap::new();
+        for c in &layer.channel_data.list {
+            let exr::prelude::FlatSamples::F32(v) = &c.sample_data else {
+                panic!("channel {} is not float32", c.name);
+            };
+            channels.insert(c.name.to_string(), v.clone());
+        }
+        let mut attributes = HashMap::new();
+        for (k, v) in &layer.attributes.other {
+            if let exr::prelude::AttributeValue::Text(t) = v {
+                attributes.insert(k.to_string(), t.to_string());
+            }
+        }
+        Exr {
+            width: layer.size.0,
+            height: layer.size.1,
+            channels,
+            attributes,
+        }
+    }
+
+    fn channel(&self, name: &str) -> &[f32] {
+        self.channels.get(name).unwrap_or_else(|| {
+            let mut names: Vec<_> = self.channels.keys().collect();
+            names.sort();
+            panic!("no channel {name}; channels: {names:?}")
+        })
+    }
+}
+
+fn read_json(path: &Path) -> serde_json::Value {
+    let s = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    serde_json::from_str(&s).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+fn rgb(prefix: &str) -> [String; 3] {
+    ["R", "G", "B"].map(|c| {
+        if prefix.is_empty() {
+            c.to_string()
+        } else {
+            format!("{prefix}.{c}")
+        }
+    })
+}
+
+#[test]
+fn render_writes_exr_png_noise_map_and_report() {
+    let dir = TempDir::new("render");
+    let out = run(bdpm()
+        .arg("render")
+        .arg(scene("cornell-lambert.toml"))
+        .args(["--mode", "path", "--resolution", "24x24", "--passes", "2"])
+        .args(["--spp", "2", "--quiet", "-o"])
+        .arg(dir.path("X.exr")));
+    assert_success(&out);
+    for f in ["X.exr", "X.png", "X-noise.png", "X.json"] {
+        assert!(dir.path(f).is_file(), "{f} missing");
+    }
+    assert!(dir.hidden_files().is_empty(), "{:?}", dir.hidden_files());
+
+    let exr = Exr::read(&dir.path("X.exr"));
+    assert_eq!((exr.width, exr.height), (24, 24));
+    for prefix in ["", "noise", "stderr"] {
+        for name in rgb(prefix) {
+            let c = exr.channel(&name);
+            assert_eq!(c.len(), 24 * 24);
+            assert!(c.iter().all(|v| v.is_finite() && *v >= 0.0), "{name}");
+        }
+    }
+    assert!(exr.channel("R").iter().any(|v| *v > 0.0), "black image");
+    let attr = |k: &str| exr.attributes.get(k).map(String::as_str);
+    assert_eq!(attr("bdpm.mode"), Some("path"));
+    assert_eq!(attr("bdpm.seed"), Some("1"));
+    assert_eq!(attr("bdpm.passes"), Some("2"));
+    assert_eq!(attr("bdpm.passes_done"), Some("2"));
+    assert_eq!(attr("bdpm.spp"), Some("2"));
+
+    let json = read_json(&dir.path("X.json"));
+    let settings = &json["settings"];
+    assert_eq!(settings["mode"], "path");
+    assert!(settings["photons_per_pass"].as_u64().is_some());
+    assert_eq!(settings["spp"], 2);
+    assert!(settings["radius_m"].as_f64().is_some_and(|r| r > 0.0));
+    assert_eq!(json["passes_done"], 2);
+    assert_eq!(json["interrupted"], false);
+    let outputs: Vec<&str> = json["outputs"]
+        .as_array()
+        .expect("outputs")
+        .iter()
+        .filter_map(|v| v.as_str())
+        .collect();
+    assert!(
+        outputs.iter().any(|o| o.ends_with("X-noise.png")),
+        "{outputs:?}"
+    );
+
+    // The noise map is the render upscaled, plus a legend panel.
+    let decoder = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(dir.path("X-noise.png")).expect("open noise png"),
+    ));
+    let reader = decoder.read_info().expect("noise png header");
+    let info = reader.info();
+    assert!(info.width > 24 * 2 && info.height >= 24 * 2);
+}
+
+#[test]
+fn technique_layers_sum_to_the_image() {
+    let dir = TempDir::new("techniques");
+    let out = run(bdpm()
+        .arg("render")
+        .arg(scene("cornell-lambert.toml"))
+        .args([
+            "--mode",
+            "optimal",
+            "--resolution",
+            "24x24",
+            "--passes",
+            "2",
+        ])
+        .args([
+            "--spp",
+            "2",
+            "--photons",
+            "20000",
+            "--techniques",
+            "--quiet",
+            "-o",
+        ])
+        .arg(dir.path("T.exr")));
+    assert_success(&out);
+    let exr = Exr::read(&dir.path("T.exr"));
+    for layer in ["direct", "x0_raw", "x0_weighted", "x1_raw", "x1_weighted"] {
+        for name in rgb(layer) {
+            assert!(exr.channel(&name).iter().all(|v| v.is_finite()), "{name}");
+        }
+    }
+    let mut worst = 0.0f64;
+    for c in ["R", "G", "B"] {
+        let image = exr.channel(c);
+        let part = |l: &str| exr.channel(&format!("{l}.{c}"));
+        let (d, x0, x1) = (part("direct"), part("x0_weighted"), part("x1_weighted"));
+        for i in 0..image.len() {
+            let sum = d[i] as f64 + x0[i] as f64 + x1[i] as f64;
+            let want = image[i] as f64;
+            let err = (sum - want).abs();
+            assert!(
+                err <= 1e-5 * want.abs() + 1e-9,
+                "{c} pixel {i}: direct + x0_weighted + x1_weighted = {sum}, image {want}"
+            );
+            worst = worst.max(err / want.abs().max(1e-12));
+        }
+    }
+    eprintln!("worst relative difference {worst:e}");
+    assert!(exr.channel("x1_weighted.R").iter().any(|v| *v != 0.0));
+}
+
+#[test]
+fn techniques_flag_is_refused_for_reference_modes() {
+    let dir = TempDir::new("techniques-path");
+    let out = run(bdpm()
+        .arg("render")
+        .arg(scene("cornell-lambert.toml"))
+        .args(["--mode", "path", "--resolution", "8x8", "--passes", "1"])
+        .args(["--techniques", "--quiet", "-o"])
+        .arg(dir.path("p.exr")));
+    assert_one_line_error(&out, &["--techniques", "path"]);
+    assert!(!dir.path("p.exr").exists());
+}
+
+/// Exit code 1 (not a panic's 101) and exactly one line on stderr containing every `needle`.
+fn assert_one_line_error(out: &Output, needles: &[&str]) {
+    let stderr = text(&out.stderr);
+    assert!(!stderr.contains("panicked"), "panic: {stderr}");
+    assert_eq!(out.status.code(), Some(1), "stderr: {stderr}");
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 1, "not one line: {stderr}");
+    assert!(lines[0].starts_with("bdpm: error: "), "{stderr}");
+    for n in needles {
+        assert!(lines[0].contains(n), "'{n}' not in: {stderr}");
+    }
+}
+
+/// A small valid scene (a coarse closed sphere with one light), to be broken by each case.
+const BASE_SCENE: &str = r#"
+[render]
+resolution = [8, 8]
+passes = 1
+photons = 1000
+spp = 1
+mode = "path"
+
+[camera]
+position = [-0.5, 0.0, 0.0]
+look_at = [0.5, 0.0, 0.0]
+up = [0.0, 1.0, 0.0]
+vfov = 60
+
+[[light]]
+position = [0.3, -0.2, 0.1]
+flux = [1.0, 1.0, 1.0]
+
+[material.inside]
+kd = 0.5
+
+[[shape]]
+type = "sphere"
+center = [0.0, 0.0, 0.0]
+radius = 1.0
+subdivisions = 2
+facing = "inside"
+material = "inside"
+"#;
+
+#[test]
+fn bad_input_gives_one_line_naming_file_and_field() {
+    let dir = TempDir::new("errors");
+    let base = BASE_SCENE;
+    let mesh = |file: &str| format!("{base}\n[[shape]]\ntype = \"mesh\"\nfile = \"{file}\"\n");
+    std::fs::write(dir.path("bad.gltf"), b"\x00\x9f garbage {{ not json").expect("write");
+    // (file name, scene text, extra arguments, what the error line must contain)
+    let cases: Vec<(&str, String, Vec<&str>, Vec<&str>)> = vec![
+        ("valid.toml", base.into(), vec![], vec![]),
+        (
+            "no-vfov.toml",
+            base.replace("vfov = 60\n", ""),
+            vec![],
+            vec!["camera.vfov", "missing"],
+        ),
+        (
+            "negative.toml",
+            base.replace("kd = 0.5", "kd = -0.1"),
+            vec![],
+            vec!["material.inside.kd", "-0.1"],
+        ),
+        (
+            "above-one.toml",
+            base.replace("kd = 0.5", "kd = 1.2"),
+            vec![],
+            vec!["material.inside.kd", "1.2"],
+        ),
+        (
+            "energy.toml",
+            base.replace("kd = 0.5", "kd = 0.6\ngr = 0.5\ndelta = 10"),
+            vec![],
+            vec!["material.inside", "kd + gr"],
+        ),
+        (
+            "mode.toml",
+            base.replace("mode = \"path\"", "mode = \"fastest\""),
+            vec![],
+            vec!["render.mode", "fastest"],
+        ),
+        (
+            "flag.toml",
+            base.into(),
+            vec!["--mode", "fast"],
+            vec!["--mode", "fast"],
+        ),
+        (
+            "missing-mesh.toml",
+            mesh("missing.gltf"),
+            vec![],
+            vec!["missing.gltf", "shape[1].file"],
+        ),
+        (
+            "corrupt-mesh.toml",
+            mesh("bad.gltf"),
+            vec![],
+            vec!["bad.gltf", "shape[1].file"],
+        ),
+        (
+            "typo.toml",
+            base.replace("spp = 1", "sp = 1"),
+            vec![],
+            vec!["`sp`"],
+        ),
+    ];
+    for (name, scene_text, extra, needles) in cases {
+        let path = dir.path(name);
+        std::fs::write(&path, scene_text).expect("write scene");
+        let out_exr = dir.path(&format!("{name}.exr"));
+        let out = run(bdpm()
+            .arg("render")
+            .arg(&path)
+            .args(&extra)
+            .args(["--quiet", "-o"])
+            .arg(&out_exr));
+        if needles.is_empty() {
+            // The unbroken scene renders: the other cases fail for their one fault only.
+            assert_success(&out);
+            continue;
+        }
+        let mut all = needles.clone();
+        // A flag error names the flag; a glTF error names the glTF file and the scene field
+        // that referenced it; every other error names the scene file.
+        if !name.starts_with("flag") && !name.ends_with("mesh.toml") {
+            all.push(name);
+        }
+        assert_one_line_error(&out, &all);
+        assert!(!out_exr.exists(), "{name}: an output was written");
+    }
+    let missing = dir.path("does-not-exist.toml");
+    let out = run(bdpm().arg("render").arg(&missing).arg("--quiet"));
+    assert_one_line_error(&out, &["does-not-exist.toml", "cannot read"]);
+    assert!(dir.hidden_files().is_empty(), "{:?}", dir.hidden_files());
+}
+
+#[test]
+fn interrupted_render_writes_what_it_has() {
+    let dir = TempDir::new("sigint");
+    // Loading and one 32×32 pass take well under a second; if the signal still comes before
+    // the first pass ends, the render (correctly) writes nothing, and the test waits longer.
+    for wait in [1.5, 6.0] {
+        let mut child = bdpm()
+            .arg("render")
+            .arg(scene("cornell-lambert.toml"))
+            .args(["--resolution", "32x32", "--passes", "100000", "--spp", "1"])
+            .args(["--photons", "20000", "--mode", "bdd0", "--threads", "1"])
+            .args(["--quiet", "-o"])
+            .arg(dir.path("i.exr"))
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start bdpm");
+        std::thread::sleep(Duration::from_secs_f64(wait));
+        let status = Command::new("kill")
+            .args(["-INT", &child.id().to_string()])
+            .status()
+            .expect("run kill");
+        assert!(status.success());
+        let start = Instant::now();
+        let code = loop {
+            if let Some(s) = child.try_wait().expect("wait") {
+                break s.code();
+            }
+            if start.elapsed() > Duration::from_secs(60) {
+                let _ = child.kill();
+                let _ = child.wait();
+                panic!("bdpm did not stop within 60 s of SIGINT");
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        let out = child.wait_with_output().expect("output");
+        let stderr = text(&out.stderr);
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert_eq!(code, Some(130), "stderr: {stderr}");
+        if stderr.contains("nothing was written") {
+            continue;
+        }
+        for f in ["i.exr", "i.png", "i-noise.png", "i.json"] {
+            assert!(dir.path(f).is_file(), "{f} missing");
+        }
+        assert!(dir.hidden_files().is_empty(), "{:?}", dir.hidden_files());
+        let json = read_json(&dir.path("i.json"));
+        assert_eq!(json["interrupted"], true);
+        let done = json["passes_done"].as_u64().expect("passes_done");
+        assert!((1..100_000).contains(&done), "passes_done {done}");
+        assert!(text(&out.stdout).contains(&format!("interrupted after {done} of 100000")));
+        let exr = Exr::read(&dir.path("i.exr"));
+        assert_eq!(
+            exr.attributes.get("bdpm.passes_done"),
+            Some(&done.to_string())
+        );
+        return;
+    }
+    panic!("the render did not finish a pass within 6 s");
+}
+
+/// Pixel (column, row) in which the Cornell camera (pinhole at (1.39, 1.365, −4) m looking
+/// +z, up +y, vfov 39.3°, square `n`×`n` image, +x to the left) sees world point `p`.
+fn cornell_pixel(p: [f64; 3], n: usize) -> (f64, f64) {
+    let tan_half = (39.3f64.to_radians() / 2.0).tan();
+    let dz = p[2] + 4.0;
+    let ndc_x = (p[0] - 1.39) / dz / tan_half;
+    let ndc_y = (p[1] - 1.365) / dz / tan_half;
+    (
+        (1.0 - ndc_x) / 2.0 * n as f64,
+        (1.0 - ndc_y) / 2.0 * n as f64,
+    )
+}
+
+#[test]
+fn weight_map_shows_the_ceiling_spot() {
+    // The preprint's Fig. 5 must-show: for x₀ on the floor, w₀ is large only in the small spot
+    // on the ceiling above the light, and ≤ 0.03 almost everywhere else. The spot is about a
+    // pixel wide at this resolution, so the test uses 67×67, where a pixel centre falls within
+    // 0.04 pixel of the ceiling point above the light (at 64×64 the nearest centre is ~0.6 px
+    // away and sees only w₀ ≈ 0.33).
+    let n = 67;
+    let dir = TempDir::new("weights");
+    let out = run(bdpm()
+        .arg("weights")
+        .arg(scene("cornell-lambert.toml"))
+        .args(["--x0", "1.05,0.4125,0.4475", "--mode", "algebraic"])
+        .args(["--resolution", &format!("{n}x{n}")])
+        .args(["--photons", "1000000", "--spp", "30", "-o"])
+        .arg(dir.path("w.exr")));
+    assert_success(&out);
+    assert!(dir.path("w.png").is_file());
+    assert!(text(&out.stdout).contains("median"));
+    let exr = Exr::read(&dir.path("w.exr"));
+    assert_eq!((exr.width, exr.height), (n, n));
+    assert_eq!(
+        exr.attributes.get("bdpm.mode").map(String::as_str),
+        Some("algebraic")
+    );
+    let w0 = exr.channel("w0");
+
+    // The ceiling (y = 548.8 mm × 0.005) above the light at (1.39, 2.676, 1.398) m.
+    let (sx, sy) = cornell_pixel([1.39, 2.744, 1.398], n);
+    let (cx, cy) = (sx as usize, sy as usize);
+    assert!((sx - (cx as f64 + 0.5)).abs() < 0.05 && (sy - (cy as f64 + 0.5)).abs() < 0.05);
+    let spot = w0[cy * n + cx] as f64;
+    eprintln!("w0 above the light: {spot:.3}");
+    assert!((0.5..=0.9).contains(&spot), "w0 above the light = {spot}");
+
+    // Everywhere else (outside a few pixels around the spot), w₀ is small.
+    let mut others = 0usize;
+    let mut small = 0usize;
+    for y in 0..n {
+        for x in 0..n {
+            let w = w0[y * n + x];
+            if w.is_nan() || (x.abs_diff(cx) <= 3 && y.abs_diff(cy) <= 3) {
+                continue;
+            }
+            others += 1;
+            small += usize::from(w <= 0.03);
+        }
+    }
+    let fraction = small as f64 / others as f64;
+    eprintln!("w0 <= 0.03 on {:.1}% of the other pixels", 100.0 * fraction);
+    assert!(others > n * n / 2, "only {others} pixels see a surface");
+    assert!(
+        fraction >= 0.9,
+        "w0 <= 0.03 on only {:.1}% of pixels",
+        100.0 * fraction
+    );
+}
+
+#[test]
+fn weights_needs_a_mode_with_weights() {
+    let out = run(bdpm()
+        .arg("weights")
+        .arg(scene("cornell-lambert.toml"))
+        .args(["--pixel", "4,4", "--mode", "path", "--resolution", "8x8"]));
+    assert_one_line_error(&out, &["--mode path", "no weights"]);
+    let out = run(bdpm()
+        .arg("weights")
+        .arg(scene("cornell-lambert.toml"))
+        .args(["--pixel", "40,4", "--mode", "bdd1", "--resolution", "8x8"]));
+    assert_one_line_error(&out, &["--pixel", "outside"]);
+}
