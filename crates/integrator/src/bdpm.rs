@@ -87,8 +87,7 @@ pub(crate) struct Mix<'a> {
 pub(crate) fn light_mask(scene: &Scene, sh: &Shading) -> u32 {
     let mut mask = 0;
     for (l, light) in scene.lights.iter().enumerate().take(32) {
-        let to = light.position - sh.p;
-        if sh.ng.dot(to) > 0.0 && !scene.geometry.occluded(scene.spawn(sh, to), light.position) {
+        if scene.light_visible(sh, light) {
             mask |= 1 << l;
         }
     }
@@ -319,7 +318,15 @@ impl<'a> Mix<'a> {
             self.w1(&pair, pixel, stats)
         };
         for (l, light) in scene.lights.iter().enumerate() {
-            let c = scene.direct_from(&sh1, wo1, light);
+            // The visibility bits already hold the shadow rays of the first 32 lights.
+            let c = if l < 32 {
+                if lights & (1 << l) == 0 {
+                    continue;
+                }
+                scene.direct_unshadowed(&sh1, wo1, light)
+            } else {
+                scene.direct_from(&sh1, wo1, light)
+            };
             if c == Vec3::ZERO {
                 continue;
             }

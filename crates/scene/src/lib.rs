@@ -255,6 +255,16 @@ impl Scene {
     /// The part of [`Scene::direct`] due to one light.
     #[inline]
     pub fn direct_from(&self, sh: &Shading, wo: Vec3, light: &PointLight) -> Vec3 {
+        let c = self.direct_unshadowed(sh, wo, light);
+        if c == Vec3::ZERO || !self.light_visible(sh, light) {
+            return Vec3::ZERO;
+        }
+        c
+    }
+
+    /// [`Scene::direct_from`] without the shadow ray: f·cos·I/d² for a light on the lit side.
+    #[inline]
+    pub fn direct_unshadowed(&self, sh: &Shading, wo: Vec3, light: &PointLight) -> Vec3 {
         let to = light.position - sh.p;
         let d2 = to.length_squared();
         if d2 <= 0.0 {
@@ -265,10 +275,13 @@ impl Scene {
         if cos <= 0.0 || sh.ng.dot(wi) <= 0.0 {
             return Vec3::ZERO;
         }
-        let f = self.eval(sh, wo, wi);
-        if f == Vec3::ZERO || self.geometry.occluded(self.spawn(sh, wi), light.position) {
-            return Vec3::ZERO;
-        }
-        f * light.intensity() * (cos / d2)
+        self.eval(sh, wo, wi) * light.intensity() * (cos / d2)
+    }
+
+    /// True if `light` is on the side of `sh` and no surface blocks the segment to it.
+    #[inline]
+    pub fn light_visible(&self, sh: &Shading, light: &PointLight) -> bool {
+        let to = light.position - sh.p;
+        sh.ng.dot(to) > 0.0 && !self.geometry.occluded(self.spawn(sh, to), light.position)
     }
 }
