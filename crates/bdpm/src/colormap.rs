@@ -104,6 +104,8 @@ impl Layout {
 /// The smallest map side after upscaling: small renders (e.g. 24×24 test images) are enlarged
 /// by an integer factor so that the map is not dwarfed by its legend.
 const MIN_MAP_SIDE: u32 = 160;
+/// The longest map side that upscaling may produce.
+const MAX_UPSCALED_SIDE: u32 = 2048;
 /// Height of the colour bar, in text-scale units, at least.
 const MIN_BAR_HEIGHT: u32 = 96;
 
@@ -117,7 +119,11 @@ pub(crate) fn compose(
     legend: &Legend,
     cmap: impl Fn(f64) -> [u8; 3],
 ) -> Layout {
-    let scale = MIN_MAP_SIDE.div_ceil(width.min(height).max(1)).clamp(1, 8);
+    // Capped so that a long thin render does not become a huge image.
+    let scale = MIN_MAP_SIDE
+        .div_ceil(width.min(height).max(1))
+        .min(MAX_UPSCALED_SIDE / width.max(height).max(1))
+        .clamp(1, 8);
     let (map_w, map_h) = (width * scale, height * scale);
     // Larger images get larger text, so that labels keep a similar size relative to the map.
     let ts = (1 + map_h / 600).min(4);
@@ -273,5 +279,7 @@ mod tests {
         assert!(l.canvas.width > 24 * 7 && l.canvas.height >= 24 * 7);
         assert_eq!(&l.canvas.rgb[0..3], &[1, 2, 3]);
         assert_eq!(l.centre(1, 0), (10, 3));
+        let thin = compose(1024, 8, &vec![[0; 3]; 1024 * 8], &legend, viridis);
+        assert_eq!(thin.scale, 2);
     }
 }

@@ -13,7 +13,7 @@ pub(crate) type CliResult<T> = Result<T, String>;
 /// Settings that override the scene file's `[render]` table.
 #[derive(Args, Debug, Clone, Default)]
 pub(crate) struct Overrides {
-    /// Integrator and weight mode: path, bdd0, bdd1, threshold, algebraic-direct, algebraic,
+    /// Integrator and weight mode: path, light, bdd0, bdd1, threshold, algebraic-direct, algebraic,
     /// optimal, balance, power.
     #[arg(long)]
     pub(crate) mode: Option<String>,

@@ -31,7 +31,9 @@ enum Command {
     /// (run report) beside it. An interrupt stops after the pass in flight, writes what was
     /// rendered and exits with code 130; a second interrupt quits without writing.
     Render(render::RenderArgs),
-    /// Map the weight w₀ = 1 − w₁ over every visible x₁ for a fixed x₀ (the preprint's Fig. 5).
+    /// Map the weight w₀ = 1 − w₁ over every visible x₁ for a fixed x₀ (the preprint's Fig. 5):
+    /// OUT.exr (channel w0) and OUT.png (log scale 0.008–1, x₀ marked). Modes whose weights
+    /// depend on x₁ alone: bdd0, bdd1, threshold, algebraic-direct, algebraic, optimal.
     Weights(weights::WeightsArgs),
     /// Error against run time for several modes: CSV, plots and a markdown table.
     Study(study::StudyArgs),

@@ -23,7 +23,7 @@ pub(crate) fn install() -> Result<(), String> {
             eprintln!("\nbdpm: interrupt: the outputs are being written, they will be complete in a moment");
         } else if n == 1 {
             eprintln!(
-                "\nbdpm: interrupt: finishing the pass in flight, then writing what was rendered \
+                "\nbdpm: interrupt: stopping after the pass in flight and writing what was rendered \
                  (interrupt again to quit without writing)"
             );
         } else {
