@@ -17,7 +17,10 @@ fn images_do_not_depend_on_the_thread_count() {
     for mode in ["path", "light", "optimal", "balance"] {
         let s = with_mode(&settings, mode, 2, 2, 20_000);
         let render_on = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
             pool.install(|| {
                 let renderer = Renderer::new(&scene, &s).unwrap();
                 render_with(&renderer)

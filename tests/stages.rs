@@ -8,26 +8,55 @@ fn stage_names(scene: &str, mode: &str) -> Vec<(String, String)> {
     let (scene, settings) = load(scene, 16, 16);
     let s = with_mode(&settings, mode, 1, 1, 20_000);
     let r = Renderer::new(&scene, &s).unwrap();
-    r.stages().iter().map(|st| (st.name.to_string(), st.detail.clone())).collect()
+    r.stages()
+        .iter()
+        .map(|st| (st.name.to_string(), st.detail.clone()))
+        .collect()
 }
 
 #[test]
 fn modes_prepare_only_what_they_need() {
-    for mode in ["path", "light", "bdd0", "bdd1", "threshold", "algebraic-direct", "balance", "power"] {
-        assert!(stage_names("cornell-lambert.toml", mode).is_empty(), "{mode} prepared something");
+    for mode in [
+        "path",
+        "light",
+        "bdd0",
+        "bdd1",
+        "threshold",
+        "algebraic-direct",
+        "balance",
+        "power",
+    ] {
+        assert!(
+            stage_names("cornell-lambert.toml", mode).is_empty(),
+            "{mode} prepared something"
+        );
     }
     let algebraic = stage_names("cornell-lambert.toml", "algebraic");
-    assert_eq!(algebraic.iter().map(|s| s.0.as_str()).collect::<Vec<_>>(), ["radiance cache"]);
+    assert_eq!(
+        algebraic.iter().map(|s| s.0.as_str()).collect::<Vec<_>>(),
+        ["radiance cache"]
+    );
     let optimal = stage_names("cornell-lambert.toml", "optimal");
-    assert_eq!(optimal.iter().map(|s| s.0.as_str()).collect::<Vec<_>>(), ["radiance cache", "pixel table"]);
+    assert_eq!(
+        optimal.iter().map(|s| s.0.as_str()).collect::<Vec<_>>(),
+        ["radiance cache", "pixel table"]
+    );
 }
 
 #[test]
 fn lambert_scenes_get_one_bin_and_glossy_scenes_get_k_bins() {
     let lambert = stage_names("cornell-lambert.toml", "optimal");
-    assert!(lambert[0].1.contains(" 1 bin(s) per side") && lambert[0].1.contains("derived"), "{:?}", lambert[0]);
+    assert!(
+        lambert[0].1.contains(" 1 bin(s) per side") && lambert[0].1.contains("derived"),
+        "{:?}",
+        lambert[0]
+    );
     let glossy = stage_names("cornell-glossy.toml", "optimal");
-    assert!(glossy[0].1.contains(" 100 bin(s) per side") && glossy[0].1.contains("b stored"), "{:?}", glossy[0]);
+    assert!(
+        glossy[0].1.contains(" 100 bin(s) per side") && glossy[0].1.contains("b stored"),
+        "{:?}",
+        glossy[0]
+    );
 }
 
 /// `bdd0` traces no x₁ and `bdd1` gathers no photons at x₀ (their technique layers stay zero),
@@ -37,11 +66,16 @@ fn pure_strategies_skip_the_other_technique() {
     let (scene, settings) = load("cornell-lambert.toml", 16, 16);
     let layers = |mode: &str| {
         let s = with_mode(&settings, mode, 1, 4, 50_000);
-        let r = Renderer::new(&scene, &s).unwrap().with_technique_layers(true);
+        let r = Renderer::new(&scene, &s)
+            .unwrap()
+            .with_technique_layers(true);
         let out = r.render_pass(0, &|_| {});
         let t = out.techniques.unwrap();
         for (e, t) in out.estimates.iter().zip(&t) {
-            assert!((t.total() - *e).abs().max_element() <= 1e-9 + 1e-6 * e.abs().max_element(), "{mode}: layers do not sum to the image");
+            assert!(
+                (t.total() - *e).abs().max_element() <= 1e-9 + 1e-6 * e.abs().max_element(),
+                "{mode}: layers do not sum to the image"
+            );
         }
         let sum = |f: fn(&bdpm_integrator::Techniques) -> f64| t.iter().map(f).sum::<f64>();
         (sum(|t| t.x0_raw.x), sum(|t| t.x1_raw.x))
