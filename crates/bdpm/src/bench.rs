@@ -1,21 +1,359 @@
 //! `bdpm bench`: throughput benchmarks.
+//!
+//! For each thread count and mode: one warm-up pass, then `--repeats` runs of `--passes`
+//! timed passes, each run with a fresh renderer (so the preparatory stages are timed too).
+//! Photons per second come from the pass's "photons" stage (its "light tracing" stage for the
+//! `light` mode) and N_F, camera samples per second from the "camera" stage and the sample
+//! count. Every figure is the median over the runs. The machine is shared, so the report
+//! records the core count and the load average before and after.
+use std::fmt::Write as _;
 use std::path::PathBuf;
+use std::time::Instant;
 
+use bdpm_integrator::{Mode, Renderer};
 use clap::Args;
 
-use crate::common::CliResult;
+use crate::common::{CliResult, Overrides, parse_resolution, prepare, thread_pool};
+use crate::output::write_atomic;
+
+/// The modes a benchmark times by default: every BDPM weight mode.
+const DEFAULT_MODES: &[&str] = &[
+    "bdd0",
+    "bdd1",
+    "threshold",
+    "algebraic-direct",
+    "algebraic",
+    "optimal",
+    "balance",
+    "power",
+];
 
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]
 pub(crate) struct BenchArgs {
     /// Scene file (TOML).
     scene: PathBuf,
+    /// Modes to time, comma-separated (default: every BDPM mode).
+    #[arg(long, value_delimiter = ',')]
+    modes: Vec<String>,
+    /// Image size as WxH (default: the scene's).
+    #[arg(long, value_parser = parse_resolution)]
+    resolution: Option<(u32, u32)>,
+    /// Photons emitted per pass, N_F (default: the scene's).
+    #[arg(long)]
+    photons: Option<u64>,
+    /// Camera samples per pixel per pass, N_B (default: the scene's).
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Timed passes per run.
+    #[arg(long, default_value_t = 2)]
+    passes: u32,
+    /// Runs per mode and thread count; figures are medians over them.
+    #[arg(long, default_value_t = 3)]
+    repeats: u32,
+    /// Thread counts, comma-separated (default: 1 and all cores).
+    #[arg(long, value_delimiter = ',')]
+    threads_list: Vec<usize>,
+    /// Master seed.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Markdown output (default: out/bench-<scene>.md).
+    #[arg(short = 'o', long = "output")]
+    output: Option<PathBuf>,
+}
+
+/// Median of a list (NaN for an empty one); the mean of the middle two for an even count.
+pub(crate) fn median(values: &[f64]) -> f64 {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| !x.is_nan()).collect();
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// The medians of one (mode, thread count) cell.
+#[derive(Clone, Debug)]
+struct Cell {
+    mode: String,
+    threads: usize,
+    /// Photons traced per second (NaN when the mode traces none).
+    photons_per_s: f64,
+    /// Camera samples per second.
+    samples_per_s: f64,
+    /// Wall time of one pass, s.
+    pass_s: f64,
+    /// Preparatory stages: (name, median s).
+    prep: Vec<(String, f64)>,
+}
+
+/// One line of /proc/loadavg (its first three fields), or "unknown".
+fn load_average() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
+        .unwrap_or_else(|| "unknown".into())
+}
+
+/// The CPU model from /proc/cpuinfo, or "unknown".
+fn cpu_model() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, v)| v.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown".into())
+}
+
+fn rate(count: f64, seconds: f64) -> f64 {
+    if seconds > 0.0 {
+        count / seconds
+    } else {
+        f64::NAN
+    }
+}
+
+fn fmt_rate(v: f64) -> String {
+    if v.is_finite() {
+        format!("{:.3}", v / 1e6)
+    } else {
+        "—".into()
+    }
+}
+
+/// Times one mode at one thread count.
+fn time_cell(
+    scene: &bdpm_scene::Scene,
+    settings: &bdpm_integrator::RenderSettings,
+    name: &str,
+    threads: usize,
+    passes: u32,
+    repeats: u32,
+) -> CliResult<Cell> {
+    let pool = thread_pool(Some(threads))?;
+    let build = || {
+        pool.install(|| Renderer::new(scene, settings))
+            .map_err(|e| format!("mode {name}: {e}"))
+    };
+    // Warm-up: caches, page faults, the allocator, the CPU's clock.
+    {
+        let r = build()?;
+        let _ = pool.install(|| r.render_pass(passes + repeats * passes, &|_| {}));
+    }
+    let photon_stage = if settings.mode == Mode::Light {
+        "light tracing"
+    } else {
+        "photons"
+    };
+    let (mut photon_rates, mut sample_rates, mut pass_times) = (vec![], vec![], vec![]);
+    let mut prep: Vec<(String, Vec<f64>)> = Vec::new();
+    for rep in 0..repeats {
+        let r = build()?;
+        for st in r.stages() {
+            match prep.iter_mut().find(|(n, _)| n == st.name) {
+                Some((_, v)) => v.push(st.seconds),
+                None => prep.push((st.name.to_string(), vec![st.seconds])),
+            }
+        }
+        let (mut photon_s, mut camera_s, mut samples) = (0.0, 0.0, 0u64);
+        let t = Instant::now();
+        for k in 0..passes {
+            let out = pool.install(|| r.render_pass(rep * passes + k, &|_| {}));
+            samples += out.samples;
+            for (stage, secs) in &out.stage_seconds {
+                if *stage == photon_stage {
+                    photon_s += secs;
+                } else if *stage == "camera" {
+                    camera_s += secs;
+                }
+            }
+        }
+        pass_times.push(t.elapsed().as_secs_f64() / passes as f64);
+        photon_rates.push(if photon_s > 0.0 {
+            rate((settings.photons * passes as u64) as f64, photon_s)
+        } else {
+            f64::NAN
+        });
+        sample_rates.push(rate(samples as f64, camera_s));
+    }
+    Ok(Cell {
+        mode: name.to_string(),
+        threads,
+        photons_per_s: median(&photon_rates),
+        samples_per_s: median(&sample_rates),
+        pass_s: median(&pass_times),
+        prep: prep.into_iter().map(|(n, v)| (n, median(&v))).collect(),
+    })
 }
 
 /// Runs the subcommand.
 pub(crate) fn run(args: BenchArgs) -> CliResult<()> {
-    Err(format!(
-        "{}: this subcommand is not implemented yet",
-        args.scene.display()
-    ))
+    if args.passes == 0 || args.repeats == 0 {
+        return Err("--passes and --repeats must be at least 1".into());
+    }
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut threads_list = if args.threads_list.is_empty() {
+        vec![1, cores]
+    } else {
+        args.threads_list.clone()
+    };
+    threads_list.dedup();
+    if threads_list.contains(&0) {
+        return Err("--threads-list: thread counts must be at least 1".into());
+    }
+    let names: Vec<String> = if args.modes.is_empty() {
+        DEFAULT_MODES.iter().map(|s| s.to_string()).collect()
+    } else {
+        args.modes.iter().map(|s| s.trim().to_string()).collect()
+    };
+    let overrides = Overrides {
+        resolution: args.resolution,
+        photons: args.photons,
+        spp: args.spp,
+        seed: args.seed,
+        ..Overrides::default()
+    };
+    let loaded = prepare(&args.scene, &overrides)?;
+    let (scene, base) = (loaded.scene, loaded.settings);
+    let modes: Vec<Mode> = names
+        .iter()
+        .map(|n| {
+            Mode::parse(n).ok_or_else(|| {
+                format!(
+                    "--modes: unknown mode '{n}'; expected some of {}",
+                    Mode::names().join(", ")
+                )
+            })
+        })
+        .collect::<CliResult<_>>()?;
+
+    let load_before = load_average();
+    let started = Instant::now();
+    let mut cells = Vec::new();
+    for &threads in &threads_list {
+        for (name, mode) in names.iter().zip(&modes) {
+            let mut s = base.clone();
+            s.mode = *mode;
+            let cell = time_cell(&scene, &s, name, threads, args.passes, args.repeats)?;
+            eprintln!(
+                "{name:>16} {threads} thread(s): {} M photons/s, {} M samples/s, {:.3} s/pass",
+                fmt_rate(cell.photons_per_s),
+                fmt_rate(cell.samples_per_s),
+                cell.pass_s
+            );
+            cells.push(cell);
+        }
+    }
+    let seconds = started.elapsed().as_secs_f64();
+    let load_after = load_average();
+
+    let mut md = String::new();
+    let command: Vec<String> = std::env::args().collect();
+    let _ = writeln!(
+        md,
+        "## Bench: {} at {}x{}, N_F = {}, N_B = {}, seed {}\n",
+        args.scene.display(),
+        base.width,
+        base.height,
+        base.photons,
+        base.spp,
+        base.seed
+    );
+    let _ = writeln!(md, "Command: `{}`\n", command.join(" "));
+    let _ = writeln!(
+        md,
+        "Machine: {cores} cores ({}); load average (1, 5, 15 min) {load_before} before, \
+         {load_after} after; {seconds:.0} s in all. The machine is shared: figures are medians \
+         of {} runs of {} timed passes, each after one warm-up pass.\n",
+        cpu_model(),
+        args.repeats,
+        args.passes
+    );
+    let _ = writeln!(
+        md,
+        "| mode | threads | M photons/s | M camera samples/s | s/pass | preparation (s) |"
+    );
+    let _ = writeln!(md, "|---|---:|---:|---:|---:|---|");
+    for c in &cells {
+        let prep = if c.prep.is_empty() {
+            "—".to_string()
+        } else {
+            c.prep
+                .iter()
+                .map(|(n, s)| format!("{n} {s:.2}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {:.3} | {} |",
+            c.mode,
+            c.threads,
+            fmt_rate(c.photons_per_s),
+            fmt_rate(c.samples_per_s),
+            c.pass_s,
+            prep
+        );
+    }
+    if threads_list.len() >= 2 {
+        let (t1, tn) = (threads_list[0], threads_list[threads_list.len() - 1]);
+        let _ = writeln!(
+            md,
+            "\nSpeed-up of {tn} threads over {t1} (ratio of the medians above):\n"
+        );
+        let _ = writeln!(md, "| mode | photons | camera samples | pass time |");
+        let _ = writeln!(md, "|---|---:|---:|---:|");
+        for name in &names {
+            let find = |t: usize| cells.iter().find(|c| &c.mode == name && c.threads == t);
+            if let (Some(a), Some(b)) = (find(t1), find(tn)) {
+                let ratio = |x: f64, y: f64| {
+                    if x.is_finite() && y.is_finite() && x > 0.0 {
+                        format!("{:.2}×", y / x)
+                    } else {
+                        "—".into()
+                    }
+                };
+                let _ = writeln!(
+                    md,
+                    "| {name} | {} | {} | {} |",
+                    ratio(a.photons_per_s, b.photons_per_s),
+                    ratio(a.samples_per_s, b.samples_per_s),
+                    ratio(b.pass_s, a.pass_s)
+                );
+            }
+        }
+    }
+    let stem = args
+        .scene
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    let path = args
+        .output
+        .unwrap_or_else(|| PathBuf::from("out").join(format!("bench-{stem}.md")));
+    write_atomic(&path, md.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
+    println!("{md}");
+    println!("wrote {}", path.display());
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_of_odd_even_and_empty() {
+        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&[4.0, 1.0, 3.0, 2.0]), 2.5);
+        assert!(median(&[]).is_nan());
+        assert_eq!(median(&[f64::NAN, 5.0]), 5.0);
+    }
 }

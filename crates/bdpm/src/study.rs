@@ -1,21 +1,790 @@
 //! `bdpm study`: error against run time for several modes.
+//!
+//! Each mode renders passes of the same scene and settings; after every pass the study records
+//! the wall time (preparatory stages such as the radiance cache and the A/B table counted in
+//! the first pass, so equal-time comparisons are honest), the RMSE of the running mean against
+//! a reference, and the mean per-pass noise √V. Every error measure is over pixel
+//! **luminance** (Rec. 709 weights). It writes `study.csv`, `study.md`, log-log plots of error
+//! against time and a bar chart of mean √V (PNG and SVG), and a preview PNG per mode.
+use std::fmt::Write as _;
 use std::path::PathBuf;
+use std::time::Instant;
 
+use bdpm_integrator::{Film, Mode, Renderer};
 use clap::Args;
+use glam::DVec3;
+use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::common::CliResult;
+use crate::common::{CliResult, Overrides, prepare, thread_pool};
+use crate::output::{write_atomic, write_png};
+
+#[path = "plot.rs"]
+mod plot;
+#[path = "study_reference.rs"]
+mod reference;
+
+/// The modes a study compares by default: every BDPM weight mode.
+const DEFAULT_MODES: &[&str] = &[
+    "bdd0",
+    "bdd1",
+    "threshold",
+    "algebraic-direct",
+    "algebraic",
+    "optimal",
+    "balance",
+    "power",
+];
 
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]
 pub(crate) struct StudyArgs {
     /// Scene file (TOML).
     scene: PathBuf,
+    /// Render settings (--passes, --photons, --spp, --resolution, …) for every mode.
+    #[command(flatten)]
+    overrides: Overrides,
+    /// Modes to compare, comma-separated (default: every BDPM mode).
+    #[arg(long, value_delimiter = ',')]
+    modes: Vec<String>,
+    /// Give each mode this many seconds of wall time (preparation included) instead of a fixed
+    /// number of passes; it stops after the pass that reaches the budget.
+    #[arg(long, conflicts_with = "passes")]
+    time_budget: Option<f64>,
+    /// Reference image (EXR with R, G, B; a `stderr` layer is used when present). Default: a
+    /// `light` render, cached under out/.
+    #[arg(long)]
+    reference: Option<PathBuf>,
+    /// Passes of the rendered reference (default: 16 × the study's passes).
+    #[arg(long)]
+    reference_passes: Option<u32>,
+    /// Photons per pass of the rendered reference (default: the study's N_F).
+    #[arg(long)]
+    reference_photons: Option<u64>,
+    /// The clock of the time axis, the equal-time comparison and the efficiency: `wall`, or
+    /// `cpu` (the process's CPU time, user + system: steadier on a shared machine). Both are
+    /// in the CSV either way.
+    #[arg(long, default_value = "wall", value_parser = ["wall", "cpu"])]
+    clock: String,
+    /// Output directory (default: out/study-<scene>).
+    #[arg(short = 'o', long = "output")]
+    output: Option<PathBuf>,
+    /// Do not draw progress bars.
+    #[arg(long)]
+    quiet: bool,
+}
+
+/// Luminance of an RGB radiance (Rec. 709 weights, as the PNG preview's exposure uses).
+pub(crate) fn luminance(c: DVec3) -> f64 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
+/// Root-mean-square difference of two equally long images.
+pub(crate) fn rmse(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len(), "images differ in size");
+    if a.is_empty() {
+        return 0.0;
+    }
+    let sum: f64 = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum();
+    (sum / a.len() as f64).sqrt()
+}
+
+/// Mean of a slice (0 for an empty one).
+pub(crate) fn mean(v: &[f64]) -> f64 {
+    if v.is_empty() {
+        0.0
+    } else {
+        v.iter().sum::<f64>() / v.len() as f64
+    }
+}
+
+/// The value at `t` of the curve through `points` (x ascending, all positive), interpolated
+/// linearly in log x and log y. `None` outside the points' x range.
+pub(crate) fn interpolate_loglog(points: &[(f64, f64)], t: f64) -> Option<f64> {
+    let first = points.first()?;
+    let last = points.last()?;
+    if t.is_nan() || t <= 0.0 || t < first.0 || t > last.0 {
+        return None;
+    }
+    for w in points.windows(2) {
+        let ((x0, y0), (x1, y1)) = (w[0], w[1]);
+        if t >= x0 && t <= x1 {
+            if x1 <= x0 || y0 <= 0.0 || y1 <= 0.0 {
+                return Some(y1);
+            }
+            let a = (t.ln() - x0.ln()) / (x1.ln() - x0.ln());
+            return Some((y0.ln() + a * (y1.ln() - y0.ln())).exp());
+        }
+    }
+    Some(first.1)
+}
+
+/// Efficiency 1/(V·t): inverse of the variance a unit of time buys. `mean_v` in
+/// (W·m⁻²·sr⁻¹)², `seconds_per_pass` in s.
+pub(crate) fn efficiency(mean_v: f64, seconds_per_pass: f64) -> f64 {
+    1.0 / (mean_v * seconds_per_pass)
+}
+
+/// Per-pixel sum and sum of squares of the luminance of the pass estimates.
+#[derive(Clone, Debug)]
+pub(crate) struct LumFilm {
+    sum: Vec<f64>,
+    sum_sq: Vec<f64>,
+    passes: u32,
+}
+
+impl LumFilm {
+    pub(crate) fn new(pixels: usize) -> LumFilm {
+        LumFilm {
+            sum: vec![0.0; pixels],
+            sum_sq: vec![0.0; pixels],
+            passes: 0,
+        }
+    }
+
+    pub(crate) fn add(&mut self, estimates: &[DVec3]) {
+        for ((s, q), e) in self.sum.iter_mut().zip(&mut self.sum_sq).zip(estimates) {
+            let l = luminance(*e);
+            *s += l;
+            *q += l * l;
+        }
+        self.passes += 1;
+    }
+
+    /// Running mean per pixel.
+    pub(crate) fn mean(&self) -> Vec<f64> {
+        let k = self.passes.max(1) as f64;
+        self.sum.iter().map(|s| s / k).collect()
+    }
+
+    /// Unbiased per-pass variance V per pixel; `None` before two passes.
+    pub(crate) fn variance(&self) -> Option<Vec<f64>> {
+        if self.passes < 2 {
+            return None;
+        }
+        let k = self.passes as f64;
+        Some(
+            self.sum
+                .iter()
+                .zip(&self.sum_sq)
+                .map(|(s, q)| ((q - s * s / k) / (k - 1.0)).max(0.0))
+                .collect(),
+        )
+    }
+}
+
+/// The record of one pass of one mode.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct PassPoint {
+    pub(crate) pass: u32,
+    /// Time since the mode started, preparation included, s, on the study's clock
+    /// (`--clock`).
+    pub(crate) time: f64,
+    /// Wall time since the mode started, preparation included, s.
+    pub(crate) wall_s: f64,
+    /// Process CPU time since the mode started, preparation included, s (NaN if unknown).
+    pub(crate) cpu_s: f64,
+    pub(crate) rmse: f64,
+    pub(crate) rel_rmse: f64,
+    /// Mean over pixels of √V; NaN after the first pass.
+    pub(crate) mean_sqrt_v: f64,
+    /// Mean over pixels of √V / reference (pixels where the reference is positive); NaN after
+    /// the first pass.
+    pub(crate) mean_rel_sqrt_v: f64,
+}
+
+/// Everything a study keeps of one mode.
+#[derive(Clone, Debug)]
+pub(crate) struct ModeRun {
+    pub(crate) name: String,
+    /// Preparatory stages (name, s).
+    pub(crate) stages: Vec<(String, f64)>,
+    pub(crate) points: Vec<PassPoint>,
+    /// Mean over pixels of V after the last pass.
+    pub(crate) mean_v: f64,
+    pub(crate) dropped: u64,
+}
+
+impl ModeRun {
+    pub(crate) fn prep_seconds(&self) -> f64 {
+        self.stages.iter().fold(0.0, |a, s| a + s.1)
+    }
+    pub(crate) fn total_seconds(&self) -> f64 {
+        self.points.last().map_or(0.0, |p| p.time)
+    }
+    pub(crate) fn seconds_per_pass(&self) -> f64 {
+        self.total_seconds() / self.points.len().max(1) as f64
+    }
+    pub(crate) fn final_point(&self) -> Option<&PassPoint> {
+        self.points.last()
+    }
+}
+
+/// The common time at which modes are compared: the smallest final time over the modes
+/// (every mode ran at least that long).
+pub(crate) fn equal_time(runs: &[ModeRun]) -> f64 {
+    runs.iter()
+        .map(ModeRun::total_seconds)
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// A mode's relative RMSE at time `t` (log-log interpolation), `None` before its first pass.
+pub(crate) fn rel_rmse_at(run: &ModeRun, t: f64) -> Option<f64> {
+    let pts: Vec<(f64, f64)> = run.points.iter().map(|p| (p.time, p.rel_rmse)).collect();
+    interpolate_loglog(&pts, t)
+}
+
+/// The CSV of all pass records.
+pub(crate) fn csv(runs: &[ModeRun]) -> String {
+    let mut s = String::from(
+        "mode,pass,wall_time_s,rmse,rel_rmse,mean_sqrt_v,cpu_time_s,mean_rel_sqrt_v\n",
+    );
+    let opt = |v: f64, digits: usize| {
+        if v.is_finite() {
+            format!("{v:.digits$e}")
+        } else {
+            String::new()
+        }
+    };
+    for r in runs {
+        for p in &r.points {
+            let cpu = if p.cpu_s.is_finite() {
+                format!("{:.2}", p.cpu_s)
+            } else {
+                String::new()
+            };
+            let _ = writeln!(
+                s,
+                "{},{},{:.4},{:.6e},{:.6e},{},{},{}",
+                r.name,
+                p.pass,
+                p.wall_s,
+                p.rmse,
+                p.rel_rmse,
+                opt(p.mean_sqrt_v, 6),
+                cpu,
+                opt(p.mean_rel_sqrt_v, 6)
+            );
+        }
+    }
+    s
+}
+
+/// Facts about the reference for the report.
+#[derive(Clone, Debug)]
+struct RefFacts {
+    origin: String,
+    mean_lum: f64,
+    /// RMSE-equivalent of the reference's own standard error (an upper bound: the luminance of
+    /// the per-channel standard errors), when known.
+    floor: Option<f64>,
+}
+
+/// The markdown report: settings, reference, and the per-mode table.
+fn markdown(
+    header: &str,
+    refs: &RefFacts,
+    runs: &[ModeRun],
+    baseline: &str,
+    clock: &str,
+    files: &[String],
+) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "{header}\n");
+    let floor = match refs.floor {
+        Some(f) => format!(
+            "its own error (RMSE-equivalent of its standard error, an upper bound) is {:.3e} \
+             W·m⁻²·sr⁻¹ = {:.3}% relative",
+            f,
+            100.0 * f / refs.mean_lum
+        ),
+        None => "its own error is unknown (no stderr layer)".into(),
+    };
+    let _ = writeln!(
+        s,
+        "Reference: {}; mean luminance {:.4e} W·m⁻²·sr⁻¹; {floor}.\n",
+        refs.origin, refs.mean_lum
+    );
+    let t_eq = equal_time(runs);
+    let _ = writeln!(
+        s,
+        "Errors are over pixel luminance. Times include the preparatory stages (radiance \
+         cache, A/B table; their wall time is the \"prep\" column) spread over the passes. \
+         The comparison clock is **{clock}** time: \"rel. RMSE at {t_eq:.2} s\" is each \
+         mode's relative-RMSE curve interpolated in log-log at the smallest final {clock} time \
+         of all modes, and efficiency is 1/(mean V · {clock} time per pass) relative to \
+         `{baseline}`. Mean √V/L is the mean over pixels of √V divided by the reference.\n"
+    );
+    let _ = writeln!(
+        s,
+        "| mode | passes | prep (s) | wall s/pass | CPU s/pass | mean √V | mean √V/L | RMSE | rel. RMSE | rel. RMSE at {t_eq:.2} s | efficiency vs {baseline} |"
+    );
+    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let base = runs
+        .iter()
+        .find(|r| r.name == baseline)
+        .map(|r| efficiency(r.mean_v, r.seconds_per_pass()));
+    let sci = |v: f64| {
+        if v.is_finite() {
+            format!("{v:.4e}")
+        } else {
+            "—".into()
+        }
+    };
+    for r in runs {
+        let Some(last) = r.final_point() else {
+            continue;
+        };
+        let k = r.points.len() as f64;
+        let at = rel_rmse_at(r, t_eq).map_or("—".into(), |v| format!("{:.3}%", 100.0 * v));
+        let eff = match base {
+            Some(b) if r.mean_v > 0.0 => {
+                format!("{:.2}", efficiency(r.mean_v, r.seconds_per_pass()) / b)
+            }
+            _ => "—".into(),
+        };
+        let cpu = if last.cpu_s.is_finite() {
+            format!("{:.3}", last.cpu_s / k)
+        } else {
+            "—".into()
+        };
+        let rel_v = if last.mean_rel_sqrt_v.is_finite() {
+            format!("{:.1}%", 100.0 * last.mean_rel_sqrt_v)
+        } else {
+            "—".into()
+        };
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.2} | {:.3} | {} | {} | {} | {:.4e} | {:.3}% | {} | {} |",
+            r.name,
+            r.points.len(),
+            r.prep_seconds(),
+            last.wall_s / k,
+            cpu,
+            sci(last.mean_sqrt_v),
+            rel_v,
+            last.rmse,
+            100.0 * last.rel_rmse,
+            at,
+            eff
+        );
+    }
+    let dropped: u64 = runs.iter().map(|r| r.dropped).sum();
+    if dropped > 0 {
+        let _ = writeln!(s, "\n{dropped} non-finite samples were dropped in total.");
+    }
+    let _ = writeln!(s, "\nFiles: {}.", files.join(", "));
+    s
+}
+
+/// CPU time of this process so far (user + system, all threads), s; `None` where
+/// /proc/self/stat is not available. Its resolution is the kernel's USER_HZ tick (10 ms).
+fn process_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the command name, which is in parentheses and may contain spaces:
+    // state is field 3, utime field 14, stime field 15 (proc(5)).
+    let rest = &stat[stat.rfind(')')? + 1..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let utime: f64 = f.get(11)?.parse().ok()?;
+    let stime: f64 = f.get(12)?.parse().ok()?;
+    Some((utime + stime) / 100.0)
+}
+
+/// The first three fields of /proc/loadavg, or "unknown".
+fn load_average() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
+        .unwrap_or_else(|| "unknown".into())
+}
+
+fn bar_for(name: &str, len: Option<u64>, quiet: bool) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    let bar = match len {
+        Some(n) => ProgressBar::new(n),
+        None => ProgressBar::no_length(),
+    };
+    let template = if len.is_some() {
+        "{prefix:>16} [{elapsed_precise}] {bar:32} {percent:>3}% {msg}"
+    } else {
+        "{prefix:>16} [{elapsed_precise}] {spinner} {msg}"
+    };
+    bar.set_style(
+        ProgressStyle::with_template(template).unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar.set_prefix(name.to_string());
+    bar
 }
 
 /// Runs the subcommand.
 pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
-    Err(format!(
-        "{}: this subcommand is not implemented yet",
-        args.scene.display()
-    ))
+    if args.overrides.mode.is_some() {
+        return Err("study: use --modes (a comma-separated list), not --mode".into());
+    }
+    if let Some(b) = args.time_budget
+        && !(b.is_finite() && b > 0.0)
+    {
+        return Err(format!(
+            "--time-budget must be a positive number of seconds, not {b}"
+        ));
+    }
+    let names: Vec<String> = if args.modes.is_empty() {
+        DEFAULT_MODES.iter().map(|s| s.to_string()).collect()
+    } else {
+        args.modes.iter().map(|s| s.trim().to_string()).collect()
+    };
+    let modes: Vec<Mode> = names
+        .iter()
+        .map(|n| {
+            Mode::parse(n).ok_or_else(|| {
+                format!(
+                    "--modes: unknown mode '{n}'; expected some of {}",
+                    Mode::names().join(", ")
+                )
+            })
+        })
+        .collect::<CliResult<_>>()?;
+    let loaded = prepare(&args.scene, &args.overrides)?;
+    let (scene, settings) = (loaded.scene, loaded.settings);
+    let pool = thread_pool(args.overrides.threads)?;
+    let stem = args
+        .scene
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    let dir = args
+        .output
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out").join(format!("study-{stem}")));
+    let (w, h) = (settings.width, settings.height);
+
+    // The reference.
+    let reference = match &args.reference {
+        Some(path) => {
+            let mut r = reference::read_exr(path)?;
+            r.origin = format!("read from {}", path.display());
+            r
+        }
+        None => {
+            let passes = match args.reference_passes {
+                Some(0) => return Err("--reference-passes must be at least 1".into()),
+                Some(p) => p,
+                None => settings.passes.saturating_mul(16),
+            };
+            let photons = match args.reference_photons {
+                Some(0) => return Err("--reference-photons must be at least 1".into()),
+                Some(n) => n,
+                None => settings.photons,
+            };
+            let rs = reference::reference_settings(&settings, passes, photons);
+            let path = reference::cache_path(&args.scene, &rs)?;
+            let mut r = reference::cached_or_render(&scene, &rs, &path, &pool, args.quiet)?;
+            r.origin = format!(
+                "`light` mode, {passes} passes of N_F = {photons}, N_B = {}, seed {}; {}",
+                rs.spp, rs.seed, r.origin
+            );
+            r
+        }
+    };
+    if (reference.width, reference.height) != (w, h) {
+        return Err(format!(
+            "{}: reference is {}x{} but the study renders {w}x{h}",
+            reference.path.display(),
+            reference.width,
+            reference.height
+        ));
+    }
+    let ref_lum: Vec<f64> = reference.mean.iter().map(|c| luminance(*c)).collect();
+    let ref_mean = mean(&ref_lum);
+    if ref_mean.is_nan() || ref_mean <= 0.0 {
+        return Err(format!(
+            "{}: the reference image is black; relative errors are undefined",
+            reference.path.display()
+        ));
+    }
+    let refs = RefFacts {
+        origin: reference.origin.clone(),
+        mean_lum: ref_mean,
+        floor: reference.stderr.as_ref().map(|se| {
+            let sq: Vec<f64> = se.iter().map(|c| luminance(*c).powi(2)).collect();
+            mean(&sq).sqrt()
+        }),
+    };
+
+    // The modes.
+    let load_before = load_average();
+    let mut runs = Vec::new();
+    let mut files = Vec::new();
+    for (name, mode) in names.iter().zip(&modes) {
+        let mut s = settings.clone();
+        s.mode = *mode;
+        let use_cpu = args.clock == "cpu";
+        let cpu0 = process_cpu_seconds();
+        if use_cpu && cpu0.is_none() {
+            return Err("--clock cpu: the process CPU time is not available here".into());
+        }
+        let t0 = Instant::now();
+        let renderer = pool
+            .install(|| Renderer::new(&scene, &s))
+            .map_err(|e| format!("{}: mode {name}: {e}", args.scene.display()))?;
+        let mut wall = t0.elapsed().as_secs_f64();
+        let cpu_since = || match (cpu0, process_cpu_seconds()) {
+            (Some(a), Some(b)) => b - a,
+            _ => f64::NAN,
+        };
+        // The mode's CPU time: preparation plus the passes, not the metrics computed between.
+        let mut cpu = cpu_since();
+        let stages: Vec<(String, f64)> = renderer
+            .stages()
+            .iter()
+            .map(|st| (st.name.to_string(), st.seconds))
+            .collect();
+        let bar = bar_for(
+            name,
+            args.time_budget
+                .is_none()
+                .then(|| s.passes as u64 * renderer.work_per_pass()),
+            args.quiet,
+        );
+        let mut film = Film::new(w, h);
+        let mut lum = LumFilm::new(w as usize * h as usize);
+        let mut points = Vec::new();
+        let mut pass = 0u32;
+        loop {
+            let done = match args.time_budget {
+                Some(budget) => (if use_cpu { cpu } else { wall }) >= budget,
+                None => pass >= s.passes,
+            };
+            if done {
+                break;
+            }
+            bar.set_message(format!("pass {}", pass + 1));
+            let t = Instant::now();
+            let c = cpu_since();
+            let out = pool.install(|| renderer.render_pass(pass, &|n| bar.inc(n)));
+            wall += t.elapsed().as_secs_f64();
+            cpu += cpu_since() - c;
+            film.add_pass(&out.estimates, out.dropped);
+            lum.add(&out.estimates);
+            let e = rmse(&lum.mean(), &ref_lum);
+            let var = lum.variance();
+            let sqrt_v = var.as_ref().map_or(f64::NAN, |v| {
+                mean(&v.iter().map(|x| x.sqrt()).collect::<Vec<_>>())
+            });
+            let rel_sqrt_v = var.as_ref().map_or(f64::NAN, |v| {
+                let rel: Vec<f64> = v
+                    .iter()
+                    .zip(&ref_lum)
+                    .filter(|(_, r)| **r > 0.0)
+                    .map(|(x, r)| x.sqrt() / r)
+                    .collect();
+                mean(&rel)
+            });
+            pass += 1;
+            points.push(PassPoint {
+                pass,
+                time: if use_cpu { cpu } else { wall },
+                wall_s: wall,
+                cpu_s: cpu,
+                rmse: e,
+                rel_rmse: e / ref_mean,
+                mean_sqrt_v: sqrt_v,
+                mean_rel_sqrt_v: rel_sqrt_v,
+            });
+        }
+        bar.finish_and_clear();
+        let mean_v = lum.variance().map_or(f64::NAN, |v| mean(&v));
+        let preview = dir.join(format!("{name}.png"));
+        write_png(&preview, &film).map_err(|e| format!("{}: {e}", preview.display()))?;
+        files.push(preview.display().to_string());
+        let run = ModeRun {
+            name: name.clone(),
+            stages,
+            points,
+            mean_v,
+            dropped: film.dropped(),
+        };
+        if !args.quiet {
+            let last = run.final_point().map(|p| p.rel_rmse).unwrap_or(f64::NAN);
+            eprintln!(
+                "{name:>16}: {} passes in {:.1} s, rel. RMSE {:.3}%",
+                run.points.len(),
+                run.total_seconds(),
+                100.0 * last
+            );
+        }
+        runs.push(run);
+    }
+
+    // Outputs.
+    let csv_path = dir.join("study.csv");
+    write_atomic(&csv_path, csv(&runs).as_bytes())
+        .map_err(|e| format!("{}: {e}", csv_path.display()))?;
+    let plot_err = plot::LogLogPlot {
+        title: format!("{stem} {w}x{h}: error against time"),
+        x_label: format!("{} time, s (preparation included)", args.clock),
+        y_label: "relative RMSE of luminance".into(),
+        series: runs
+            .iter()
+            .map(|r| plot::Series {
+                name: r.name.clone(),
+                points: r.points.iter().map(|p| (p.time, p.rel_rmse)).collect(),
+            })
+            .collect(),
+        floor: refs
+            .floor
+            .map(|f| ("reference's own error".to_string(), f / ref_mean)),
+    };
+    let err_stem = dir.join("error-vs-time");
+    plot::write_loglog(&err_stem, &plot_err)?;
+    let plot_v = plot::BarPlot {
+        title: format!(
+            "{stem} {w}x{h}: mean per-pass noise (N_F = {}, N_B = {})",
+            settings.photons, settings.spp
+        ),
+        y_label: "mean √V of luminance, W·m⁻²·sr⁻¹".into(),
+        bars: runs
+            .iter()
+            .map(|r| {
+                (
+                    r.name.clone(),
+                    r.final_point().map_or(f64::NAN, |p| p.mean_sqrt_v),
+                )
+            })
+            .collect(),
+    };
+    let v_stem = dir.join("sqrt-v");
+    plot::write_bars(&v_stem, &plot_v)?;
+    let baseline = if names.iter().any(|n| n == "bdd0") {
+        "bdd0".to_string()
+    } else {
+        names[0].clone()
+    };
+    let mut all_files = vec![csv_path.display().to_string()];
+    for stem in [&err_stem, &v_stem] {
+        for ext in ["png", "svg"] {
+            all_files.push(stem.with_extension(ext).display().to_string());
+        }
+    }
+    all_files.extend(files);
+    let header = format!(
+        "## Study: {} at {w}x{h}, N_F = {} photons and N_B = {} camera samples per pixel per pass, {}, seed {}, {} threads",
+        args.scene.display(),
+        settings.photons,
+        settings.spp,
+        match args.time_budget {
+            Some(b) => format!("{b} s per mode"),
+            None => format!("{} passes", settings.passes),
+        },
+        settings.seed,
+        pool.current_num_threads()
+    );
+    let header = format!(
+        "{header}\n\nLoad average (1, 5, 15 min) {load_before} before the modes ran, {} after: \
+         wall times depend on what else the machine runs.",
+        load_average()
+    );
+    let md = markdown(&header, &refs, &runs, &baseline, &args.clock, &all_files);
+    let md_path = dir.join("study.md");
+    write_atomic(&md_path, md.as_bytes()).map_err(|e| format!("{}: {e}", md_path.display()))?;
+    println!("{md}");
+    println!("wrote {}", md_path.display());
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rmse_of_known_images() {
+        assert_eq!(rmse(&[1.0, 2.0], &[1.0, 2.0]), 0.0);
+        // Differences 3 and 4: √((9 + 16)/2).
+        assert!((rmse(&[3.0, 0.0], &[0.0, 4.0]) - 12.5f64.sqrt()).abs() < 1e-12);
+        assert_eq!(rmse(&[], &[]), 0.0);
+    }
+
+    #[test]
+    fn luminance_of_white_is_one() {
+        assert!((luminance(DVec3::ONE) - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn loglog_interpolation_is_exact_on_power_laws() {
+        // y = 2 t^(-1/2): a straight line in log-log, so interpolation is exact.
+        let pts: Vec<(f64, f64)> = [1.0, 4.0, 16.0]
+            .iter()
+            .map(|t: &f64| (*t, 2.0 / t.sqrt()))
+            .collect();
+        for t in [1.0, 2.0, 4.0, 9.0, 16.0] {
+            let y = interpolate_loglog(&pts, t).expect("inside the range");
+            assert!((y - 2.0 / t.sqrt()).abs() < 1e-12, "t = {t}: {y}");
+        }
+        assert_eq!(interpolate_loglog(&pts, 0.5), None);
+        assert_eq!(interpolate_loglog(&pts, 17.0), None);
+        assert_eq!(interpolate_loglog(&[], 1.0), None);
+    }
+
+    #[test]
+    fn efficiency_is_inverse_of_variance_times_time() {
+        assert!((efficiency(0.5, 4.0) - 0.5).abs() < 1e-12);
+        // Half the variance at twice the time: equally efficient.
+        assert_eq!(efficiency(1.0, 2.0), efficiency(0.5, 4.0));
+    }
+
+    #[test]
+    fn lum_film_mean_and_variance() {
+        let mut f = LumFilm::new(1);
+        assert!(f.variance().is_none());
+        for v in [1.0, 2.0, 3.0, 6.0, 3.0] {
+            f.add(&[DVec3::splat(v)]);
+        }
+        assert!((f.mean()[0] - 3.0).abs() < 1e-12);
+        assert!((f.variance().expect("5 passes")[0] - 3.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn equal_time_and_rmse_at_it() {
+        let run = |name: &str, pts: &[(f64, f64)]| ModeRun {
+            name: name.into(),
+            stages: vec![("cache".into(), 0.5)],
+            points: pts
+                .iter()
+                .enumerate()
+                .map(|(i, (t, e))| PassPoint {
+                    pass: i as u32 + 1,
+                    time: *t,
+                    wall_s: *t,
+                    cpu_s: f64::NAN,
+                    mean_rel_sqrt_v: f64::NAN,
+                    rmse: *e,
+                    rel_rmse: *e,
+                    mean_sqrt_v: f64::NAN,
+                })
+                .collect(),
+            mean_v: 1.0,
+            dropped: 0,
+        };
+        let runs = [
+            run("a", &[(1.0, 0.4), (4.0, 0.2)]),
+            run("b", &[(2.0, 0.1), (3.0, 0.08)]),
+        ];
+        assert_eq!(equal_time(&runs), 3.0);
+        let a = rel_rmse_at(&runs[0], 3.0).expect("inside");
+        assert!((a - 0.4 * (3.0f64).powf(-0.5)).abs() < 1e-12);
+        let b = rel_rmse_at(&runs[1], 3.0).expect("at its last point");
+        assert!((b - 0.08).abs() < 1e-12);
+        assert!((runs[0].seconds_per_pass() - 2.0).abs() < 1e-12);
+        assert_eq!(runs[0].prep_seconds(), 0.5);
+        let text = csv(&runs);
+        assert!(text.starts_with("mode,pass,wall_time_s,rmse,rel_rmse,mean_sqrt_v,"));
+        assert_eq!(text.lines().count(), 5);
+    }
+
+    #[test]
+    fn fnv_hash_is_stable() {
+        assert_eq!(reference::fnv1a(b""), 0xcbf2_9ce4_8422_2325);
+        assert_eq!(reference::fnv1a(b"a"), 0xaf63_dc4c_8601_ec8c);
+    }
 }

@@ -1,0 +1,194 @@
+//! The reference image of `bdpm study`: read from a given EXR, or rendered once with the
+//! `light` mode (unbiased, and far faster to converge than `path` on the Cornell scenes,
+//! method.md §10) and cached under `out/` by a hash of everything that determines it.
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use bdpm_integrator::{Film, Mode, RenderSettings, Renderer};
+use bdpm_scene::Scene;
+use exr::prelude::{FlatSamples, read_all_flat_layers_from_file};
+use glam::DVec3;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::output::write_exr;
+
+/// Seed offset of the reference render, so that its random streams are independent of the
+/// study's (the streams are keyed by the seed).
+pub(crate) const SEED_OFFSET: u64 = 12345;
+
+/// A reference image and what is known about its own error.
+#[derive(Clone, Debug)]
+pub(crate) struct Reference {
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    /// Mean radiance per pixel, W·m⁻²·sr⁻¹.
+    pub(crate) mean: Vec<DVec3>,
+    /// Standard error of the mean per pixel, when the file has it (`stderr.R/G/B`).
+    pub(crate) stderr: Option<Vec<DVec3>>,
+    /// Where it came from, for the report.
+    pub(crate) path: PathBuf,
+    /// How it was made ("read from …", "rendered …", "cached …").
+    pub(crate) origin: String,
+}
+
+/// 64-bit FNV-1a: a stable hash (unlike `DefaultHasher`, whose output may change between Rust
+/// releases) for naming cached references.
+pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ *b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+/// The settings of the reference render for a study with `study` settings.
+pub(crate) fn reference_settings(
+    study: &RenderSettings,
+    passes: u32,
+    photons: u64,
+) -> RenderSettings {
+    let mut s = study.clone();
+    s.mode = Mode::Light;
+    s.passes = passes;
+    s.photons = photons;
+    s.seed = study.seed.wrapping_add(SEED_OFFSET);
+    s
+}
+
+/// The cache path of a reference: `out/reference-<stem>-<W>x<H>-<hash>.exr`, the hash over the
+/// scene file's bytes and every reference setting.
+pub(crate) fn cache_path(scene_path: &Path, settings: &RenderSettings) -> Result<PathBuf, String> {
+    let bytes = std::fs::read(scene_path)
+        .map_err(|e| format!("{}: cannot read: {e}", scene_path.display()))?;
+    let mut key = bytes;
+    key.extend_from_slice(format!("{settings:?}").as_bytes());
+    let stem = scene_path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    Ok(PathBuf::from("out").join(format!(
+        "reference-{stem}-{}x{}-{:016x}.exr",
+        settings.width,
+        settings.height,
+        fnv1a(&key)
+    )))
+}
+
+/// Reads the RGB mean (channels `R`, `G`, `B`) and, when present, the `stderr.R/G/B` layer of
+/// an EXR file.
+pub(crate) fn read_exr(path: &Path) -> Result<Reference, String> {
+    let image = read_all_flat_layers_from_file(path)
+        .map_err(|e| format!("{}: cannot read EXR: {e}", path.display()))?;
+    let layer = image
+        .layer_data
+        .first()
+        .ok_or_else(|| format!("{}: EXR has no layer", path.display()))?;
+    let (w, h) = (layer.size.width(), layer.size.height());
+    let find = |name: &str| -> Option<Vec<f64>> {
+        layer
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name.to_string() == name)
+            .map(|c| match &c.sample_data {
+                FlatSamples::F16(v) => v.iter().map(|x| x.to_f64()).collect(),
+                FlatSamples::F32(v) => v.iter().map(|x| *x as f64).collect(),
+                FlatSamples::U32(v) => v.iter().map(|x| *x as f64).collect(),
+            })
+    };
+    let rgb = |prefix: &str| -> Option<Vec<DVec3>> {
+        let [r, g, b] = ["R", "G", "B"].map(|c| find(&format!("{prefix}{c}")));
+        let (r, g, b) = (r?, g?, b?);
+        Some(
+            r.iter()
+                .zip(&g)
+                .zip(&b)
+                .map(|((r, g), b)| DVec3::new(*r, *g, *b))
+                .collect(),
+        )
+    };
+    let mean = rgb("").ok_or_else(|| {
+        format!(
+            "{}: EXR has no R, G, B channels in its first layer",
+            path.display()
+        )
+    })?;
+    if mean.len() != w * h {
+        return Err(format!(
+            "{}: channel size does not match the image",
+            path.display()
+        ));
+    }
+    Ok(Reference {
+        width: w as u32,
+        height: h as u32,
+        mean,
+        stderr: rgb("stderr."),
+        path: path.to_path_buf(),
+        origin: String::new(),
+    })
+}
+
+/// The cached reference at `path` if it exists, else a fresh `light` render of `settings`
+/// written there.
+pub(crate) fn cached_or_render(
+    scene: &Scene,
+    settings: &RenderSettings,
+    path: &Path,
+    pool: &rayon::ThreadPool,
+    quiet: bool,
+) -> Result<Reference, String> {
+    if path.exists() {
+        let mut r = read_exr(path)?;
+        r.origin = format!("cached {}", path.display());
+        return Ok(r);
+    }
+    let renderer = pool
+        .install(|| Renderer::new(scene, settings))
+        .map_err(|e| format!("reference: {e}"))?;
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else {
+        let bar = ProgressBar::new(settings.passes as u64 * renderer.work_per_pass());
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{prefix:>16} [{elapsed_precise}] {bar:32} {percent:>3}% (eta {eta})",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        bar.set_prefix("reference");
+        bar
+    };
+    let start = Instant::now();
+    let mut film = Film::new(settings.width, settings.height);
+    for pass in 0..settings.passes {
+        let out = pool.install(|| renderer.render_pass(pass, &|n| bar.inc(n)));
+        film.add_pass(&out.estimates, out.dropped);
+    }
+    let seconds = start.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+    let attrs = vec![
+        ("mode".to_string(), "light".to_string()),
+        ("passes".to_string(), settings.passes.to_string()),
+        ("photons".to_string(), settings.photons.to_string()),
+        ("spp".to_string(), settings.spp.to_string()),
+        ("seed".to_string(), settings.seed.to_string()),
+        ("seconds".to_string(), format!("{seconds:.1}")),
+    ];
+    write_exr(path, &film, &attrs).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(Reference {
+        width: settings.width,
+        height: settings.height,
+        // Rounded to f32 as in the file, so a cached and a fresh reference give the same numbers.
+        mean: film.mean().iter().map(|v| v.as_vec3().as_dvec3()).collect(),
+        stderr: Some(
+            film.standard_error()
+                .iter()
+                .map(|v| v.as_vec3().as_dvec3())
+                .collect(),
+        ),
+        path: path.to_path_buf(),
+        origin: format!(
+            "rendered in {seconds:.0} s and cached as {}",
+            path.display()
+        ),
+    })
+}
