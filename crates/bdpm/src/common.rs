@@ -7,6 +7,16 @@ use bdpm_load::{LoadReport, load_scene};
 use bdpm_scene::Scene;
 use clap::Args;
 
+/// `println!` that ignores a closed standard output (as in `bdpm render … | head`) instead of
+/// panicking: the render's files are what matter, and they are written before any message.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+pub(crate) use say;
+
 /// An error for the user: one line, no backtrace.
 pub(crate) type CliResult<T> = Result<T, String>;
 

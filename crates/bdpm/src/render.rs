@@ -5,12 +5,12 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
-use bdpm_integrator::{Film, Mode, Renderer, Techniques};
+use bdpm_integrator::{Film, Mode, Renderer, Techniques, WeightStats};
 use clap::Args;
 use glam::DVec3;
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::common::{CliResult, Overrides, default_output, image_mean, prepare, thread_pool};
+use crate::common::{CliResult, Overrides, default_output, image_mean, prepare, say, thread_pool};
 use crate::output::luminance;
 use crate::{output, report, signal};
 
@@ -154,6 +154,9 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
     let mut samples = 0u64;
     let mut pass_means = Vec::new();
     let mut stage_totals: Vec<(&'static str, f64)> = Vec::new();
+    let mut weights = WeightStats::default();
+    let mut photon_map_bytes = 0u64;
+    let mut photons_stored = 0u64;
     let t_render = Instant::now();
     for pass in 0..settings.passes {
         if signal::requested() {
@@ -168,6 +171,9 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
         }
         pass_means.push(image_mean(&out.estimates));
         samples += out.samples;
+        weights.add(&out.weights);
+        photon_map_bytes = photon_map_bytes.max(out.photon_map_bytes);
+        photons_stored += out.photons_stored;
         for (name, secs) in out.stage_seconds {
             match stage_totals.iter_mut().find(|(n, _)| *n == name) {
                 Some(entry) => entry.1 += secs,
@@ -221,17 +227,20 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
         outputs: &outputs,
         interrupted,
         pass_means: &pass_means,
+        weights: &weights,
+        photon_map_bytes,
+        photons_stored,
     });
     output::write_atomic(&outputs.json, run.to_json().as_bytes())
         .map_err(|e| format!("{}: {e}", outputs.json.display()))?;
     if interrupted {
-        println!(
+        say!(
             "interrupted after {} of {} passes; the outputs hold those passes",
             film.passes(),
             settings.passes
         );
     }
-    println!(
+    say!(
         "rendered {} ({}x{}, mode {}, {} passes) in {:.2} s: {:.3} M samples/s on {} threads",
         args.scene.display(),
         settings.width,
@@ -243,7 +252,7 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
         threads
     );
     if film.dropped() > 0 {
-        println!(
+        say!(
             "warning: {} non-finite samples were dropped",
             film.dropped()
         );
@@ -253,7 +262,7 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
         .iter()
         .map(|p| p.display().to_string())
         .collect();
-    println!("wrote {}", written.join(", "));
+    say!("wrote {}", written.join(", "));
     Ok(if interrupted {
         ExitCode::from(signal::EXIT_INTERRUPTED)
     } else {

@@ -2,7 +2,7 @@
 //! each stage cost.
 use std::path::Path;
 
-use bdpm_integrator::{Film, RenderSettings, Renderer};
+use bdpm_integrator::{Film, RenderSettings, Renderer, WeightStats};
 use bdpm_load::LoadReport;
 use serde::Serialize;
 
@@ -24,6 +24,25 @@ pub(crate) struct RunFacts<'a> {
     pub(crate) outputs: &'a Outputs,
     pub(crate) interrupted: bool,
     pub(crate) pass_means: &'a [[f64; 3]],
+    pub(crate) weights: &'a WeightStats,
+    pub(crate) photon_map_bytes: u64,
+    pub(crate) photons_stored: u64,
+}
+
+/// Weight evaluations of the BDPM mix and how many were anomalous (method.md §4).
+#[derive(Serialize)]
+struct WeightsOut {
+    evaluations: u64,
+    outside_unit_interval: u64,
+    outside_unit_fraction: f64,
+    clamped_cb: u64,
+}
+
+/// The photon maps of the passes.
+#[derive(Serialize)]
+struct PhotonsOut {
+    stored_total: u64,
+    largest_map_bytes: u64,
 }
 
 #[derive(Serialize)]
@@ -84,6 +103,8 @@ pub(crate) struct RunReport {
     dropped_samples: u64,
     prepared_stages: Vec<Stage>,
     timing: Timing,
+    weights: WeightsOut,
+    photons: PhotonsOut,
     mean_radiance: [f64; 3],
     /// Standard error of the image mean from the spread of the per-pass image means (this
     /// accounts for correlations between pixels within a pass).
@@ -181,6 +202,17 @@ impl RunReport {
                         detail: String::new(),
                     })
                     .collect(),
+            },
+            weights: WeightsOut {
+                evaluations: f.weights.evaluations,
+                outside_unit_interval: f.weights.outside_unit,
+                outside_unit_fraction: f.weights.outside_unit as f64
+                    / f.weights.evaluations.max(1) as f64,
+                clamped_cb: f.weights.clamped_cb,
+            },
+            photons: PhotonsOut {
+                stored_total: f.photons_stored,
+                largest_map_bytes: f.photon_map_bytes,
             },
             mean_radiance: mean_of(&f.film.mean()),
             mean_radiance_standard_error: standard_error_of_mean(f.pass_means),

@@ -8,7 +8,7 @@ use clap::{ArgGroup, Args};
 use glam::Vec3;
 
 use crate::colormap::{Canvas, Legend, compose, viridis};
-use crate::common::{CliResult, Overrides, prepare, thread_pool};
+use crate::common::{CliResult, Overrides, prepare, say, thread_pool};
 use crate::output;
 
 /// Bottom of the PNG's colour scale: w₀ at or below it gets the bottom colour. 2⁻⁷, the
@@ -163,17 +163,22 @@ pub(crate) fn run(args: WeightsArgs) -> CliResult<()> {
     output::write_png_rgb8(&png_path, canvas.width, canvas.height, &canvas.rgb)
         .map_err(|e| format!("{}: {e}", png_path.display()))?;
 
-    println!(
+    say!(
         "x0 = ({:.4}, {:.4}, {:.4}) m, seen in pixel ({}, {}); mode {}",
-        map.x0.x, map.x0.y, map.x0.z, map.x0_pixel.0, map.x0_pixel.1, mode
+        map.x0.x,
+        map.x0.y,
+        map.x0.z,
+        map.x0_pixel.0,
+        map.x0_pixel.1,
+        mode
     );
     let mut w: Vec<f64> = map.w0.iter().copied().filter(|v| v.is_finite()).collect();
     if w.is_empty() {
-        println!("no pixel sees a surface");
+        say!("no pixel sees a surface");
     } else {
         w.sort_by(f64::total_cmp);
         let small = w.iter().filter(|v| **v <= 0.03).count();
-        println!(
+        say!(
             "w0 over {} pixels with a surface: min {:.4}, median {:.4}, max {:.4}; {:.1}% at or below 0.03",
             w.len(),
             w[0],
@@ -182,7 +187,7 @@ pub(crate) fn run(args: WeightsArgs) -> CliResult<()> {
             100.0 * small as f64 / w.len() as f64
         );
     }
-    println!("wrote {}, {}", exr_path.display(), png_path.display());
+    say!("wrote {}, {}", exr_path.display(), png_path.display());
     Ok(())
 }
 
