@@ -15,18 +15,43 @@ fn repo() -> PathBuf {
 }
 
 fn seeds() -> Vec<String> {
-    ["cornell-lambert.toml", "cornell-glossy.toml", "sphere-furnace.toml"]
-        .iter()
-        .map(|f| std::fs::read_to_string(repo().join("scenes").join(f)).unwrap())
-        .chain(std::iter::once(std::fs::read_to_string(repo().join("docs/scene-format.md")).unwrap_or_default()))
-        .collect()
+    [
+        "cornell-lambert.toml",
+        "cornell-glossy.toml",
+        "sphere-furnace.toml",
+    ]
+    .iter()
+    .map(|f| std::fs::read_to_string(repo().join("scenes").join(f)).unwrap())
+    .chain(std::iter::once(
+        std::fs::read_to_string(repo().join("docs/scene-format.md")).unwrap_or_default(),
+    ))
+    .collect()
 }
 
 /// Tokens that stress the parser and the range checks.
 const TOKENS: &[&str] = &[
-    "nan", "inf", "-inf", "-1", "0", "1e38", "1e-45", "16385", "\"\"", "[]", "[[shape]]", "[render]",
-    "=", "\n", "type = \"sphere\"", "subdivisions = 256", "resolution = [0, 0]", "kd = 2",
-    "delta = 0", "vertices = [[0,0,0]]", "file = \"missing.gltf\"", "mode = \"x\"",
+    "nan",
+    "inf",
+    "-inf",
+    "-1",
+    "0",
+    "1e38",
+    "1e-45",
+    "16385",
+    "\"\"",
+    "[]",
+    "[[shape]]",
+    "[render]",
+    "=",
+    "\n",
+    "type = \"sphere\"",
+    "subdivisions = 256",
+    "resolution = [0, 0]",
+    "kd = 2",
+    "delta = 0",
+    "vertices = [[0,0,0]]",
+    "file = \"missing.gltf\"",
+    "mode = \"x\"",
 ];
 
 #[derive(Debug, Clone)]
