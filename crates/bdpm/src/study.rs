@@ -680,9 +680,11 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
         settings.seed,
         pool.current_num_threads()
     );
+    let command: Vec<String> = std::env::args().collect();
     let header = format!(
-        "{header}\n\nLoad average (1, 5, 15 min) {load_before} before the modes ran, {} after: \
+        "{header}\n\nCommand: `{}`\n\nLoad average (1, 5, 15 min) {load_before} before the modes ran, {} after: \
          wall times depend on what else the machine runs.",
+        command.join(" "),
         load_average()
     );
     let md = markdown(&header, &refs, &runs, &baseline, &args.clock, &all_files);
