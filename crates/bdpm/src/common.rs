@@ -45,6 +45,10 @@ pub(crate) struct Overrides {
     /// Master seed of all random streams.
     #[arg(long)]
     pub(crate) seed: Option<u64>,
+    /// Send all camera samples of a pixel through its centre (the layout the preprint's noise
+    /// model assumes) instead of jittering them over the pixel.
+    #[arg(long)]
+    pub(crate) no_jitter: bool,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub(crate) threads: Option<usize>,
@@ -109,6 +113,9 @@ pub(crate) fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> C
             ));
         }
         settings.radius = Some(r);
+    }
+    if o.no_jitter {
+        settings.pixel_jitter = false;
     }
     if let Some(s) = o.seed {
         settings.seed = s;

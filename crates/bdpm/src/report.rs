@@ -70,6 +70,7 @@ struct SettingsOut {
     cache_bins: u32,
     pixel_table_rays: u32,
     clamp_weights: bool,
+    pixel_jitter: bool,
 }
 
 #[derive(Serialize)]
@@ -150,6 +151,7 @@ fn settings_out(s: &RenderSettings, radius: f32) -> SettingsOut {
         cache_bins: s.cache_bins,
         pixel_table_rays: s.pixel_table_rays,
         clamp_weights: s.clamp_weights,
+        pixel_jitter: s.pixel_jitter,
     }
 }
 

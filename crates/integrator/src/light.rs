@@ -11,7 +11,7 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::render::{PassOutput, accumulate};
-use crate::settings::RenderSettings;
+use crate::settings::{RenderSettings, pixel_offset};
 
 /// Renders one pass of the `light` reference.
 pub(crate) fn render_light_pass(
@@ -39,7 +39,8 @@ pub(crate) fn render_light_pass(
                         Domain::Camera,
                         [pass as u64, pixel, k as u64],
                     );
-                    let [jx, jy] = rng.uniform2();
+                    // The numbers are drawn either way, so the streams do not depend on the setting.
+                    let [jx, jy] = pixel_offset(rng.uniform2(), settings.pixel_jitter);
                     let dir = cam.ray_direction(x as f32 + jx, y as f32 + jy);
                     let l = match scene.geometry.intersect(cam.position, dir, f32::INFINITY) {
                         Some(hit) => scene.direct(&scene.shade(&hit, -dir), -dir),

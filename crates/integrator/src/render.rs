@@ -12,7 +12,7 @@ use bdpm_photon::{PhotonMap, TraceOptions};
 
 use crate::bdpm::{Mix, Techniques, WeightStats, scene_default_radius};
 use crate::path::trace_path;
-use crate::settings::{Mode, RenderSettings};
+use crate::settings::{Mode, RenderSettings, pixel_offset};
 use crate::table::{self, PixelTable};
 
 /// Radiance-cache cells per largest scene extent: cells of ~9 cm in the 2.8 m Cornell box,
@@ -279,7 +279,8 @@ impl Renderer<'_> {
                 let mut tsum = Techniques::default();
                 for k in 0..s.spp {
                     let mut rng = Rng::new(s.seed, Domain::Camera, [pass as u64, pixel, k as u64]);
-                    let [jx, jy] = rng.uniform2();
+                    // The numbers are drawn either way, so the streams do not depend on the setting.
+                    let [jx, jy] = pixel_offset(rng.uniform2(), s.pixel_jitter);
                     let terms = table.map(|t| t.get(x as u32, y as u32));
                     let t = mix.sample(
                         &map,
@@ -411,7 +412,8 @@ pub fn render_path_pass(
                         Domain::Camera,
                         [pass as u64, pixel, s as u64],
                     );
-                    let [jx, jy] = rng.uniform2();
+                    // The numbers are drawn either way, so the streams do not depend on the setting.
+                    let [jx, jy] = pixel_offset(rng.uniform2(), settings.pixel_jitter);
                     let dir = cam.ray_direction(x as f32 + jx, y as f32 + jy);
                     let l = trace_path(scene, cam.position, dir, &mut rng, settings.roulette_depth);
                     accumulate(&mut sum, l, &mut row_dropped);

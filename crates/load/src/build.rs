@@ -540,6 +540,7 @@ fn render_settings(
             u32::MAX,
         )?,
         clamp_weights: r.clamp_weights.unwrap_or(d.clamp_weights),
+        pixel_jitter: r.pixel_jitter.unwrap_or(d.pixel_jitter),
         roulette_depth: r.roulette_depth.unwrap_or(d.roulette_depth),
     };
     if let Some(out) = &r.output

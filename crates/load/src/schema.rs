@@ -43,6 +43,7 @@ pub(crate) struct RenderDef {
     pub(crate) cache_bins: Option<u32>,
     pub(crate) pixel_table_rays: Option<u32>,
     pub(crate) clamp_weights: Option<bool>,
+    pub(crate) pixel_jitter: Option<bool>,
     pub(crate) roulette_depth: Option<u32>,
 }
 

@@ -68,7 +68,7 @@ fn cornell_lambert_matches_appendix_a() {
         (r.width, r.height, r.passes, r.photons, r.spp, r.seed),
         (256, 256, 10, 1_000_000, 30, 1)
     );
-    assert_eq!(r.mode.name(), "path");
+    assert_eq!(r.mode.name(), "balance");
     assert_eq!(
         s.output.as_deref(),
         Some(Path::new("out/cornell-lambert.exr"))
