@@ -78,17 +78,7 @@ fn check_against(mode: &str, film: &Film, reference: &Film) -> Result<(), String
 fn every_mode_agrees_with_the_light_reference() {
     let (scene, _) = scene();
     let mut failures = Vec::new();
-    for mode in [
-        "path",
-        "bdd0",
-        "bdd1",
-        "threshold",
-        "algebraic-direct",
-        "algebraic",
-        "optimal",
-        "balance",
-        "power",
-    ] {
+    for mode in std::iter::once("path").chain(bdpm_mis::Heuristic::ALL_NAMES.iter().copied()) {
         let film = render(scene, &settings_for(mode));
         if let Err(e) = check(mode, &film) {
             failures.push(e);

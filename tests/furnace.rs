@@ -32,16 +32,7 @@ fn every_bdpm_mode_matches_the_analytic_furnace() {
     let furnace = Furnace::of(&scene);
     let exact = furnace.image(&scene, EXACT_GRID);
     let mut failures = Vec::new();
-    for mode in [
-        "bdd0",
-        "bdd1",
-        "threshold",
-        "algebraic-direct",
-        "algebraic",
-        "optimal",
-        "balance",
-        "power",
-    ] {
+    for mode in bdpm_mis::Heuristic::ALL_NAMES.iter().copied() {
         let mut s = with_mode(&settings, mode, 24, 8, 40_000);
         s.radius = Some(0.05);
         // A threshold radius that splits the sphere, so both branches of eq. 11 are exercised.

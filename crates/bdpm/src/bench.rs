@@ -17,16 +17,7 @@ use crate::common::{CliResult, Overrides, parse_resolution, prepare, thread_pool
 use crate::output::write_atomic;
 
 /// The modes a benchmark times by default: every BDPM weight mode.
-const DEFAULT_MODES: &[&str] = &[
-    "bdd0",
-    "bdd1",
-    "threshold",
-    "algebraic-direct",
-    "algebraic",
-    "optimal",
-    "balance",
-    "power",
-];
+const DEFAULT_MODES: &[&str] = bdpm_mis::Heuristic::ALL_NAMES;
 
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]

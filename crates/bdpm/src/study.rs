@@ -24,16 +24,7 @@ mod plot;
 mod reference;
 
 /// The modes a study compares by default: every BDPM weight mode.
-const DEFAULT_MODES: &[&str] = &[
-    "bdd0",
-    "bdd1",
-    "threshold",
-    "algebraic-direct",
-    "algebraic",
-    "optimal",
-    "balance",
-    "power",
-];
+const DEFAULT_MODES: &[&str] = bdpm_mis::Heuristic::ALL_NAMES;
 
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]

@@ -120,6 +120,17 @@ pub(crate) fn direct_masked(scene: &Scene, v: &WeightVertex, wo: Vec3) -> Vec3 {
 }
 
 impl WeightVertex {
+    /// The vertex a camera ray found, with its light visibility (one shadow ray per light).
+    pub(crate) fn from_shading(scene: &Scene, sh: &Shading) -> WeightVertex {
+        WeightVertex {
+            p: sh.p,
+            n: sh.ng,
+            material: sh.material,
+            prim: sh.prim,
+            lights: light_mask(scene, sh),
+        }
+    }
+
     pub(crate) fn from_photon_vertex(pv: &PathVertex) -> WeightVertex {
         WeightVertex {
             p: pv.position,
@@ -294,14 +305,8 @@ impl<'a> Mix<'a> {
         let wo1 = -v;
         let sh1 = scene.shade(&hit1, wo1);
         let e = s.weight;
-        let lights = light_mask(scene, &sh1);
-        let x1 = WeightVertex {
-            p: sh1.p,
-            n: sh1.ng,
-            material: sh1.material,
-            prim: sh1.prim,
-            lights,
-        };
+        let x1 = WeightVertex::from_shading(scene, &sh1);
+        let lights = x1.lights;
         let pair = self.pair(x0, &x1, v, s.f);
         let dist2 = (x1.p - x0.sh.p).length_squared();
 

@@ -4,7 +4,7 @@ use bdpm_geometry::{Domain, Rng};
 use bdpm_mis::{PixelTerms, w1_partial};
 use rayon::prelude::*;
 
-use crate::bdpm::{FirstVertex, Mix, WeightVertex, light_mask};
+use crate::bdpm::{FirstVertex, Mix, WeightVertex};
 
 /// A, B per pixel (luminances), row-major; frozen before rendering.
 #[derive(Clone, Debug)]
@@ -58,13 +58,7 @@ pub(crate) fn pixel_terms(
             continue;
         };
         let sh1 = scene.shade(&hit1, -v);
-        let x1 = WeightVertex {
-            p: sh1.p,
-            n: sh1.ng,
-            material: sh1.material,
-            prim: sh1.prim,
-            lights: light_mask(scene, &sh1),
-        };
+        let x1 = WeightVertex::from_shading(scene, &sh1);
         let pair = mix.pair(x0, &x1, v, s.f);
         let l = pair.direct + pair.indirect;
         let w1 = w1_partial(&mix.budget, pair.f_tilde, l, pair.b);
