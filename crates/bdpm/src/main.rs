@@ -5,6 +5,7 @@
 mod bench;
 mod colormap;
 mod common;
+mod compare;
 mod font;
 mod output;
 mod render;
@@ -39,6 +40,9 @@ enum Command {
     Study(study::StudyArgs),
     /// Throughput benchmarks: photons/s and camera samples/s per mode, 1 and N threads.
     Bench(bench::BenchArgs),
+    /// Compare two renders: bit-identical mean radiance or not, image means, and the fraction
+    /// of pixels within k combined standard errors.
+    Compare(compare::CompareArgs),
 }
 
 fn main() -> ExitCode {
@@ -49,6 +53,7 @@ fn main() -> ExitCode {
         Command::Weights(args) => weights::run(args).map(success),
         Command::Study(args) => study::run(args).map(success),
         Command::Bench(args) => bench::run(args).map(success),
+        Command::Compare(args) => compare::run(args),
     };
     match result {
         Ok(code) => code,

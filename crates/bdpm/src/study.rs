@@ -21,7 +21,7 @@ use crate::output::{write_atomic, write_png};
 #[path = "plot.rs"]
 mod plot;
 #[path = "study_reference.rs"]
-mod reference;
+pub(crate) mod reference;
 
 /// The modes a study compares by default: every BDPM weight mode.
 const DEFAULT_MODES: &[&str] = bdpm_mis::Heuristic::ALL_NAMES;
