@@ -26,6 +26,15 @@ pub struct BdfSample {
     pub weight: Vec3,
 }
 
+/// The per-outgoing-direction data of a [`Bdf`] (see [`Bdf::outgoing`]): the direction and the
+/// lobe's directional albedo µ_G(wo) (dimensionless; 0 without a lobe or below the surface).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Outgoing {
+    /// The outgoing direction, local frame (normal = +z), unit.
+    pub wo: Vec3,
+    lobe_albedo: f32,
+}
+
 /// A surface's scattering model: `f = kd/π + g_r·G` with G the Gaussian lobe of
 /// method.md §9 (width Δ, normalised so that `∫ G cos ≤ 1` for every direction).
 ///
@@ -121,16 +130,34 @@ impl Bdf {
         }
     }
 
+    /// What [`Self::eval`], [`Self::pdf`], [`Self::sample`] and [`Self::albedo`] share for one
+    /// outgoing direction `wo` (the lobe's directional albedo, a table lookup), computed once.
+    /// A vertex that evaluates several directions against one `wo` passes this to the `_at`
+    /// methods instead of recomputing it; the results are bit-identical to the plain methods.
+    pub fn outgoing(&self, wo: Vec3) -> Outgoing {
+        let lobe_albedo = match &self.lobe {
+            Some(lobe) if above(wo) => lobe.albedo(wo.z),
+            _ => 0.0,
+        };
+        Outgoing { wo, lobe_albedo }
+    }
+
     /// Solid-angle pdf (sr⁻¹) with which [`Self::sample`] returns `wi` given `wo`.
     ///
     /// This is the mixture `P_d·cos θᵢ/π + P_G·p_G(wi)`. The lobe density is not
     /// renormalised for the part of the lobe below the horizon (those samples fail), so
     /// the pdf integrates to at most 1 over the hemisphere.
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        self.pdf_at(&self.outgoing(wo), wi)
+    }
+
+    /// [`Self::pdf`] for the outgoing direction prepared by [`Self::outgoing`].
+    pub fn pdf_at(&self, o: &Outgoing, wi: Vec3) -> f32 {
+        let wo = o.wo;
         if !(above(wo) && above(wi)) {
             return 0.0;
         }
-        let Some(p_lobe) = self.lobe_probability(wo) else {
+        let Some(p_lobe) = self.lobe_probability(o) else {
             return 0.0;
         };
         let diffuse = (1.0 - p_lobe) * wi.z * FRAC_1_PI;
@@ -149,10 +176,16 @@ impl Bdf {
     /// grazing), when `wo` is not above the surface, or when kd and gr are both zero:
     /// such a sample contributes zero, which keeps the estimator unbiased.
     pub fn sample(&self, wo: Vec3, u: [f32; 3]) -> Option<BdfSample> {
+        self.sample_at(&self.outgoing(wo), u)
+    }
+
+    /// [`Self::sample`] for the outgoing direction prepared by [`Self::outgoing`].
+    pub fn sample_at(&self, o: &Outgoing, u: [f32; 3]) -> Option<BdfSample> {
+        let wo = o.wo;
         if !above(wo) {
             return None;
         }
-        let p_lobe = self.lobe_probability(wo)?;
+        let p_lobe = self.lobe_probability(o)?;
         let wi = match &self.lobe {
             Some(lobe) if u[0] < p_lobe => lobe.sample(wo, u[1], u[2]),
             _ => cosine_hemisphere(u[1], u[2]),
@@ -161,7 +194,7 @@ impl Bdf {
             return None;
         }
         // pdf and f come from the same functions callers use, so they agree bit for bit.
-        let pdf = self.pdf(wo, wi);
+        let pdf = self.pdf_at(o, wi);
         if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
         }
@@ -177,19 +210,24 @@ impl Bdf {
     /// Directional albedo µ(wo) = ∫ f(wo, wi) cos θᵢ dwi (dimensionless, ≤ 1 per channel):
     /// kd + gr·µ_G(wo), µ_G interpolated from the lobe's table. Zero below the surface.
     pub fn albedo(&self, wo: Vec3) -> Vec3 {
-        if !above(wo) {
+        self.albedo_at(&self.outgoing(wo))
+    }
+
+    /// [`Self::albedo`] for the outgoing direction prepared by [`Self::outgoing`].
+    pub fn albedo_at(&self, o: &Outgoing) -> Vec3 {
+        if !above(o.wo) {
             return Vec3::ZERO;
         }
         match &self.lobe {
-            Some(lobe) => self.kd + self.gr * lobe.albedo(wo.z),
+            Some(_) => self.kd + self.gr * o.lobe_albedo,
             None => self.kd,
         }
     }
 
-    /// Probability of sampling the lobe at `wo`, or `None` if nothing is reflected.
-    fn lobe_probability(&self, wo: Vec3) -> Option<f32> {
+    /// Probability of sampling the lobe at `o.wo`, or `None` if nothing is reflected.
+    fn lobe_probability(&self, o: &Outgoing) -> Option<f32> {
         let lobe = match &self.lobe {
-            Some(lobe) => self.luminance_gr * lobe.albedo(wo.z),
+            Some(_) => self.luminance_gr * o.lobe_albedo,
             None => 0.0,
         };
         let total = self.luminance_kd + lobe;

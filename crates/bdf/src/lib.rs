@@ -44,7 +44,7 @@ mod quadrature;
 
 use glam::Vec3;
 
-pub use bdf::{Bdf, BdfSample};
+pub use bdf::{Bdf, BdfSample, Outgoing};
 pub use error::BdfError;
 pub use lobe::{LOBE_EPSILON, LOBE_WIDTH_MAX, LOBE_WIDTH_MIN};
 

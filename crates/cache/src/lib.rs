@@ -73,8 +73,11 @@ pub struct RadianceCache {
     tri: Vec<([Vec3; 3], Vec3)>,
     side_bins: usize,
     grid: u32,
-    ld: Vec<f32>,
-    b: Vec<f32>,
+    /// Bin values, W·m⁻²·sr⁻¹ (L_d) and W·m⁻²·sr⁻² (b): `[L_d, b]` pairs per bin, interleaved
+    /// so that a lookup touches one cache line, or L_d alone when b is not stored (`stride` 1).
+    values: Vec<f32>,
+    /// Floats per bin in `values`: 2 with b, 1 without.
+    stride: usize,
     /// Photon arrivals per (cell, side).
     arrivals: Vec<u32>,
     stats: CacheStats,
@@ -204,12 +207,8 @@ impl RadianceCache {
             tri,
             side_bins,
             grid,
-            ld: vec![0.0; slots],
-            b: if lambert {
-                Vec::new()
-            } else {
-                vec![0.0; slots]
-            },
+            values: vec![0.0; slots * if lambert { 1 } else { 2 }],
+            stride: if lambert { 1 } else { 2 },
             arrivals: vec![0; cells as usize * 2],
             stats: CacheStats {
                 cells: cells as usize,
@@ -254,8 +253,9 @@ impl RadianceCache {
             let e_s = luminance(arrival.power * sc.weight);
             out.push((slot, e_s, e_s * luminance(sc.f)));
         });
-        let mut ld = vec![0f64; self.ld.len()];
-        let mut b = vec![0f64; self.b.len()];
+        let slots = self.values.len() / self.stride;
+        let mut ld = vec![0f64; slots];
+        let mut b = vec![0f64; if self.stride == 2 { slots } else { 0 }];
         for &(slot, l, bb) in &records {
             let slot = slot as usize;
             ld[slot] += l as f64;
@@ -278,9 +278,10 @@ impl RadianceCache {
                 for side in 0..2 {
                     let base = (cell * 2 + side) * self.side_bins;
                     for (k, omega_cos) in (base..base + self.side_bins).zip(&projected) {
-                        self.ld[k] = (ld[k] / (cell_area * omega_cos)) as f32;
+                        self.values[k * self.stride] = (ld[k] / (cell_area * omega_cos)) as f32;
                         if !b.is_empty() {
-                            self.b[k] = (b[k] / (cell_area * omega_cos)) as f32;
+                            self.values[k * self.stride + 1] =
+                                (b[k] / (cell_area * omega_cos)) as f32;
                         }
                     }
                 }
@@ -288,7 +289,7 @@ impl RadianceCache {
         }
         self.stats.filled_fraction = self.arrivals.iter().filter(|a| **a > 0).count() as f64
             / self.arrivals.len().max(1) as f64;
-        self.stats.bytes = ((self.ld.len() + self.b.len()) * 4
+        self.stats.bytes = (self.values.len() * 4
             + self.arrivals.len() * 4
             + self.first_cell.len() * 4
             + self.subdivision.len() * 2
@@ -355,7 +356,12 @@ impl RadianceCache {
         };
         let local = Frame::from_normal(n).to_local(wo);
         let slot = cell_side * self.side_bins + self.bin(local);
-        (self.ld[slot], self.b.get(slot).copied().unwrap_or(0.0))
+        let k = slot * self.stride;
+        if self.stride == 2 {
+            (self.values[k], self.values[k + 1])
+        } else {
+            (self.values[k], 0.0)
+        }
     }
 
     /// Every (cell, side) with its area, arrivals and bin-averaged L_d (for checks and tools).
@@ -367,13 +373,14 @@ impl RadianceCache {
             for cell in first..first + n as usize * n as usize {
                 for side in 0..2 {
                     let cs = cell * 2 + side;
-                    let bins = &self.ld[cs * self.side_bins..(cs + 1) * self.side_bins];
+                    let bins = (cs * self.side_bins..(cs + 1) * self.side_bins)
+                        .map(|k| self.values[k * self.stride]);
                     out.push(CellSummary {
                         prim: prim as u32,
                         side: side as u8,
                         area,
                         arrivals: self.arrivals[cs],
-                        mean_ld: bins.iter().map(|v| *v as f64).sum::<f64>()
+                        mean_ld: bins.map(f64::from).sum::<f64>()
                             / self.side_bins as f64,
                     });
                 }

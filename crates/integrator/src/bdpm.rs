@@ -2,12 +2,12 @@
 //! by 1 − w₁(x₀, y_p), and the camera's second vertex x₁ weighted by w₁(x₀, x₁).
 use std::f32::consts::PI;
 
-use bdpm_bdf::{Bdf, luminance};
+use bdpm_bdf::{Bdf, Outgoing, luminance};
 use bdpm_cache::RadianceCache;
 use bdpm_geometry::Hit;
 use bdpm_geometry::{Frame, Rng};
 use bdpm_mis::{Budget, Heuristic, Needs, Pair, PathKind, PixelTerms};
-use bdpm_photon::{PathVertex, PhotonMap, survival_probability};
+use bdpm_photon::{PathVertex, PhotonMap, survival_at};
 use bdpm_scene::{Scene, Shading};
 use glam::{DVec3, Vec3};
 
@@ -146,7 +146,8 @@ impl WeightVertex {
 pub(crate) struct FirstVertex<'s> {
     pub(crate) sh: Shading,
     pub(crate) u: Vec3,
-    pub(crate) u_local: Vec3,
+    /// The BDF's data for outgoing direction u, shared by every sample and pdf at x₀.
+    pub(crate) out: Outgoing,
     pub(crate) bdf: &'s Bdf,
     /// Luminance of the directional albedo µ(u; x₀).
     pub(crate) albedo: f32,
@@ -171,12 +172,13 @@ impl<'a> Mix<'a> {
             return None;
         }
         let bdf = self.scene.bdf(sh.material);
+        let out = bdf.outgoing(u_local);
         Some(FirstVertex {
             sh,
             u,
-            u_local,
+            out,
             bdf,
-            albedo: luminance(bdf.albedo(u_local)),
+            albedo: luminance(bdf.albedo_at(&out)),
         })
     }
 
@@ -222,12 +224,12 @@ impl<'a> Mix<'a> {
     ) -> (f64, f64) {
         let cos1 = x1.n.dot(v).abs();
         let cos0 = x0.sh.ng.dot(v).abs();
-        let p_c = x0.bdf.pdf(x0.u_local, x0.sh.frame.to_local(v)) * cos1 / dist2;
+        let p_c = x0.bdf.pdf_at(&x0.out, x0.sh.frame.to_local(v)) * cos1 / dist2;
         let frame1 = Frame::from_normal(x1.n);
         let bdf1 = self.scene.bdf(x1.material);
-        let in_l = frame1.to_local(incoming);
-        let q = survival_probability(bdf1, in_l);
-        let p_l = q * bdf1.pdf(in_l, frame1.to_local(-v)) * cos0 / dist2;
+        let in_l = bdf1.outgoing(frame1.to_local(incoming));
+        let q = survival_at(bdf1, &in_l);
+        let p_l = q * bdf1.pdf_at(&in_l, frame1.to_local(-v)) * cos0 / dist2;
         (p_c as f64, p_l as f64)
     }
 
@@ -294,7 +296,7 @@ impl<'a> Mix<'a> {
         t: &mut Techniques,
     ) -> Option<f64> {
         let scene = self.scene;
-        let s = x0.bdf.sample(x0.u_local, rng.uniform3())?;
+        let s = x0.bdf.sample_at(&x0.out, rng.uniform3())?;
         let v = x0.sh.frame.to_world(s.wi);
         if x0.sh.ng.dot(v) <= 0.0 {
             return None;

@@ -44,7 +44,7 @@ pub(crate) fn pixel_terms(
     let (mut a, mut b) = (0.0f64, 0.0f64);
     for j in 0..rays {
         let mut rng = Rng::new(seed, Domain::PixelTable, [key, j as u64, 0]);
-        let Some(s) = x0.bdf.sample(x0.u_local, rng.uniform3()) else {
+        let Some(s) = x0.bdf.sample_at(&x0.out, rng.uniform3()) else {
             continue;
         };
         let v = x0.sh.frame.to_world(s.wi);

@@ -76,5 +76,5 @@ mod trace;
 pub use map::{Photon, PhotonMap};
 pub use trace::{
     Emission, MAX_SURVIVAL, PathVertex, PhotonArrival, Scatter, TraceOptions, emit,
-    for_each_arrival, survival_probability, trace_photons,
+    for_each_arrival, survival_at, survival_probability, trace_photons,
 };

@@ -35,6 +35,10 @@ const _: () = assert!(size_of::<Photon>() <= 48);
 pub struct PhotonMap {
     /// Stored photons (depth ≥ 1 arrivals), sorted by grid bucket.
     pub photons: Vec<Photon>,
+    /// `photons[i].position` for every i, packed densely: the range test of a gather reads
+    /// only these 12 bytes per candidate, so the candidates of a query share fewer cache lines
+    /// and the array stays in the last-level cache for a million photons.
+    positions: Vec<Vec3>,
     /// Every light-path vertex of the pass (depth 0 included), in path order.
     pub vertices: Vec<PathVertex>,
     grid: HashGrid,
@@ -106,9 +110,11 @@ impl PhotonMap {
         );
         let positions: Vec<Vec3> = photons.iter().map(|p| p.position).collect();
         let (grid, order) = HashGrid::build(&positions, radius);
-        let photons = order.iter().map(|&i| photons[i as usize]).collect();
+        let photons: Vec<Photon> = order.iter().map(|&i| photons[i as usize]).collect();
+        let positions = photons.iter().map(|p| p.position).collect();
         PhotonMap {
             photons,
+            positions,
             vertices,
             grid,
             radius,
@@ -133,8 +139,9 @@ impl PhotonMap {
     pub fn for_each_near(&self, x: Vec3, mut f: impl FnMut(&Photon)) {
         let r2 = self.radius * self.radius;
         self.grid.for_each_bucket(x, self.radius, |range| {
-            for p in &self.photons[range] {
-                if (p.position - x).length_squared() <= r2 {
+            let photons = &self.photons[range.clone()];
+            for (position, p) in self.positions[range].iter().zip(photons) {
+                if (*position - x).length_squared() <= r2 {
                     f(p);
                 }
             }
@@ -151,6 +158,7 @@ impl PhotonMap {
     pub fn memory_bytes(&self) -> u64 {
         (size_of::<Self>()
             + self.photons.capacity() * size_of::<Photon>()
+            + self.positions.capacity() * size_of::<Vec3>()
             + self.vertices.capacity() * size_of::<PathVertex>()) as u64
             + self.grid.memory_bytes()
     }

@@ -1,6 +1,6 @@
 //! Emission from point lights and the random walk of photons (method.md §1).
 
-use bdpm_bdf::Bdf;
+use bdpm_bdf::{Bdf, Outgoing};
 use bdpm_geometry::sampling::uniform_sphere;
 use bdpm_geometry::{Domain, Rng};
 use bdpm_scene::{Scene, Shading};
@@ -119,7 +119,12 @@ pub fn emit(scene: &Scene, u_light: f32, u_dir: [f32; 2], photons: u64) -> Optio
 /// power, so the photon density p_L(x₁→x₀) that the balance heuristic needs (method.md §8) is
 /// `q · pdf` and can be recomputed from a stored vertex. Zero below the surface.
 pub fn survival_probability(bdf: &Bdf, incoming_local: Vec3) -> f32 {
-    bdf.albedo(incoming_local)
+    survival_at(bdf, &bdf.outgoing(incoming_local))
+}
+
+/// [`survival_probability`] for an arrival direction prepared by [`Bdf::outgoing`].
+pub fn survival_at(bdf: &Bdf, incoming: &Outgoing) -> f32 {
+    bdf.albedo_at(incoming)
         .max_element()
         .clamp(0.0, MAX_SURVIVAL)
 }
@@ -258,8 +263,8 @@ fn trace_one(
         let incoming = -dir;
         let sh = scene.shade(&hit, incoming);
         let bdf = scene.bdf(sh.material);
-        let in_local = sh.frame.to_local(incoming);
-        let survival = survival_probability(bdf, in_local);
+        let in_local = bdf.outgoing(sh.frame.to_local(incoming));
+        let survival = survival_at(bdf, &in_local);
         let vertex = PathVertex {
             position: sh.p,
             normal: sh.ng,
@@ -279,7 +284,7 @@ fn trace_one(
         // view of one arrival never shifts the stream of another.
         let u_rr = rng.uniform();
         let u_bdf = rng.uniform3();
-        let scatter = bdf.sample(in_local, u_bdf).and_then(|s| {
+        let scatter = bdf.sample_at(&in_local, u_bdf).and_then(|s| {
             let direction = sh.frame.to_world(s.wi);
             // The shading normal may disagree with the geometric one; a direction that would
             // pass through the surface carries no light (no transmission in our models).

@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Renders every mode on both Cornell scenes at small settings, or compares two such sets bit
+# for bit. Used to show that a performance change kept the image bits (docs/performance.md).
+#   scripts/bit-check.sh render DIR          # with the current build (cargo build --release)
+#   scripts/bit-check.sh compare DIR_A DIR_B # exits non-zero if any image differs
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bin=target/release/bdpm
+modes="path light bdd0 bdd1 threshold algebraic-direct algebraic optimal balance power"
+case "${1:-}" in
+  render)
+    dir=$2; mkdir -p "$dir"
+    for m in $modes; do
+      $bin render scenes/cornell-lambert.toml --mode "$m" --resolution 64x64 --passes 2 \
+        --photons 200000 --spp 4 -o "$dir/lambert-$m.exr" --quiet > /dev/null
+      $bin render scenes/cornell-glossy.toml --mode "$m" --resolution 64x64 --passes 2 \
+        --photons 100000 --spp 4 -o "$dir/glossy-$m.exr" --quiet > /dev/null
+    done
+    echo "rendered $(ls "$dir"/*.exr | wc -l) images into $dir" ;;
+  compare)
+    fail=0
+    for f in "$2"/*.exr; do
+      g="$3/$(basename "$f")"
+      if out=$($bin compare "$f" "$g" --require-identical); then
+        echo "same bits: $(basename "$f")"
+      else
+        echo "DIFFERENT: $(basename "$f"): $out"; fail=1
+      fi
+    done
+    exit $fail ;;
+  *) echo "usage: $0 render DIR | compare DIR_A DIR_B" >&2; exit 2 ;;
+esac
