@@ -28,6 +28,7 @@
 
 mod frame;
 mod mesh;
+mod prefetch;
 mod rng;
 pub mod sampling;
 
@@ -35,4 +36,5 @@ pub use frame::Frame;
 pub use mesh::{
     Geometry, GeometryError, Hit, MAX_COORDINATE, SurfaceSample, TriangleMesh, spawn_offset,
 };
+pub use prefetch::prefetch;
 pub use rng::{Domain, Rng};

@@ -272,6 +272,10 @@ impl<'a> Mix<'a> {
         let Some(x0) = self.first_vertex(&hit0, u) else {
             return t;
         };
+        if self.needs.photons_at_x0 {
+            // The gather at x₀ comes after the whole x₁ branch, which hides this fetch.
+            map.prefetch(x0.sh.p);
+        }
 
         // The camera's x₁ is sampled first: the test-only variant needs its weight at x₀.
         let mut camera_w1 = None;
@@ -304,6 +308,8 @@ impl<'a> Mix<'a> {
         let hit1 = scene
             .geometry
             .intersect(scene.spawn(&x0.sh, v), v, f32::INFINITY)?;
+        // Overlaps the grid's miss with the shadow ray and the weight's inputs below.
+        map.prefetch(hit1.p);
         let wo1 = -v;
         let sh1 = scene.shade(&hit1, wo1);
         let e = s.weight;

@@ -148,6 +148,14 @@ impl PhotonMap {
         });
     }
 
+    /// Hints the CPU to fetch what [`Self::for_each_near`] at `x` will read first (the grid's
+    /// bucket bounds). Call it as soon as a query point is known and do other work before the
+    /// query; it never changes a result.
+    #[inline]
+    pub fn prefetch(&self, x: Vec3) {
+        self.grid.prefetch(x, self.radius);
+    }
+
     /// The path vertex with index `i` (a [`Photon::prev`] or [`Photon::vertex`]).
     #[inline]
     pub fn vertex(&self, i: u32) -> &PathVertex {
