@@ -380,8 +380,7 @@ impl RadianceCache {
                         side: side as u8,
                         area,
                         arrivals: self.arrivals[cs],
-                        mean_ld: bins.map(f64::from).sum::<f64>()
-                            / self.side_bins as f64,
+                        mean_ld: bins.map(f64::from).sum::<f64>() / self.side_bins as f64,
                     });
                 }
             }

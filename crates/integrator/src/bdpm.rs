@@ -7,7 +7,7 @@ use bdpm_cache::RadianceCache;
 use bdpm_geometry::Hit;
 use bdpm_geometry::{Frame, Rng};
 use bdpm_mis::{Budget, Heuristic, Needs, Pair, PathKind, PixelTerms};
-use bdpm_photon::{PathVertex, PhotonMap, survival_at};
+use bdpm_photon::{PathVertex, PhotonMap, PhotonQuery, survival_at};
 use bdpm_scene::{Scene, Shading};
 use glam::{DVec3, Vec3};
 
@@ -66,6 +66,46 @@ pub(crate) struct WeightVertex {
     pub(crate) prim: u32,
     /// Bit l set iff light l is visible from the vertex.
     pub(crate) lights: u32,
+}
+
+/// Camera samples that [`Mix::sample_batch`] takes together: enough for each sample's
+/// photon-map fetches to be hidden behind the others' work, few enough to stay in registers
+/// and L1.
+pub(crate) const BATCH: usize = 8;
+
+/// One camera sample to take: its image point (pixels, x right and y down from the top-left
+/// corner), its random stream, and where its value goes.
+#[derive(Clone, Debug)]
+pub(crate) struct Job {
+    pub(crate) x: f32,
+    pub(crate) y: f32,
+    pub(crate) rng: Rng,
+    pub(crate) out: Techniques,
+}
+
+/// A sample between its rays and its gathers.
+struct Pending<'s> {
+    x0: FirstVertex<'s>,
+    second: Option<Second>,
+    /// The photon query at x₀ (BDD=0 and the mixes).
+    query: Option<PhotonQuery>,
+}
+
+/// The x₁ part of a sample before its gather.
+struct Second {
+    sh1: Shading,
+    x1: WeightVertex,
+    /// Unit direction x₀ → x₁.
+    v: Vec3,
+    dist2: f32,
+    pair: Pair,
+    /// The weight w₁ when it is the same for every path through (x₀, x₁).
+    w_const: f64,
+    /// E = f·cos/pdf at x₀.
+    weight: Vec3,
+    direct_raw: Vec3,
+    direct_weighted: Vec3,
+    query: PhotonQuery,
 }
 
 /// Per-render constants of the mix.
@@ -250,55 +290,84 @@ impl<'a> Mix<'a> {
         w.w1
     }
 
-    /// One camera sample through image point (x, y): the value split by technique.
-    pub(crate) fn sample(
+    /// Camera samples through the image points of `jobs`, each with its own random stream:
+    /// every job's `out` receives the value split by technique. At most [`BATCH`] jobs.
+    ///
+    /// The samples are taken together in stages so that the photon-map reads of one sample
+    /// are fetched while the others compute: first every sample's rays, shading and weights
+    /// up to its gathers (starting the gathers' queries), then two rounds that move every
+    /// query on, then the gathers. Each sample's arithmetic is exactly that of a sample taken
+    /// alone, so the results do not depend on the batch.
+    pub(crate) fn sample_batch(
         &self,
         map: &PhotonMap,
-        x: f32,
-        y: f32,
-        rng: &mut Rng,
+        jobs: &mut [Job],
         pixel: Option<&PixelTerms>,
         stats: &mut WeightStats,
-    ) -> Techniques {
-        let scene = self.scene;
-        let cam = &scene.camera;
-        let mut t = Techniques::default();
-        let dir = cam.ray_direction(x, y);
-        let Some(hit0) = scene.geometry.intersect(cam.position, dir, f32::INFINITY) else {
-            return t;
-        };
-        let u = -dir;
-        t.direct = scene.direct(&scene.shade(&hit0, u), u).as_dvec3();
-        let Some(x0) = self.first_vertex(&hit0, u) else {
-            return t;
-        };
-        if self.needs.photons_at_x0 {
-            // The gather at x₀ comes after the whole x₁ branch, which hides this fetch.
-            map.prefetch(x0.sh.p);
+    ) {
+        assert!(jobs.len() <= BATCH, "at most {BATCH} samples per batch");
+        let mut pending: [Option<Pending<'_>>; BATCH] = Default::default();
+        for (job, slot) in jobs.iter_mut().zip(&mut pending) {
+            job.out = Techniques::default();
+            *slot = self.start_sample(map, job, pixel, stats);
         }
-
-        // The camera's x₁ is sampled first: the test-only variant needs its weight at x₀.
-        let mut camera_w1 = None;
-        if self.needs.second_vertex {
-            camera_w1 = self.second_vertex(&x0, map, rng, pixel, stats, &mut t);
+        for _ in 0..2 {
+            for p in pending.iter_mut().flatten() {
+                if let Some(second) = &mut p.second {
+                    map.advance_query(&mut second.query);
+                }
+                if let Some(q) = &mut p.query {
+                    map.advance_query(q);
+                }
+            }
         }
-        if self.needs.photons_at_x0 {
-            self.merge_at_x0(&x0, map, pixel, camera_w1, stats, &mut t);
+        for (job, slot) in jobs.iter_mut().zip(&mut pending) {
+            let Some(p) = slot.take() else { continue };
+            let camera_w1 = p.second.as_ref().map(|s| s.w_const);
+            if let Some(second) = p.second {
+                self.merge_at_x1(&p.x0, map, second, pixel, stats, &mut job.out);
+            }
+            if let Some(q) = p.query {
+                self.merge_at_x0(&p.x0, map, q, pixel, camera_w1, stats, &mut job.out);
+            }
         }
-        t
     }
 
-    /// BDD=1: sample v at x₀ (never absorbed), find x₁, add E·(L₀(x₁→x₀) + Ph(x₁)) with weights.
-    /// Returns the weight w₁(x₀, x₁ᶜ) of the merge kind (for the test-only variant).
-    fn second_vertex(
+    /// Everything of one sample up to its gathers: the direct light at x₀ goes into
+    /// `job.out`; the rest is returned (None if the sample ends before any gather).
+    fn start_sample<'s>(
+        &'s self,
+        map: &PhotonMap,
+        job: &mut Job,
+        pixel: Option<&PixelTerms>,
+        stats: &mut WeightStats,
+    ) -> Option<Pending<'s>> {
+        let scene = self.scene;
+        let cam = &scene.camera;
+        let dir = cam.ray_direction(job.x, job.y);
+        let hit0 = scene.geometry.intersect(cam.position, dir, f32::INFINITY)?;
+        let u = -dir;
+        job.out.direct = scene.direct(&scene.shade(&hit0, u), u).as_dvec3();
+        let x0 = self.first_vertex(&hit0, u)?;
+        let query = self.needs.photons_at_x0.then(|| map.start_query(x0.sh.p));
+        let second = if self.needs.second_vertex {
+            self.start_second(&x0, map, &mut job.rng, pixel, stats)
+        } else {
+            None
+        };
+        Some(Pending { x0, second, query })
+    }
+
+    /// BDD=1 up to its gather: sample v at x₀ (never absorbed), find x₁, weigh the one-bounce
+    /// paths light→x₁→x₀, and start the photon query at x₁.
+    fn start_second(
         &self,
         x0: &FirstVertex<'_>,
         map: &PhotonMap,
         rng: &mut Rng,
         pixel: Option<&PixelTerms>,
         stats: &mut WeightStats,
-        t: &mut Techniques,
-    ) -> Option<f64> {
+    ) -> Option<Second> {
         let scene = self.scene;
         let s = x0.bdf.sample_at(&x0.out, rng.uniform3())?;
         let v = x0.sh.frame.to_world(s.wi);
@@ -308,11 +377,10 @@ impl<'a> Mix<'a> {
         let hit1 = scene
             .geometry
             .intersect(scene.spawn(&x0.sh, v), v, f32::INFINITY)?;
-        // Overlaps the grid's miss with the shadow ray and the weight's inputs below.
-        map.prefetch(hit1.p);
+        // Started before the shadow ray and the weight's inputs, which hide its first fetch.
+        let query = map.start_query(hit1.p);
         let wo1 = -v;
         let sh1 = scene.shade(&hit1, wo1);
-        let e = s.weight;
         let x1 = WeightVertex::from_shading(scene, &sh1);
         let lights = x1.lights;
         let pair = self.pair(x0, &x1, v, s.f);
@@ -360,11 +428,49 @@ impl<'a> Mix<'a> {
             };
             direct_weighted += c * w as f32;
         }
+        Some(Second {
+            sh1,
+            x1,
+            v,
+            dist2,
+            pair,
+            w_const,
+            weight: s.weight,
+            direct_raw,
+            direct_weighted,
+            query,
+        })
+    }
 
-        // Merge paths …→x₂→x₁→x₀: photons around x₁.
+    /// BDD=1's merge paths …→x₂→x₁→x₀: photons around x₁, weighted by w₁; finishes the x₁
+    /// part of the sample.
+    fn merge_at_x1(
+        &self,
+        x0: &FirstVertex<'_>,
+        map: &PhotonMap,
+        second: Second,
+        pixel: Option<&PixelTerms>,
+        stats: &mut WeightStats,
+        t: &mut Techniques,
+    ) {
+        let scene = self.scene;
+        let Second {
+            sh1,
+            x1,
+            v,
+            dist2,
+            pair,
+            w_const,
+            weight: e,
+            direct_raw,
+            direct_weighted,
+            query,
+        } = second;
+        let wo1 = -v;
+        let per_light = self.needs.densities;
         let mut ph_raw = Vec3::ZERO;
         let mut ph_weighted = Vec3::ZERO;
-        map.for_each_near(x1.p, |ph| {
+        map.finish_query(query, |ph| {
             let prev = map.vertex(ph.prev);
             let wp = (prev.position - ph.position).normalize_or_zero();
             let f = scene.eval(&sh1, wo1, wp);
@@ -390,14 +496,15 @@ impl<'a> Mix<'a> {
         let k = self.inv_area;
         t.x1_raw = (e * (direct_raw + ph_raw * k)).as_dvec3();
         t.x1_weighted = (e * (direct_weighted + ph_weighted * k)).as_dvec3();
-        Some(w_const)
     }
 
     /// BDD=0: photons around x₀, each weighted by 1 − w₁(x₀, y_p) (method.md §2).
+    #[allow(clippy::too_many_arguments)]
     fn merge_at_x0(
         &self,
         x0: &FirstVertex<'_>,
         map: &PhotonMap,
+        query: PhotonQuery,
         pixel: Option<&PixelTerms>,
         camera_w1: Option<f64>,
         stats: &mut WeightStats,
@@ -407,7 +514,7 @@ impl<'a> Mix<'a> {
         let mut raw = Vec3::ZERO;
         let mut weighted = Vec3::ZERO;
         let pure = matches!(self.heuristic, Heuristic::Bdd0);
-        map.for_each_near(x0.sh.p, |ph| {
+        map.finish_query(query, |ph| {
             let prev = map.vertex(ph.prev);
             let to_prev = prev.position - x0.sh.p;
             let wp = (prev.position - ph.position).normalize_or_zero();

@@ -10,7 +10,7 @@ use bdpm_cache::{CacheSettings, RadianceCache};
 use bdpm_mis::{Budget, CB_EPSILON, Heuristic};
 use bdpm_photon::{PhotonMap, TraceOptions};
 
-use crate::bdpm::{Mix, Techniques, WeightStats, scene_default_radius};
+use crate::bdpm::{BATCH, Job, Mix, Techniques, WeightStats, scene_default_radius};
 use crate::path::trace_path;
 use crate::settings::{Mode, RenderSettings, pixel_offset};
 use crate::table::{self, PixelTable};
@@ -277,31 +277,40 @@ impl Renderer<'_> {
                 let pixel = (y * w + x) as u64;
                 let mut sum = DVec3::ZERO;
                 let mut tsum = Techniques::default();
-                for k in 0..s.spp {
-                    let mut rng = Rng::new(s.seed, Domain::Camera, [pass as u64, pixel, k as u64]);
-                    // The numbers are drawn either way, so the streams do not depend on the setting.
-                    let [jx, jy] = pixel_offset(rng.uniform2(), s.pixel_jitter);
-                    let terms = table.map(|t| t.get(x as u32, y as u32));
-                    let t = mix.sample(
-                        &map,
-                        x as f32 + jx,
-                        y as f32 + jy,
-                        &mut rng,
-                        terms,
-                        &mut row_stats,
-                    );
-                    let value = t.total();
-                    if value.is_finite() {
-                        sum += value;
-                        if record {
-                            tsum.direct += t.direct;
-                            tsum.x0_raw += t.x0_raw;
-                            tsum.x0_weighted += t.x0_weighted;
-                            tsum.x1_raw += t.x1_raw;
-                            tsum.x1_weighted += t.x1_weighted;
+                let terms = table.map(|t| t.get(x as u32, y as u32));
+                for first in (0..s.spp).step_by(BATCH) {
+                    let count = (s.spp - first).min(BATCH as u32);
+                    let mut jobs: [Job; BATCH] = std::array::from_fn(|i| {
+                        let k = first + i as u32;
+                        let mut rng =
+                            Rng::new(s.seed, Domain::Camera, [pass as u64, pixel, k as u64]);
+                        // The numbers are drawn either way, so the streams do not depend on
+                        // the setting.
+                        let [jx, jy] = pixel_offset(rng.uniform2(), s.pixel_jitter);
+                        Job {
+                            x: x as f32 + jx,
+                            y: y as f32 + jy,
+                            rng,
+                            out: Techniques::default(),
                         }
-                    } else {
-                        row_dropped += 1;
+                    });
+                    let jobs = &mut jobs[..count as usize];
+                    mix.sample_batch(&map, jobs, terms, &mut row_stats);
+                    // Summed in sample order, so the pixel does not depend on the batching.
+                    for t in jobs.iter().map(|j| &j.out) {
+                        let value = t.total();
+                        if value.is_finite() {
+                            sum += value;
+                            if record {
+                                tsum.direct += t.direct;
+                                tsum.x0_raw += t.x0_raw;
+                                tsum.x0_weighted += t.x0_weighted;
+                                tsum.x1_raw += t.x1_raw;
+                                tsum.x1_weighted += t.x1_weighted;
+                            }
+                        } else {
+                            row_dropped += 1;
+                        }
                     }
                 }
                 let n = s.spp as f64;

@@ -27,6 +27,40 @@ pub(crate) struct HashGrid {
     filter_mask: u64,
 }
 
+/// How far a [`GridQuery`] has got.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) enum Stage {
+    /// Cells and buckets known; filter bits requested.
+    #[default]
+    Filter,
+    /// Live buckets known; their bounds requested.
+    Live,
+    /// Bounds read; ready to visit.
+    Bounds,
+}
+
+/// A range query in flight (see [`HashGrid::start`]): the ≤ 8 cells a sphere of radius r
+/// touches in a grid of cell 2r, their distinct buckets in visiting order, and what the stages
+/// so far have read.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct GridQuery {
+    /// Distinct buckets, in visiting order: `buckets[..n]`.
+    buckets: [u32; 8],
+    /// Bucket bounds `starts[b]..starts[b + 1]`, read in [`Stage::Live`].
+    ranges: [(u32, u32); 8],
+    /// Filter bit of each touched cell, and the index in `buckets` of its bucket.
+    cell_bits: [u64; 8],
+    cell_slot: [u8; 8],
+    cells: u8,
+    n: u8,
+    /// Bit k set: some touched cell of bucket k may hold a point.
+    live: u8,
+    stage: Stage,
+    /// A query spanning 3 cells on an axis (rounding at huge coordinates) takes the general
+    /// path: its point and radius.
+    general: Option<(Vec3, f32)>,
+}
+
 /// Filter bits per bucket: 4 gives ~1 bit set in 6 for a full table and half a megabyte for a
 /// million points.
 const FILTER_BITS_PER_BUCKET: usize = 4;
@@ -109,10 +143,9 @@ impl HashGrid {
 
     /// The distinct buckets that a sphere of radius `radius` (the build radius) around `x` can
     /// touch, in a deterministic order, with whether the filter says any of their touched
-    /// cells may hold a point: `(buckets[..n], live[..n])`. With cell edge 2r the span is ≤ 2
-    /// cells per axis (8 in all); rounding at huge coordinates could make it 3, so 27 are
-    /// allowed.
-    #[inline]
+    /// cells may hold a point: `(buckets[..n], live[..n])`. This is the general path, for
+    /// queries that span 3 cells on an axis (rounding at huge coordinates); [`GridQuery`]
+    /// visits the same buckets in the same order for the usual ≤ 2.
     fn buckets_near(&self, x: Vec3, radius: f32) -> ([u32; 27], [bool; 27], usize) {
         let lo = cell_of(x - Vec3::splat(radius), self.inv_cell);
         let hi = cell_of(x + Vec3::splat(radius), self.inv_cell);
@@ -124,8 +157,7 @@ impl HashGrid {
                 for cz in lo[2]..=hi[2].min(lo[2] + 2) {
                     let h = hash([cx, cy, cz]);
                     let b = (h & self.mask) as u32;
-                    let bit = filter_bit(h, self.filter_mask);
-                    let occupied = self.filter[(bit >> 6) as usize] & (1 << (bit & 63)) != 0;
+                    let occupied = self.filter_has(filter_bit(h, self.filter_mask));
                     // Two touched cells may share a bucket; visit it once (or its points would
                     // be reported twice), at its first place in the order.
                     if let Some(k) = buckets[..n].iter().position(|&c| c == b) {
@@ -141,49 +173,118 @@ impl HashGrid {
         (buckets, live, n)
     }
 
-    /// Calls `f(range)` once for each distinct non-empty bucket that a sphere of radius
-    /// `radius` (the build radius) around `x` can touch, in a deterministic order. The ranges
-    /// index the sorted points. Allocation-free.
     #[inline]
-    pub(crate) fn for_each_bucket(
-        &self,
-        x: Vec3,
-        radius: f32,
-        mut f: impl FnMut(std::ops::Range<usize>),
-    ) {
+    fn filter_has(&self, bit: u64) -> bool {
+        self.filter[(bit >> 6) as usize] & (1 << (bit & 63)) != 0
+    }
+
+    /// Starts a range query for a sphere of radius `radius` (the build radius) around `x`:
+    /// finds the touched cells and their buckets and hints the CPU to fetch their filter bits.
+    /// [`Self::advance`] moves it on, [`Self::visit`] finishes it.
+    #[inline]
+    pub(crate) fn start(&self, x: Vec3, radius: f32) -> GridQuery {
+        let mut q = GridQuery::default();
         if self.starts.len() < 2 {
-            return;
+            q.stage = Stage::Bounds;
+            return q;
         }
-        let (buckets, live, n) = self.buckets_near(x, radius);
-        // All bucket bounds are read before any point: the reads are independent, so their
-        // cache misses overlap instead of alternating with the points' misses.
-        let mut ranges = [(0u32, 0u32); 27];
-        for ((r, &b), _) in ranges
-            .iter_mut()
-            .zip(&buckets[..n])
-            .zip(&live)
-            .filter(|(_, l)| **l)
-        {
-            *r = (self.starts[b as usize], self.starts[b as usize + 1]);
+        let lo = cell_of(x - Vec3::splat(radius), self.inv_cell);
+        let hi = cell_of(x + Vec3::splat(radius), self.inv_cell);
+        if (0..3).any(|a| hi[a] - lo[a] > 1) {
+            q.general = Some((x, radius));
+            return q;
         }
-        for &(s, e) in &ranges[..n] {
-            if s < e {
-                f(s as usize..e as usize);
+        let mut cells = 0;
+        let mut n = 0;
+        for cx in lo[0]..=hi[0] {
+            for cy in lo[1]..=hi[1] {
+                for cz in lo[2]..=hi[2] {
+                    let h = hash([cx, cy, cz]);
+                    let b = (h & self.mask) as u32;
+                    let bit = filter_bit(h, self.filter_mask);
+                    bdpm_geometry::prefetch(&self.filter[(bit >> 6) as usize]);
+                    // Cells that share a bucket: the bucket is visited once, at its first place.
+                    let slot = match q.buckets[..n].iter().position(|&c| c == b) {
+                        Some(k) => k,
+                        None => {
+                            q.buckets[n] = b;
+                            n += 1;
+                            n - 1
+                        }
+                    };
+                    q.cell_bits[cells] = bit;
+                    q.cell_slot[cells] = slot as u8;
+                    cells += 1;
+                }
             }
+        }
+        q.cells = cells as u8;
+        q.n = n as u8;
+        q
+    }
+
+    /// Moves `q` one stage on, hinting the CPU to fetch what the next stage reads: the filter
+    /// bits decide which buckets are live (and their bounds are fetched), then the bounds are
+    /// read (and `hint(first point index)` is called for each non-empty bucket, so the caller
+    /// can fetch its points). Results do not depend on how often this is called.
+    #[inline]
+    pub(crate) fn advance(&self, q: &mut GridQuery, hint: impl Fn(usize)) {
+        match q.stage {
+            Stage::Filter => {
+                for c in 0..q.cells as usize {
+                    if self.filter_has(q.cell_bits[c]) {
+                        q.live |= 1 << q.cell_slot[c];
+                    }
+                }
+                for k in 0..q.n as usize {
+                    if q.live & (1 << k) != 0 {
+                        bdpm_geometry::prefetch(&self.starts[q.buckets[k] as usize]);
+                    }
+                }
+                q.stage = Stage::Live;
+            }
+            Stage::Live => {
+                // All bounds are read before any point: the reads are independent, so their
+                // misses overlap.
+                for k in 0..q.n as usize {
+                    if q.live & (1 << k) != 0 {
+                        let b = q.buckets[k] as usize;
+                        q.ranges[k] = (self.starts[b], self.starts[b + 1]);
+                        if q.ranges[k].0 < q.ranges[k].1 {
+                            hint(q.ranges[k].0 as usize);
+                        }
+                    }
+                }
+                q.stage = Stage::Bounds;
+            }
+            Stage::Bounds => {}
         }
     }
 
-    /// Asks the CPU to fetch the bucket bounds that a query at `x` will read (a hint; no
-    /// effect on results). Issued a little before the query, it hides their memory latency
-    /// behind other work.
+    /// Finishes `q`: calls `f(range)` once for each distinct non-empty bucket the query
+    /// touches, in a deterministic order (the same whatever stage `q` had reached). The ranges
+    /// index the sorted points.
     #[inline]
-    pub(crate) fn prefetch(&self, x: Vec3, radius: f32) {
-        if self.starts.len() < 2 {
+    pub(crate) fn visit(&self, mut q: GridQuery, mut f: impl FnMut(std::ops::Range<usize>)) {
+        if let Some((x, radius)) = q.general {
+            let (buckets, live, n) = self.buckets_near(x, radius);
+            for k in 0..n {
+                let b = buckets[k] as usize;
+                let (s, e) = (self.starts[b], self.starts[b + 1]);
+                if live[k] && s < e {
+                    f(s as usize..e as usize);
+                }
+            }
             return;
         }
-        let (buckets, live, n) = self.buckets_near(x, radius);
-        for (&b, _) in buckets[..n].iter().zip(&live).filter(|(_, l)| **l) {
-            bdpm_geometry::prefetch(&self.starts[b as usize]);
+        while q.stage != Stage::Bounds {
+            self.advance(&mut q, |_| {});
+        }
+        for k in 0..q.n as usize {
+            let (s, e) = q.ranges[k];
+            if q.live & (1 << k) != 0 && s < e {
+                f(s as usize..e as usize);
+            }
         }
     }
 

@@ -73,7 +73,7 @@ mod grid;
 mod map;
 mod trace;
 
-pub use map::{Photon, PhotonMap};
+pub use map::{Photon, PhotonMap, PhotonQuery};
 pub use trace::{
     Emission, MAX_SURVIVAL, PathVertex, PhotonArrival, Scatter, TraceOptions, emit,
     for_each_arrival, survival_at, survival_probability, trace_photons,

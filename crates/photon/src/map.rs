@@ -3,7 +3,7 @@
 use bdpm_scene::Scene;
 use glam::Vec3;
 
-use crate::grid::HashGrid;
+use crate::grid::{GridQuery, HashGrid};
 use crate::trace::{PathVertex, TraceOptions, trace_chunks};
 
 /// A stored photon: an arrival at a surface after ≥ 1 scattering (method.md §1). The first
@@ -25,6 +25,13 @@ pub struct Photon {
 
 // Photons are the bulk of a pass's memory: keep them small.
 const _: () = assert!(size_of::<Photon>() <= 48);
+
+/// A range query of a [`PhotonMap`] in flight: see [`PhotonMap::start_query`].
+#[derive(Clone, Copy, Debug)]
+pub struct PhotonQuery {
+    x: Vec3,
+    grid: GridQuery,
+}
 
 /// The photons of one pass in a hashed uniform grid for fixed-radius gathers.
 ///
@@ -136,9 +143,39 @@ impl PhotonMap {
     /// distances in f32). The order is deterministic (grid order); nothing is allocated. At
     /// most 8 grid cells are visited, so the cost is the photons in a (4r)³ box.
     #[inline]
-    pub fn for_each_near(&self, x: Vec3, mut f: impl FnMut(&Photon)) {
+    pub fn for_each_near(&self, x: Vec3, f: impl FnMut(&Photon)) {
+        self.finish_query(self.start_query(x), f);
+    }
+
+    /// Starts the query of [`Self::for_each_near`] at `x` without waiting for memory: it works
+    /// out which grid cells to read and asks the CPU to fetch the first of them. Do other work
+    /// (e.g. other queries' [`Self::advance_query`]) before advancing or finishing it, and the
+    /// fetches overlap that work. The photons reported do not depend on how far a query was
+    /// advanced.
+    #[inline]
+    pub fn start_query(&self, x: Vec3) -> PhotonQuery {
+        PhotonQuery {
+            x,
+            grid: self.grid.start(x, self.radius),
+        }
+    }
+
+    /// Moves `q` one stage on (three stages: cell filter, bucket bounds, first photons), each
+    /// time asking the CPU to fetch what the next stage reads.
+    #[inline]
+    pub fn advance_query(&self, q: &mut PhotonQuery) {
+        self.grid.advance(&mut q.grid, |i| {
+            bdpm_geometry::prefetch(&self.positions[i]);
+        });
+    }
+
+    /// Finishes `q`: calls `f` for every photon within the radius of its point, exactly as
+    /// [`Self::for_each_near`] would.
+    #[inline]
+    pub fn finish_query(&self, q: PhotonQuery, mut f: impl FnMut(&Photon)) {
         let r2 = self.radius * self.radius;
-        self.grid.for_each_bucket(x, self.radius, |range| {
+        let x = q.x;
+        self.grid.visit(q.grid, |range| {
             let photons = &self.photons[range.clone()];
             for (position, p) in self.positions[range].iter().zip(photons) {
                 if (*position - x).length_squared() <= r2 {
@@ -149,11 +186,11 @@ impl PhotonMap {
     }
 
     /// Hints the CPU to fetch what [`Self::for_each_near`] at `x` will read first (the grid's
-    /// bucket bounds). Call it as soon as a query point is known and do other work before the
+    /// cell filter). Call it as soon as a query point is known and do other work before the
     /// query; it never changes a result.
     #[inline]
     pub fn prefetch(&self, x: Vec3) {
-        self.grid.prefetch(x, self.radius);
+        let _ = self.grid.start(x, self.radius);
     }
 
     /// The path vertex with index `i` (a [`Photon::prev`] or [`Photon::vertex`]).
