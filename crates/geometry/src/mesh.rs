@@ -1,7 +1,7 @@
 use std::fmt;
 use std::time::Duration;
 
-use glam::{Vec2, Vec3, Vec3A};
+use glam::{UVec2, Vec2, Vec3, Vec3A};
 use obvhs::BvhBuildParams;
 use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::builder::build_cwbvh_from_tris;
@@ -411,10 +411,26 @@ impl Geometry {
     pub fn intersect(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
         let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, tmax);
         let mut hit = RayHit::none();
-        if !self
-            .bvh
-            .ray_traverse(ray, &mut hit, |r, id| self.rt[id].intersect(r))
-        {
+        // obvhs's traversal macro rather than `CwBvh::ray_traverse`: the same traversal, with
+        // the triangle test inlined in it instead of called through a closure per triangle.
+        let mut traverse_ray = ray;
+        let mut state = self.bvh.new_traversal(ray.direction);
+        let mut node;
+        obvhs::traverse!(
+            self.bvh,
+            node,
+            state,
+            node.intersect_ray(&traverse_ray, state.oct_inv4),
+            {
+                let t = self.rt[state.primitive_id as usize].intersect(&traverse_ray);
+                if t < traverse_ray.tmax {
+                    hit.primitive_id = state.primitive_id;
+                    hit.t = t;
+                    traverse_ray.tmax = t;
+                }
+            }
+        );
+        if !(hit.t < ray.tmax) {
             return None;
         }
         let leaf = hit.primitive_id as usize;
@@ -454,9 +470,25 @@ impl Geometry {
         let d = to - from;
         // Stop just short of `to` so that a light on a surface is not shadowed by that surface.
         let ray = Ray::new(Vec3A::from(from), Vec3A::from(d), 0.0, 1.0 - 1e-5);
-        !self
-            .bvh
-            .ray_traverse_miss(ray, |r, id| self.rt[id].intersect(r))
+        // As in `intersect`: `CwBvh::ray_traverse_miss` with the triangle test inlined.
+        let mut state = self.bvh.new_traversal(ray.direction);
+        let mut node;
+        let mut occluded = false;
+        'traversal: {
+            obvhs::traverse!(
+                self.bvh,
+                node,
+                state,
+                node.intersect_ray(&ray, state.oct_inv4),
+                {
+                    if self.rt[state.primitive_id as usize].intersect(&ray) < ray.tmax {
+                        occluded = true;
+                        break 'traversal;
+                    }
+                }
+            );
+        }
+        occluded
     }
 
     /// Number of triangles in the original mesh (degenerate ones included).

@@ -321,13 +321,13 @@ impl<'a> Mix<'a> {
                 }
             }
         }
-        for (job, slot) in jobs.iter_mut().zip(&mut pending) {
-            let Some(p) = slot.take() else { continue };
+        for (job, slot) in jobs.iter_mut().zip(&pending) {
+            let Some(p) = slot else { continue };
             let camera_w1 = p.second.as_ref().map(|s| s.w_const);
-            if let Some(second) = p.second {
+            if let Some(second) = &p.second {
                 self.merge_at_x1(&p.x0, map, second, pixel, stats, &mut job.out);
             }
-            if let Some(q) = p.query {
+            if let Some(q) = &p.query {
                 self.merge_at_x0(&p.x0, map, q, pixel, camera_w1, stats, &mut job.out);
             }
         }
@@ -448,13 +448,13 @@ impl<'a> Mix<'a> {
         &self,
         x0: &FirstVertex<'_>,
         map: &PhotonMap,
-        second: Second,
+        second: &Second,
         pixel: Option<&PixelTerms>,
         stats: &mut WeightStats,
         t: &mut Techniques,
     ) {
         let scene = self.scene;
-        let Second {
+        let &Second {
             sh1,
             x1,
             v,
@@ -464,7 +464,7 @@ impl<'a> Mix<'a> {
             weight: e,
             direct_raw,
             direct_weighted,
-            query,
+            ref query,
         } = second;
         let wo1 = -v;
         let per_light = self.needs.densities;
@@ -504,7 +504,7 @@ impl<'a> Mix<'a> {
         &self,
         x0: &FirstVertex<'_>,
         map: &PhotonMap,
-        query: PhotonQuery,
+        query: &PhotonQuery,
         pixel: Option<&PixelTerms>,
         camera_w1: Option<f64>,
         stats: &mut WeightStats,

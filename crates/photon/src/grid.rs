@@ -265,7 +265,7 @@ impl HashGrid {
     /// touches, in a deterministic order (the same whatever stage `q` had reached). The ranges
     /// index the sorted points.
     #[inline]
-    pub(crate) fn visit(&self, mut q: GridQuery, mut f: impl FnMut(std::ops::Range<usize>)) {
+    pub(crate) fn visit(&self, q: &GridQuery, mut f: impl FnMut(std::ops::Range<usize>)) {
         if let Some((x, radius)) = q.general {
             let (buckets, live, n) = self.buckets_near(x, radius);
             for k in 0..n {
@@ -277,8 +277,12 @@ impl HashGrid {
             }
             return;
         }
-        while q.stage != Stage::Bounds {
-            self.advance(&mut q, |_| {});
+        if q.stage != Stage::Bounds {
+            let mut q = *q;
+            while q.stage != Stage::Bounds {
+                self.advance(&mut q, |_| {});
+            }
+            return self.visit(&q, f);
         }
         for k in 0..q.n as usize {
             let (s, e) = q.ranges[k];

@@ -144,7 +144,7 @@ impl PhotonMap {
     /// most 8 grid cells are visited, so the cost is the photons in a (4r)³ box.
     #[inline]
     pub fn for_each_near(&self, x: Vec3, f: impl FnMut(&Photon)) {
-        self.finish_query(self.start_query(x), f);
+        self.finish_query(&self.start_query(x), f);
     }
 
     /// Starts the query of [`Self::for_each_near`] at `x` without waiting for memory: it works
@@ -172,10 +172,10 @@ impl PhotonMap {
     /// Finishes `q`: calls `f` for every photon within the radius of its point, exactly as
     /// [`Self::for_each_near`] would.
     #[inline]
-    pub fn finish_query(&self, q: PhotonQuery, mut f: impl FnMut(&Photon)) {
+    pub fn finish_query(&self, q: &PhotonQuery, mut f: impl FnMut(&Photon)) {
         let r2 = self.radius * self.radius;
         let x = q.x;
-        self.grid.visit(q.grid, |range| {
+        self.grid.visit(&q.grid, |range| {
             let photons = &self.photons[range.clone()];
             for (position, p) in self.positions[range].iter().zip(photons) {
                 if (*position - x).length_squared() <= r2 {
