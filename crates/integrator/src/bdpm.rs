@@ -84,11 +84,16 @@ pub(crate) struct Job {
 }
 
 /// A sample between its rays and its gathers.
-struct Pending<'s> {
-    x0: FirstVertex<'s>,
+#[derive(Default)]
+struct Slot<'s> {
+    /// None if the sample ended before any gather.
+    x0: Option<FirstVertex<'s>>,
+    /// The x₁ part, if the mode has one and x₁ was found.
     second: Option<Second>,
-    /// The photon query at x₀ (BDD=0 and the mixes).
-    query: Option<PhotonQuery>,
+    /// The photon query at x₀ (used when the mode gathers there).
+    query0: PhotonQuery,
+    /// The photon query at x₁ (used when `second` is Some).
+    query1: PhotonQuery,
 }
 
 /// The x₁ part of a sample before its gather.
@@ -105,7 +110,6 @@ struct Second {
     weight: Vec3,
     direct_raw: Vec3,
     direct_weighted: Vec3,
-    query: PhotonQuery,
 }
 
 /// Per-render constants of the mix.
@@ -306,56 +310,63 @@ impl<'a> Mix<'a> {
         stats: &mut WeightStats,
     ) {
         assert!(jobs.len() <= BATCH, "at most {BATCH} samples per batch");
-        let mut pending: [Option<Pending<'_>>; BATCH] = Default::default();
-        for (job, slot) in jobs.iter_mut().zip(&mut pending) {
+        // Fixed slots, filled in place: the per-sample state is large and moving it costs.
+        let mut slots: [Slot<'_>; BATCH] = Default::default();
+        for (job, slot) in jobs.iter_mut().zip(&mut slots) {
             job.out = Techniques::default();
-            *slot = self.start_sample(map, job, pixel, stats);
+            self.start_sample(map, job, pixel, stats, slot);
         }
         for _ in 0..2 {
-            for p in pending.iter_mut().flatten() {
-                if let Some(second) = &mut p.second {
-                    map.advance_query(&mut second.query);
+            for slot in slots.iter_mut().filter(|s| s.x0.is_some()) {
+                if slot.second.is_some() {
+                    map.advance_query(&mut slot.query1);
                 }
-                if let Some(q) = &mut p.query {
-                    map.advance_query(q);
+                if self.needs.photons_at_x0 {
+                    map.advance_query(&mut slot.query0);
                 }
             }
         }
-        for (job, slot) in jobs.iter_mut().zip(&pending) {
-            let Some(p) = slot else { continue };
-            let camera_w1 = p.second.as_ref().map(|s| s.w_const);
-            if let Some(second) = &p.second {
-                self.merge_at_x1(&p.x0, map, second, pixel, stats, &mut job.out);
+        for (job, slot) in jobs.iter_mut().zip(&slots) {
+            let Some(x0) = &slot.x0 else { continue };
+            let camera_w1 = slot.second.as_ref().map(|s| s.w_const);
+            if let Some(second) = &slot.second {
+                self.merge_at_x1(x0, map, second, &slot.query1, pixel, stats, &mut job.out);
             }
-            if let Some(q) = &p.query {
-                self.merge_at_x0(&p.x0, map, q, pixel, camera_w1, stats, &mut job.out);
+            if self.needs.photons_at_x0 {
+                self.merge_at_x0(x0, map, &slot.query0, pixel, camera_w1, stats, &mut job.out);
             }
         }
     }
 
     /// Everything of one sample up to its gathers: the direct light at x₀ goes into
-    /// `job.out`; the rest is returned (None if the sample ends before any gather).
+    /// `job.out`, the rest into `slot` (whose `x0` stays None if the sample ends before any
+    /// gather).
     fn start_sample<'s>(
         &'s self,
         map: &PhotonMap,
         job: &mut Job,
         pixel: Option<&PixelTerms>,
         stats: &mut WeightStats,
-    ) -> Option<Pending<'s>> {
+        slot: &mut Slot<'s>,
+    ) {
         let scene = self.scene;
         let cam = &scene.camera;
         let dir = cam.ray_direction(job.x, job.y);
-        let hit0 = scene.geometry.intersect(cam.position, dir, f32::INFINITY)?;
+        let Some(hit0) = scene.geometry.intersect(cam.position, dir, f32::INFINITY) else {
+            return;
+        };
         let u = -dir;
         job.out.direct = scene.direct(&scene.shade(&hit0, u), u).as_dvec3();
-        let x0 = self.first_vertex(&hit0, u)?;
-        let query = self.needs.photons_at_x0.then(|| map.start_query(x0.sh.p));
-        let second = if self.needs.second_vertex {
-            self.start_second(&x0, map, &mut job.rng, pixel, stats)
-        } else {
-            None
+        let Some(x0) = self.first_vertex(&hit0, u) else {
+            return;
         };
-        Some(Pending { x0, second, query })
+        if self.needs.photons_at_x0 {
+            map.restart_query(&mut slot.query0, x0.sh.p);
+        }
+        if self.needs.second_vertex {
+            slot.second = self.start_second(&x0, map, &mut job.rng, pixel, stats, &mut slot.query1);
+        }
+        slot.x0 = Some(x0);
     }
 
     /// BDD=1 up to its gather: sample v at x₀ (never absorbed), find x₁, weigh the one-bounce
@@ -367,6 +378,7 @@ impl<'a> Mix<'a> {
         rng: &mut Rng,
         pixel: Option<&PixelTerms>,
         stats: &mut WeightStats,
+        query: &mut PhotonQuery,
     ) -> Option<Second> {
         let scene = self.scene;
         let s = x0.bdf.sample_at(&x0.out, rng.uniform3())?;
@@ -378,7 +390,7 @@ impl<'a> Mix<'a> {
             .geometry
             .intersect(scene.spawn(&x0.sh, v), v, f32::INFINITY)?;
         // Started before the shadow ray and the weight's inputs, which hide its first fetch.
-        let query = map.start_query(hit1.p);
+        map.restart_query(query, hit1.p);
         let wo1 = -v;
         let sh1 = scene.shade(&hit1, wo1);
         let x1 = WeightVertex::from_shading(scene, &sh1);
@@ -438,17 +450,18 @@ impl<'a> Mix<'a> {
             weight: s.weight,
             direct_raw,
             direct_weighted,
-            query,
         })
     }
 
     /// BDD=1's merge paths …→x₂→x₁→x₀: photons around x₁, weighted by w₁; finishes the x₁
     /// part of the sample.
+    #[allow(clippy::too_many_arguments)]
     fn merge_at_x1(
         &self,
         x0: &FirstVertex<'_>,
         map: &PhotonMap,
         second: &Second,
+        query: &PhotonQuery,
         pixel: Option<&PixelTerms>,
         stats: &mut WeightStats,
         t: &mut Techniques,
@@ -464,7 +477,6 @@ impl<'a> Mix<'a> {
             weight: e,
             direct_raw,
             direct_weighted,
-            ref query,
         } = second;
         let wo1 = -v;
         let per_light = self.needs.densities;

@@ -181,18 +181,26 @@ impl HashGrid {
     /// Starts a range query for a sphere of radius `radius` (the build radius) around `x`:
     /// finds the touched cells and their buckets and hints the CPU to fetch their filter bits.
     /// [`Self::advance`] moves it on, [`Self::visit`] finishes it.
+    /// `q` is overwritten in place (a query is a few hundred bytes; callers keep theirs in
+    /// fixed slots rather than moving them).
     #[inline]
-    pub(crate) fn start(&self, x: Vec3, radius: f32) -> GridQuery {
-        let mut q = GridQuery::default();
+    pub(crate) fn start(&self, q: &mut GridQuery, x: Vec3, radius: f32) {
+        // The arrays need no reset: only their first `cells`/`n` entries are read, and
+        // `ranges[k]` only once bucket k is live.
+        q.live = 0;
+        q.n = 0;
+        q.cells = 0;
+        q.general = None;
+        q.stage = Stage::Filter;
         if self.starts.len() < 2 {
             q.stage = Stage::Bounds;
-            return q;
+            return;
         }
         let lo = cell_of(x - Vec3::splat(radius), self.inv_cell);
         let hi = cell_of(x + Vec3::splat(radius), self.inv_cell);
         if (0..3).any(|a| hi[a] - lo[a] > 1) {
             q.general = Some((x, radius));
-            return q;
+            return;
         }
         let mut cells = 0;
         let mut n = 0;
@@ -220,7 +228,6 @@ impl HashGrid {
         }
         q.cells = cells as u8;
         q.n = n as u8;
-        q
     }
 
     /// Moves `q` one stage on, hinting the CPU to fetch what the next stage reads: the filter

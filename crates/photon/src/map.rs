@@ -26,8 +26,9 @@ pub struct Photon {
 // Photons are the bulk of a pass's memory: keep them small.
 const _: () = assert!(size_of::<Photon>() <= 48);
 
-/// A range query of a [`PhotonMap`] in flight: see [`PhotonMap::start_query`].
-#[derive(Clone, Copy, Debug)]
+/// A range query of a [`PhotonMap`] in flight: see [`PhotonMap::start_query`]. The default
+/// value is an empty query to be filled by [`PhotonMap::restart_query`].
+#[derive(Clone, Copy, Debug, Default)]
 pub struct PhotonQuery {
     x: Vec3,
     grid: GridQuery,
@@ -154,10 +155,16 @@ impl PhotonMap {
     /// advanced.
     #[inline]
     pub fn start_query(&self, x: Vec3) -> PhotonQuery {
-        PhotonQuery {
-            x,
-            grid: self.grid.start(x, self.radius),
-        }
+        let mut q = PhotonQuery::default();
+        self.restart_query(&mut q, x);
+        q
+    }
+
+    /// [`Self::start_query`] into an existing query, overwriting it in place.
+    #[inline]
+    pub fn restart_query(&self, q: &mut PhotonQuery, x: Vec3) {
+        q.x = x;
+        self.grid.start(&mut q.grid, x, self.radius);
     }
 
     /// Moves `q` one stage on (three stages: cell filter, bucket bounds, first photons), each
@@ -190,7 +197,7 @@ impl PhotonMap {
     /// query; it never changes a result.
     #[inline]
     pub fn prefetch(&self, x: Vec3) {
-        let _ = self.grid.start(x, self.radius);
+        let _ = self.start_query(x);
     }
 
     /// The path vertex with index `i` (a [`Photon::prev`] or [`Photon::vertex`]).
