@@ -36,7 +36,9 @@ pub struct PathVertex {
     /// Number of scatterings before this arrival: 0 = reached directly from the light.
     pub depth: u16,
     /// Bit `l` is set iff light `l` (only `l < 32`) lies on the side of `normal` and no surface
-    /// blocks the segment to it. Filled only with [`TraceOptions::light_visibility`], else 0.
+    /// blocks the segment to it. Filled only with [`TraceOptions::light_visibility`] and only at
+    /// vertices the path continued from (each is the previous vertex y_p of the next stored
+    /// photon, where the weights read it); 0 elsewhere.
     pub visible_lights: u32,
     /// Russian-roulette survival probability q used when scattering at this vertex
     /// (dimensionless): [`survival_probability`] of the material for `incoming`. Recorded even
@@ -57,7 +59,8 @@ pub struct TraceOptions {
     pub domain: Domain,
     /// Pass index (stream key): photon `i` of pass `pass` uses `Rng::new(seed, domain, [pass, i, 0])`.
     pub pass: u32,
-    /// Fill [`PathVertex::visible_lights`] (one shadow ray per light, up to 32, per vertex).
+    /// Fill [`PathVertex::visible_lights`] (one shadow ray per light, up to 32, per vertex the
+    /// path continues from).
     pub light_visibility: bool,
     /// Hard cap on scatterings per path (arrivals have depth ≤ `max_depth`), a guard for
     /// scenes that barely absorb; e.g. 1024.
@@ -265,7 +268,7 @@ fn trace_one(
         let bdf = scene.bdf(sh.material);
         let in_local = bdf.outgoing(sh.frame.to_local(incoming));
         let survival = survival_at(bdf, &in_local);
-        let vertex = PathVertex {
+        let mut vertex = PathVertex {
             position: sh.p,
             normal: sh.ng,
             incoming,
@@ -273,11 +276,8 @@ fn trace_one(
             material: sh.material,
             light,
             depth: depth as u16,
-            visible_lights: if options.light_visibility {
-                visible_lights(scene, &sh)
-            } else {
-                0
-            },
+            // Filled below once it is known whether the path goes on.
+            visible_lights: 0,
             survival,
         };
         // The random numbers are drawn in a fixed order whatever happens, so that a visitor's
@@ -296,6 +296,11 @@ fn trace_one(
             })
         });
         let continued = scatter.is_some() && u_rr < survival && depth < max_depth;
+        // Only a vertex the path leaves is some photon's previous vertex, the one place the
+        // weights read light visibility: a path's last vertex would waste its shadow rays.
+        if options.light_visibility && continued {
+            vertex.visible_lights = visible_lights(scene, &sh);
+        }
         visit(&PhotonArrival {
             photon: index,
             vertex,

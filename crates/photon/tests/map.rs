@@ -249,7 +249,8 @@ fn light_visibility_bits_match_analytic_shadows() {
     options.light_visibility = true;
     let map = PhotonMap::trace(&scene, &options, 0.02);
     let (mut checked, mut set, mut shelf_back) = (0, 0, 0);
-    for v in &map.vertices {
+    // Visibility is recorded where the weights read it: at each photon's previous vertex.
+    for v in map.photons.iter().map(|p| map.vertex(p.prev)) {
         for (l, light) in scene.lights.iter().enumerate() {
             let to = light.position - v.position;
             // A vertex on the shelf itself sees only the lights on its own side; that is the
@@ -278,9 +279,34 @@ fn light_visibility_bits_match_analytic_shadows() {
     );
     // Lights behind a shelf vertex are exercised (they are unoccluded from the far side).
     assert!(shelf_back > 1_000, "{shelf_back}");
+
     // Without the option no bits are set.
     let plain = PhotonMap::trace(&scene, &TraceOptions::new(2_000, 8, 0), 0.02);
     assert!(plain.vertices.iter().all(|v| v.visible_lights == 0));
+}
+
+/// In a closed box every path ends by absorption at its last vertex, which is nobody's previous
+/// vertex: it gets no shadow rays, while the vertices paths continue from do.
+#[test]
+fn light_visibility_is_recorded_only_where_paths_continue() {
+    let scene = lambert_box(Vec3::splat(0.5), &[(Vec3::splat(0.5), Vec3::ONE)]);
+    let mut options = TraceOptions::new(5_000, 3, 0);
+    options.light_visibility = true;
+    let map = PhotonMap::trace(&scene, &options, 0.02);
+    let last: Vec<_> = map
+        .vertices
+        .windows(2)
+        .filter(|w| w[1].depth == 0)
+        .map(|w| w[0])
+        .collect();
+    assert!(last.len() > 1_000, "{}", last.len());
+    assert!(last.iter().all(|v| v.visible_lights == 0));
+    let prev_lit = map
+        .photons
+        .iter()
+        .filter(|p| map.vertex(p.prev).visible_lights != 0)
+        .count();
+    assert!(prev_lit > map.photons.len() / 2, "{prev_lit} of {}", map.photons.len());
 }
 
 #[test]
