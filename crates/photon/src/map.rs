@@ -2,6 +2,7 @@
 
 use bdpm_scene::Scene;
 use glam::Vec3;
+use rayon::prelude::*;
 
 use crate::grid::{GridQuery, HashGrid};
 use crate::trace::{PathVertex, TraceOptions, trace_chunks};
@@ -25,6 +26,37 @@ pub struct Photon {
 
 // Photons are the bulk of a pass's memory: keep them small.
 const _: () = assert!(size_of::<Photon>() <= 48);
+
+/// The concatenation of `parts`, each element passed through `adjust(part index, element)`,
+/// copied in parallel: a pass's photon map is a hundred megabytes, and copying (and
+/// page-faulting) it on one thread was a third of the photon stage.
+fn concat_parallel<T: Copy + Send + Sync>(
+    parts: &[&[T]],
+    adjust: impl Fn(usize, T) -> T + Sync,
+) -> Vec<T> {
+    let n: usize = parts.iter().map(|p| p.len()).sum();
+    let mut out = Vec::with_capacity(n);
+    let mut rest = &mut out.spare_capacity_mut()[..n];
+    let mut slices = Vec::with_capacity(parts.len());
+    for p in parts {
+        let (head, tail) = rest.split_at_mut(p.len());
+        slices.push(head);
+        rest = tail;
+    }
+    slices
+        .into_par_iter()
+        .zip(parts.par_iter())
+        .enumerate()
+        .for_each(|(i, (dst, src))| {
+            for (d, s) in dst.iter_mut().zip(src.iter()) {
+                d.write(adjust(i, *s));
+            }
+        });
+    // SAFETY: the slices partition the first n spare elements and the loop above wrote every
+    // element of every slice (each has the length of its part), so all n are initialised.
+    unsafe { out.set_len(n) };
+    out
+}
 
 /// A range query of a [`PhotonMap`] in flight: see [`PhotonMap::start_query`]. The default
 /// value is an empty query to be filled by [`PhotonMap::restart_query`].
@@ -85,17 +117,24 @@ impl PhotonMap {
             n_vertices < u32::MAX as usize,
             "too many path vertices for u32 indices"
         );
-        let mut vertices = Vec::with_capacity(n_vertices);
-        let mut photons = Vec::with_capacity(n_photons);
-        for (v, p) in chunks {
-            let offset = vertices.len() as u32;
-            photons.extend(p.into_iter().map(|p| Photon {
-                prev: p.prev + offset,
-                vertex: p.vertex + offset,
-                ..p
-            }));
-            vertices.extend(v);
-        }
+        debug_assert!(n_photons <= n_vertices);
+        // Each chunk's vertex indices start at the vertices of the chunks before it.
+        let offsets: Vec<u32> = chunks
+            .iter()
+            .scan(0u32, |acc, c| {
+                let first = *acc;
+                *acc += c.0.len() as u32;
+                Some(first)
+            })
+            .collect();
+        let vertex_parts: Vec<&[PathVertex]> = chunks.iter().map(|c| c.0.as_slice()).collect();
+        let photon_parts: Vec<&[Photon]> = chunks.iter().map(|c| c.1.as_slice()).collect();
+        let vertices = concat_parallel(&vertex_parts, |_, v| v);
+        let photons = concat_parallel(&photon_parts, |chunk, p| Photon {
+            prev: p.prev + offsets[chunk],
+            vertex: p.vertex + offsets[chunk],
+            ..p
+        });
         PhotonMap::from_parts(photons, vertices, options.photons, radius)
     }
 
@@ -116,10 +155,10 @@ impl PhotonMap {
             radius > 0.0 && radius.is_finite(),
             "merge radius must be positive and finite, got {radius}"
         );
-        let positions: Vec<Vec3> = photons.iter().map(|p| p.position).collect();
+        let positions: Vec<Vec3> = photons.par_iter().map(|p| p.position).collect();
         let (grid, order) = HashGrid::build(&positions, radius);
-        let photons: Vec<Photon> = order.iter().map(|&i| photons[i as usize]).collect();
-        let positions = photons.iter().map(|p| p.position).collect();
+        let photons: Vec<Photon> = order.par_iter().map(|&i| photons[i as usize]).collect();
+        let positions = photons.par_iter().map(|p| p.position).collect();
         PhotonMap {
             photons,
             positions,
