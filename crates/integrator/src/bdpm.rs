@@ -73,6 +73,10 @@ pub(crate) struct WeightVertex {
 /// and L1.
 pub(crate) const BATCH: usize = 8;
 
+/// Rounds of [`PhotonMap::advance_query`] between a batch's rays and its gathers: one per
+/// stage of a query, so that every read of a gather has been fetched.
+const QUERY_STAGES: usize = 4;
+
 /// One camera sample to take: its image point (pixels, x right and y down from the top-left
 /// corner), its random stream, and where its value goes.
 #[derive(Clone, Debug)]
@@ -299,7 +303,7 @@ impl<'a> Mix<'a> {
     ///
     /// The samples are taken together in stages so that the photon-map reads of one sample
     /// are fetched while the others compute: first every sample's rays, shading and weights
-    /// up to its gathers (starting the gathers' queries), then two rounds that move every
+    /// up to its gathers (starting the gathers' queries), then rounds that move every
     /// query on, then the gathers. Each sample's arithmetic is exactly that of a sample taken
     /// alone, so the results do not depend on the batch.
     pub(crate) fn sample_batch(
@@ -316,7 +320,7 @@ impl<'a> Mix<'a> {
             job.out = Techniques::default();
             self.start_sample(map, job, pixel, stats, slot);
         }
-        for _ in 0..2 {
+        for _ in 0..QUERY_STAGES {
             for slot in slots.iter_mut().filter(|s| s.x0.is_some()) {
                 if slot.second.is_some() {
                     map.advance_query(&mut slot.query1);

@@ -61,6 +61,15 @@ pub(crate) struct GridQuery {
     general: Option<(Vec3, f32)>,
 }
 
+impl GridQuery {
+    /// True once the bucket bounds have been read: [`HashGrid::visit`] reads nothing more of
+    /// the grid.
+    #[inline]
+    pub(crate) fn ready(&self) -> bool {
+        self.stage == Stage::Bounds
+    }
+}
+
 /// Filter bits per bucket: 4 gives ~1 bit set in 6 for a full table and half a megabyte for a
 /// million points.
 const FILTER_BITS_PER_BUCKET: usize = 4;

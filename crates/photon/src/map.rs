@@ -64,6 +64,28 @@ fn concat_parallel<T: Copy + Send + Sync>(
 pub struct PhotonQuery {
     x: Vec3,
     grid: GridQuery,
+    /// Indices (grid order) of the photons found, in the order they are reported, once the
+    /// query has been scanned: `found[..n_found]`.
+    found: [u32; FOUND_CAPACITY],
+    n_found: u8,
+    scan: Scan,
+}
+
+/// Photons a query remembers after its scan; more are found again when it is finished.
+const FOUND_CAPACITY: usize = 8;
+
+/// How far a [`PhotonQuery`] got past its grid stages.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+enum Scan {
+    /// Not scanned yet.
+    #[default]
+    No,
+    /// Scanned; every photon found is in `found` (and was asked for).
+    Listed,
+    /// Scanned, and their previous vertices were asked for too.
+    Fetched,
+    /// Scanned, but more photons were found than `found` holds.
+    Overflow,
 }
 
 /// The photons of one pass in a hashed uniform grid for fixed-radius gathers.
@@ -203,15 +225,72 @@ impl PhotonMap {
     #[inline]
     pub fn restart_query(&self, q: &mut PhotonQuery, x: Vec3) {
         q.x = x;
+        q.n_found = 0;
+        q.scan = Scan::No;
         self.grid.start(&mut q.grid, x, self.radius);
     }
 
-    /// Moves `q` one stage on (three stages: cell filter, bucket bounds, first photons), each
-    /// time asking the CPU to fetch what the next stage reads.
+    /// Moves `q` one stage on, each time asking the CPU to fetch what the next stage reads.
+    /// Four stages: the cell filter (then the bucket bounds are fetched), the bounds (then the
+    /// candidates' positions), the range test (then the photons found), the photons (then
+    /// their previous vertices, which the weights read). Further calls do nothing.
     #[inline]
     pub fn advance_query(&self, q: &mut PhotonQuery) {
-        self.grid.advance(&mut q.grid, |i| {
-            bdpm_geometry::prefetch(&self.positions[i]);
+        if !q.grid.ready() {
+            self.grid.advance(&mut q.grid, |i| {
+                bdpm_geometry::prefetch(&self.positions[i]);
+            });
+            return;
+        }
+        match q.scan {
+            Scan::No => {
+                let (mut n, mut overflow) = (0, false);
+                let mut found = [0u32; FOUND_CAPACITY];
+                self.scan(q, |i| {
+                    if n < FOUND_CAPACITY {
+                        found[n] = i as u32;
+                        n += 1;
+                    } else {
+                        overflow = true;
+                    }
+                });
+                q.found = found;
+                q.n_found = n as u8;
+                for &i in &q.found[..n] {
+                    bdpm_geometry::prefetch(&self.photons[i as usize]);
+                }
+                q.scan = if overflow {
+                    Scan::Overflow
+                } else {
+                    Scan::Listed
+                };
+            }
+            Scan::Listed => {
+                for &i in &q.found[..q.n_found as usize] {
+                    let v = &self.vertices[self.photons[i as usize].prev as usize];
+                    // A vertex may straddle two cache lines.
+                    bdpm_geometry::prefetch(v);
+                    bdpm_geometry::prefetch(&v.survival);
+                }
+                q.scan = Scan::Fetched;
+            }
+            Scan::Fetched | Scan::Overflow => {}
+        }
+    }
+
+    /// Calls `found(i)` with the index (grid order) of every photon within the radius of the
+    /// query's point, in reporting order.
+    #[inline]
+    fn scan(&self, q: &PhotonQuery, mut found: impl FnMut(usize)) {
+        let r2 = self.radius * self.radius;
+        let x = q.x;
+        self.grid.visit(&q.grid, |range| {
+            let start = range.start;
+            for (k, position) in self.positions[range].iter().enumerate() {
+                if (*position - x).length_squared() <= r2 {
+                    found(start + k);
+                }
+            }
         });
     }
 
@@ -219,16 +298,14 @@ impl PhotonMap {
     /// [`Self::for_each_near`] would.
     #[inline]
     pub fn finish_query(&self, q: &PhotonQuery, mut f: impl FnMut(&Photon)) {
-        let r2 = self.radius * self.radius;
-        let x = q.x;
-        self.grid.visit(&q.grid, |range| {
-            let photons = &self.photons[range.clone()];
-            for (position, p) in self.positions[range].iter().zip(photons) {
-                if (*position - x).length_squared() <= r2 {
-                    f(p);
+        match q.scan {
+            Scan::Listed | Scan::Fetched => {
+                for &i in &q.found[..q.n_found as usize] {
+                    f(&self.photons[i as usize]);
                 }
             }
-        });
+            Scan::No | Scan::Overflow => self.scan(q, |i| f(&self.photons[i])),
+        }
     }
 
     /// Hints the CPU to fetch what [`Self::for_each_near`] at `x` will read first (the grid's

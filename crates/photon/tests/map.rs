@@ -306,7 +306,11 @@ fn light_visibility_is_recorded_only_where_paths_continue() {
         .iter()
         .filter(|p| map.vertex(p.prev).visible_lights != 0)
         .count();
-    assert!(prev_lit > map.photons.len() / 2, "{prev_lit} of {}", map.photons.len());
+    assert!(
+        prev_lit > map.photons.len() / 2,
+        "{prev_lit} of {}",
+        map.photons.len()
+    );
 }
 
 #[test]
