@@ -70,7 +70,7 @@ pub struct RadianceCache {
     /// Subdivision n of each triangle (n² cells).
     subdivision: Vec<u16>,
     /// Triangle vertices and normals for barycentric lookup.
-    tri: Vec<([Vec3; 3], Vec3)>,
+    tri: Vec<CellTriangle>,
     side_bins: usize,
     grid: u32,
     /// Bin values, W·m⁻²·sr⁻¹ (L_d) and W·m⁻²·sr⁻² (b): `[L_d, b]` pairs per bin, interleaved
@@ -81,6 +81,42 @@ pub struct RadianceCache {
     /// Photon arrivals per (cell, side).
     arrivals: Vec<u32>,
     stats: CacheStats,
+}
+
+/// A bin of a [`RadianceCache`], as [`RadianceCache::slot`] finds it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CacheSlot(usize);
+
+/// A triangle as the cell lookup needs it: vertices, normal, and the per-triangle parts of the
+/// barycentric solve (edges, their Gram matrix and its determinant), computed once.
+#[derive(Clone, Copy, Debug)]
+struct CellTriangle {
+    v: [Vec3; 3],
+    ng: Vec3,
+    e1: Vec3,
+    e2: Vec3,
+    d11: f32,
+    d12: f32,
+    d22: f32,
+    det: f32,
+}
+
+impl CellTriangle {
+    fn new(v: [Vec3; 3], ng: Vec3) -> CellTriangle {
+        let e1 = v[1] - v[0];
+        let e2 = v[2] - v[0];
+        let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+        CellTriangle {
+            v,
+            ng,
+            e1,
+            e2,
+            d11,
+            d12,
+            d22,
+            det: d11 * d22 - d12 * d12,
+        }
+    }
 }
 
 /// One side of one cell, as [`RadianceCache::cells`] reports it.
@@ -197,7 +233,7 @@ impl RadianceCache {
             };
             first_cell.push(cells);
             subdivision.push(n as u16);
-            tri.push((v, g.normal(prim)));
+            tri.push(CellTriangle::new(v, g.normal(prim)));
             cells += n * n;
         }
         let slots = cells as usize * 2 * side_bins;
@@ -293,12 +329,12 @@ impl RadianceCache {
             + self.arrivals.len() * 4
             + self.first_cell.len() * 4
             + self.subdivision.len() * 2
-            + self.tri.len() * std::mem::size_of::<([Vec3; 3], Vec3)>())
+            + self.tri.len() * std::mem::size_of::<CellTriangle>())
             as u64;
     }
 
     fn triangle_area(&self, prim: usize) -> f64 {
-        let (v, _) = self.tri[prim];
+        let v = self.tri[prim].v;
         0.5 * (v[1] - v[0])
             .as_dvec3()
             .cross((v[2] - v[0]).as_dvec3())
@@ -307,19 +343,15 @@ impl RadianceCache {
 
     /// Index of (cell, side) for a point `p` on triangle `prim`, seen from the side of `n`.
     fn cell_side(&self, prim: u32, p: Vec3, n: Vec3) -> Option<usize> {
-        let (v, ng) = *self.tri.get(prim as usize)?;
-        let e1 = v[1] - v[0];
-        let e2 = v[2] - v[0];
-        let d = p - v[0];
-        // Barycentrics by least squares in the triangle's plane.
-        let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
-        let det = d11 * d22 - d12 * d12;
-        if det <= 0.0 {
+        let t = self.tri.get(prim as usize)?;
+        if t.det <= 0.0 {
             return None;
         }
-        let (p1, p2) = (d.dot(e1), d.dot(e2));
-        let b1 = ((d22 * p1 - d12 * p2) / det).clamp(0.0, 1.0);
-        let b2 = ((d11 * p2 - d12 * p1) / det).clamp(0.0, 1.0 - b1);
+        // Barycentrics by least squares in the triangle's plane.
+        let d = p - t.v[0];
+        let (p1, p2) = (d.dot(t.e1), d.dot(t.e2));
+        let b1 = ((t.d22 * p1 - t.d12 * p2) / t.det).clamp(0.0, 1.0);
+        let b2 = ((t.d11 * p2 - t.d12 * p1) / t.det).clamp(0.0, 1.0 - b1);
         let sub = self.subdivision[prim as usize] as u32;
         let (fu, fv) = (b1 * sub as f32, b2 * sub as f32);
         let i = (fu as u32).min(sub - 1);
@@ -329,7 +361,7 @@ impl RadianceCache {
         let row_start = j * (2 * sub - j);
         let local = row_start + 2 * i + upper as u32;
         let cell = self.first_cell[prim as usize] + local.min(sub * sub - 1);
-        let side = (ng.dot(n) < 0.0) as usize;
+        let side = (t.ng.dot(n) < 0.0) as usize;
         Some(cell as usize * 2 + side)
     }
 
@@ -347,15 +379,36 @@ impl RadianceCache {
     /// direction `wo`, on the side of `wo`. b is 0 when the cache does not store it (Lambert:
     /// use (kd/π)·L_d).
     pub fn lookup(&self, prim: u32, p: Vec3, wo: Vec3) -> (f32, f32) {
-        let Some(&(_, ng)) = self.tri.get(prim as usize) else {
-            return (0.0, 0.0);
-        };
+        self.slot(prim, p, wo).map_or((0.0, 0.0), |s| self.at(s))
+    }
+
+    /// Where [`Self::lookup`] of the same arguments reads, or None where it returns zeros (an
+    /// unknown or degenerate triangle). Splitting the lookup lets a caller [`Self::prefetch`]
+    /// the bin and do other work before reading it with [`Self::at`].
+    pub fn slot(&self, prim: u32, p: Vec3, wo: Vec3) -> Option<CacheSlot> {
+        let ng = self.tri.get(prim as usize)?.ng;
         let n = if ng.dot(wo) < 0.0 { -ng } else { ng };
-        let Some(cell_side) = self.cell_side(prim, p, n) else {
-            return (0.0, 0.0);
+        let cell_side = self.cell_side(prim, p, n)?;
+        // One bin (Lambert-only scenes) needs no direction.
+        let bin = if self.grid == 1 {
+            0
+        } else {
+            self.bin(Frame::from_normal(n).to_local(wo))
         };
-        let local = Frame::from_normal(n).to_local(wo);
-        let slot = cell_side * self.side_bins + self.bin(local);
+        Some(CacheSlot(cell_side * self.side_bins + bin))
+    }
+
+    /// Hints the CPU to fetch the bin at `slot` (no effect on results).
+    #[inline]
+    pub fn prefetch(&self, slot: CacheSlot) {
+        if let Some(v) = self.values.get(slot.0 * self.stride) {
+            bdpm_geometry::prefetch(v);
+        }
+    }
+
+    /// L_d and b at `slot` (see [`Self::lookup`]).
+    pub fn at(&self, slot: CacheSlot) -> (f32, f32) {
+        let slot = slot.0;
         let k = slot * self.stride;
         if self.stride == 2 {
             (self.values[k], self.values[k + 1])

@@ -3,7 +3,7 @@
 use std::f32::consts::PI;
 
 use bdpm_bdf::{Bdf, Outgoing, luminance};
-use bdpm_cache::RadianceCache;
+use bdpm_cache::{CacheSlot, RadianceCache};
 use bdpm_geometry::Hit;
 use bdpm_geometry::{Frame, Rng};
 use bdpm_mis::{Budget, Heuristic, Needs, Pair, PathKind, PixelTerms};
@@ -232,6 +232,27 @@ impl<'a> Mix<'a> {
 
     /// The pair data shared by both path kinds for x₀ and a candidate x₁ at `x1`.
     pub(crate) fn pair(&self, x0: &FirstVertex<'_>, x1: &WeightVertex, v: Vec3, f0: Vec3) -> Pair {
+        self.pair_at(x0, x1, v, f0, self.cache_slot(x1.prim, x1.p, -v))
+    }
+
+    /// Where the weights' radiance-cache lookup for the point `p` of triangle `prim` towards
+    /// `wo` reads (None without a cache); see [`Self::pair_at`].
+    pub(crate) fn cache_slot(&self, prim: u32, p: Vec3, wo: Vec3) -> Option<CacheSlot> {
+        self.cache
+            .filter(|_| self.needs.radiance_cache)
+            .and_then(|c| c.slot(prim, p, wo))
+    }
+
+    /// [`Self::pair`] with the cache slot of (x₁, −v) found beforehand by [`Self::cache_slot`],
+    /// so that its read could be fetched ahead.
+    pub(crate) fn pair_at(
+        &self,
+        x0: &FirstVertex<'_>,
+        x1: &WeightVertex,
+        v: Vec3,
+        f0: Vec3,
+        slot: Option<CacheSlot>,
+    ) -> Pair {
         let mut pair = Pair {
             f_tilde: self.f_tilde(x0, f0),
             ..Pair::default()
@@ -240,7 +261,7 @@ impl<'a> Mix<'a> {
             pair.direct = luminance(direct_masked(self.scene, x1, -v)) as f64;
         }
         if let Some(cache) = self.cache.filter(|_| self.needs.radiance_cache) {
-            let (ld, b) = cache.lookup(x1.prim, x1.p, -v);
+            let (ld, b) = slot.map_or((0.0, 0.0), |s| cache.at(s));
             pair.indirect = ld as f64;
             pair.b = if cache.stats().stores_b {
                 b as f64
@@ -396,10 +417,15 @@ impl<'a> Mix<'a> {
         // Started before the shadow ray and the weight's inputs, which hide its first fetch.
         map.restart_query(query, hit1.p);
         let wo1 = -v;
+        // Likewise the weight's cache read, fetched during the shadow ray.
+        let slot = self.cache_slot(hit1.prim, hit1.p, wo1);
+        if let (Some(cache), Some(slot)) = (self.cache, slot) {
+            cache.prefetch(slot);
+        }
         let sh1 = scene.shade(&hit1, wo1);
         let x1 = WeightVertex::from_shading(scene, &sh1);
         let lights = x1.lights;
-        let pair = self.pair(x0, &x1, v, s.f);
+        let pair = self.pair_at(x0, &x1, v, s.f, slot);
         let dist2 = (x1.p - x0.sh.p).length_squared();
 
         // One-bounce paths light→x₁→x₀, light by light (their balance weights differ).
