@@ -451,7 +451,8 @@ impl Geometry {
                 }
             }
         );
-        if !(hit.t < ray.tmax) {
+        let found = hit.t < ray.tmax;
+        if !found {
             return None;
         }
         let leaf = hit.primitive_id as usize;
