@@ -87,6 +87,11 @@ pub(crate) struct Job {
     pub(crate) out: Techniques,
 }
 
+/// Room for the state of a batch of samples between their rays and their gathers, reused from
+/// batch to batch: it is a few kilobytes, and is filled in place rather than moved.
+#[derive(Default)]
+pub(crate) struct Slots<'s>([Slot<'s>; BATCH]);
+
 /// A sample between its rays and its gathers.
 #[derive(Default)]
 struct Slot<'s> {
@@ -214,7 +219,11 @@ impl<'a> Mix<'a> {
     /// Prepares x₀ for a camera ray that hit `hit` (u = towards the camera), or None if the
     /// shading normal faces away from the camera.
     pub(crate) fn first_vertex<'s>(&'s self, hit: &Hit, u: Vec3) -> Option<FirstVertex<'s>> {
-        let sh = self.scene.shade(hit, u);
+        self.first_vertex_shaded(self.scene.shade(hit, u), u)
+    }
+
+    /// [`Self::first_vertex`] for a hit already shaded for `u`.
+    fn first_vertex_shaded<'s>(&'s self, sh: Shading, u: Vec3) -> Option<FirstVertex<'s>> {
         let u_local = sh.frame.to_local(u);
         if u_local.z <= 0.0 {
             return None;
@@ -327,18 +336,20 @@ impl<'a> Mix<'a> {
     /// up to its gathers (starting the gathers' queries), then rounds that move every
     /// query on, then the gathers. Each sample's arithmetic is exactly that of a sample taken
     /// alone, so the results do not depend on the batch.
-    pub(crate) fn sample_batch(
-        &self,
+    pub(crate) fn sample_batch<'s>(
+        &'s self,
         map: &PhotonMap,
         jobs: &mut [Job],
+        slots: &mut Slots<'s>,
         pixel: Option<&PixelTerms>,
         stats: &mut WeightStats,
     ) {
         assert!(jobs.len() <= BATCH, "at most {BATCH} samples per batch");
-        // Fixed slots, filled in place: the per-sample state is large and moving it costs.
-        let mut slots: [Slot<'_>; BATCH] = Default::default();
-        for (job, slot) in jobs.iter_mut().zip(&mut slots) {
+        let slots = &mut slots.0;
+        for (job, slot) in jobs.iter_mut().zip(slots.iter_mut()) {
             job.out = Techniques::default();
+            slot.x0 = None;
+            slot.second = None;
             self.start_sample(map, job, pixel, stats, slot);
         }
         for _ in 0..QUERY_STAGES {
@@ -351,7 +362,7 @@ impl<'a> Mix<'a> {
                 }
             }
         }
-        for (job, slot) in jobs.iter_mut().zip(&slots) {
+        for (job, slot) in jobs.iter_mut().zip(slots.iter()) {
             let Some(x0) = &slot.x0 else { continue };
             let camera_w1 = slot.second.as_ref().map(|s| s.w_const);
             if let Some(second) = &slot.second {
@@ -381,8 +392,9 @@ impl<'a> Mix<'a> {
             return;
         };
         let u = -dir;
-        job.out.direct = scene.direct(&scene.shade(&hit0, u), u).as_dvec3();
-        let Some(x0) = self.first_vertex(&hit0, u) else {
+        let sh0 = scene.shade(&hit0, u);
+        job.out.direct = scene.direct(&sh0, u).as_dvec3();
+        let Some(x0) = self.first_vertex_shaded(sh0, u) else {
             return;
         };
         if self.needs.photons_at_x0 {

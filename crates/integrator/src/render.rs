@@ -10,7 +10,7 @@ use bdpm_cache::{CacheSettings, RadianceCache};
 use bdpm_mis::{Budget, CB_EPSILON, Heuristic};
 use bdpm_photon::{PhotonMap, TraceOptions};
 
-use crate::bdpm::{BATCH, Job, Mix, Techniques, WeightStats, scene_default_radius};
+use crate::bdpm::{BATCH, Job, Mix, Slots, Techniques, WeightStats, scene_default_radius};
 use crate::path::trace_path;
 use crate::settings::{Mode, RenderSettings, pixel_offset};
 use crate::table::{self, PixelTable};
@@ -273,6 +273,7 @@ impl Renderer<'_> {
         let render_row = |y: usize, row: &mut [DVec3], mut trow: Option<&mut [Techniques]>| {
             let mut row_dropped = 0;
             let mut row_stats = WeightStats::default();
+            let mut slots = Slots::default();
             for (x, px) in row.iter_mut().enumerate() {
                 let pixel = (y * w + x) as u64;
                 let mut sum = DVec3::ZERO;
@@ -295,7 +296,7 @@ impl Renderer<'_> {
                         }
                     });
                     let jobs = &mut jobs[..count as usize];
-                    mix.sample_batch(&map, jobs, terms, &mut row_stats);
+                    mix.sample_batch(&map, jobs, &mut slots, terms, &mut row_stats);
                     // Summed in sample order, so the pixel does not depend on the batching.
                     for t in jobs.iter().map(|j| &j.out) {
                         let value = t.total();
