@@ -68,6 +68,12 @@ impl GridQuery {
     pub(crate) fn ready(&self) -> bool {
         self.stage == Stage::Bounds
     }
+
+    /// True if the query is known to touch no point (no live bucket, normal path).
+    #[inline]
+    pub(crate) fn empty(&self) -> bool {
+        self.ready() && self.live == 0 && self.general.is_none()
+    }
 }
 
 /// Filter bits per bucket: 4 gives ~1 bit set in 6 for a full table and half a megabyte for a
@@ -251,6 +257,11 @@ impl HashGrid {
                     if self.filter_has(q.cell_bits[c]) {
                         q.live |= 1 << q.cell_slot[c];
                     }
+                }
+                if q.live == 0 {
+                    // Nothing to read: most queries end here.
+                    q.stage = Stage::Bounds;
+                    return;
                 }
                 for k in 0..q.n as usize {
                     if q.live & (1 << k) != 0 {

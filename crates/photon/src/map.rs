@@ -240,6 +240,10 @@ impl PhotonMap {
             self.grid.advance(&mut q.grid, |i| {
                 bdpm_geometry::prefetch(&self.positions[i]);
             });
+            if q.grid.empty() {
+                q.n_found = 0;
+                q.scan = Scan::Fetched;
+            }
             return;
         }
         match q.scan {
