@@ -17,7 +17,7 @@
 
 use bdpm_integrator::Renderer;
 use bdpm_mis::Heuristic;
-use bdpm_suite::{load, with_mode};
+use bdpm_suite::{load, thread_pool, with_mode};
 use divan::Bencher;
 use divan::counter::ItemsCount;
 
@@ -38,13 +38,6 @@ const PHOTONS: u64 = 200_000;
 /// The scene every benchmark renders.
 const SCENE: &str = "cornell-lambert.toml";
 
-fn pool(threads: usize) -> rayon::ThreadPool {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("cannot start the benchmark's worker threads")
-}
-
 /// `path`, then every BDPM weight mode.
 fn modes() -> impl Iterator<Item = &'static str> {
     std::iter::once("path").chain(Heuristic::ALL_NAMES.iter().copied())
@@ -54,7 +47,7 @@ fn modes() -> impl Iterator<Item = &'static str> {
 fn render_pass<const THREADS: usize>(bencher: Bencher, mode: &str) {
     let (scene, settings) = load(SCENE, RENDER_SIDE, RENDER_SIDE);
     let settings = with_mode(&settings, mode, 1, SPP, PHOTONS);
-    let pool = pool(THREADS);
+    let pool = thread_pool(THREADS);
     let renderer = pool
         .install(|| Renderer::new(&scene, &settings))
         .unwrap_or_else(|e| panic!("{mode}: {e}"));
@@ -68,7 +61,7 @@ fn render_pass<const THREADS: usize>(bencher: Bencher, mode: &str) {
 fn prepare<const THREADS: usize>(bencher: Bencher, mode: &str) {
     let (scene, settings) = load(SCENE, PREPARE_SIDE, PREPARE_SIDE);
     let settings = with_mode(&settings, mode, 1, SPP, PHOTONS);
-    let pool = pool(THREADS);
+    let pool = thread_pool(THREADS);
     bencher.bench(|| {
         pool.install(|| Renderer::new(&scene, &settings))
             .unwrap_or_else(|e| panic!("{mode}: {e}"))

@@ -23,7 +23,7 @@ use bdpm_integrator::scene_default_radius;
 use bdpm_load::load_scene;
 use bdpm_photon::{PhotonMap, TraceOptions};
 use bdpm_scene::Scene;
-use bdpm_suite::scene_path;
+use bdpm_suite::{scene_path, thread_pool};
 use divan::Bencher;
 use divan::counter::ItemsCount;
 use glam::Vec3;
@@ -41,13 +41,6 @@ const PHOTONS: u64 = 200_000;
 const QUERIES: usize = 65_536;
 /// Master seed of the photon pass and of the query points.
 const SEED: u64 = 1;
-
-fn pool(threads: usize) -> rayon::ThreadPool {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("cannot start the benchmark's worker threads")
-}
 
 /// The photon pass every benchmark traces: pass 0 with the renderer's options.
 fn options() -> TraceOptions {
@@ -87,7 +80,7 @@ impl Workload {
     }
 
     fn bench_trace(&self, bencher: Bencher, threads: usize) {
-        let pool = pool(threads);
+        let pool = thread_pool(threads);
         let options = options();
         bencher
             .counter(ItemsCount::new(options.photons))
@@ -95,7 +88,7 @@ impl Workload {
     }
 
     fn bench_build(&self, bencher: Bencher, threads: usize) {
-        let pool = pool(threads);
+        let pool = thread_pool(threads);
         bencher
             .counter(ItemsCount::new(self.map.photons.len()))
             .with_inputs(|| self.map.clone())
@@ -103,7 +96,7 @@ impl Workload {
     }
 
     fn bench_gather(&self, bencher: Bencher, threads: usize) {
-        let pool = pool(threads);
+        let pool = thread_pool(threads);
         bencher
             .counter(ItemsCount::new(self.queries.len()))
             .bench(|| {

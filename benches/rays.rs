@@ -25,7 +25,7 @@ use std::sync::LazyLock;
 use bdpm_geometry::sampling::uniform_sphere;
 use bdpm_geometry::{Domain, Geometry, Rng, TriangleMesh, spawn_offset};
 use bdpm_load::load_scene;
-use bdpm_suite::scene_path;
+use bdpm_suite::{scene_path, thread_pool};
 use divan::Bencher;
 use divan::counter::ItemsCount;
 use glam::Vec3;
@@ -45,13 +45,6 @@ const SEED: u64 = 1;
 const STACKS: u32 = 256;
 /// Longitude segments of the UV sphere; 2·STACKS·SLICES − 2·SLICES = 130,560 triangles.
 const SLICES: u32 = 256;
-
-fn pool(threads: usize) -> rayon::ThreadPool {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("cannot start the benchmark's worker threads")
-}
 
 /// A ray `origin + t·dir`, `dir` unit.
 struct Ray {
@@ -108,7 +101,7 @@ impl Workload {
 
     /// Times closest-hit queries of the ray batch on `threads` threads.
     fn bench_intersect(&self, bencher: Bencher, threads: usize) {
-        let pool = pool(threads);
+        let pool = thread_pool(threads);
         bencher.counter(ItemsCount::new(self.rays.len())).bench(|| {
             pool.install(|| {
                 self.rays
@@ -126,7 +119,7 @@ impl Workload {
 
     /// Times occlusion queries of the segment batch on `threads` threads.
     fn bench_occluded(&self, bencher: Bencher, threads: usize) {
-        let pool = pool(threads);
+        let pool = thread_pool(threads);
         bencher
             .counter(ItemsCount::new(self.segments.len()))
             .bench(|| {
@@ -238,7 +231,7 @@ mod sphere_130k {
     /// `Geometry::new` of the mesh, counted in triangles; the mesh is cloned outside the timer.
     #[divan::bench(args = THREADS, sample_count = 10)]
     fn bvh_build(bencher: Bencher, threads: usize) {
-        let pool = pool(threads);
+        let pool = thread_pool(threads);
         let mesh = &*SPHERE_MESH;
         bencher
             .counter(ItemsCount::new(mesh.triangle_count()))

@@ -24,6 +24,7 @@ use std::sync::LazyLock;
 
 use bdpm_geometry::{Domain, Rng};
 use bdpm_mis::{Budget, Heuristic, Pair, PathKind, PixelTerms};
+use bdpm_suite::thread_pool;
 use divan::Bencher;
 use divan::counter::ItemsCount;
 use rayon::prelude::*;
@@ -40,13 +41,6 @@ const PAIRS: usize = 4096;
 const REPEATS: usize = 64;
 /// Seed of the pair stream.
 const SEED: u64 = 1;
-
-fn pool(threads: usize) -> rayon::ThreadPool {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("cannot start the benchmark's worker threads")
-}
 
 /// One weight evaluation's inputs.
 struct Input {
@@ -139,7 +133,7 @@ fn weight_parallel<const THREADS: usize>(bencher: Bencher, mode: &str) {
     let heuristic = parse(mode);
     let budget = budget();
     let inputs = &*INPUTS;
-    let pool = pool(THREADS);
+    let pool = thread_pool(THREADS);
     // One output batch per repeat, allocated before timing.
     let mut out = vec![0.0; REPEATS * inputs.len()];
     bencher.counter(ItemsCount::new(out.len())).bench_local(|| {

@@ -199,3 +199,11 @@ pub fn films_agree(a: &Film, b: &Film, k: f64) -> (f64, f64, f64) {
 pub fn lum(v: Vec3) -> f32 {
     0.2126 * v.x + 0.7152 * v.y + 0.0722 * v.z
 }
+
+/// A rayon pool of exactly `threads` workers, for the benchmarks' 1- and 2-thread runs.
+pub fn thread_pool(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("cannot start the benchmark's worker threads")
+}
