@@ -536,3 +536,48 @@ fn weights_needs_a_mode_with_weights() {
         .args(["--pixel", "40,4", "--mode", "bdd1", "--resolution", "8x8"]));
     assert_one_line_error(&out, &["--pixel", "outside"]);
 }
+
+/// `bdpm compare`: a render and its rerun with 1 thread are bit-identical (exit 0 with
+/// `--require-identical`); a render with another seed is not (exit 1), but agrees with it
+/// statistically; images of different sizes are refused with one line.
+#[test]
+fn compare_tells_identical_from_merely_equivalent_renders() {
+    let dir = TempDir::new("compare");
+    let render = |name: &str, seed: &str, threads: &str, res: &str| {
+        let out = run(bdpm()
+            .arg("render")
+            .arg(scene("cornell-lambert.toml"))
+            .args(["--mode", "balance", "--resolution", res, "--passes", "3"])
+            .args(["--spp", "4", "--photons", "20000", "--seed", seed])
+            .args(["--threads", threads, "--quiet", "-o"])
+            .arg(dir.path(name)));
+        assert_success(&out);
+    };
+    render("a.exr", "1", "2", "16x16");
+    render("b.exr", "1", "1", "16x16");
+    render("c.exr", "2", "2", "16x16");
+    render("d.exr", "1", "2", "8x8");
+    let compare = |a: &str, b: &str| {
+        run(bdpm()
+            .arg("compare")
+            .arg(dir.path(a))
+            .arg(dir.path(b))
+            .arg("--require-identical"))
+    };
+    let same = compare("a.exr", "b.exr");
+    assert_success(&same);
+    assert!(
+        text(&same.stdout).contains("bit-identical"),
+        "{}",
+        text(&same.stdout)
+    );
+    let other = compare("a.exr", "c.exr");
+    assert_eq!(other.status.code(), Some(1), "{}", text(&other.stdout));
+    assert!(
+        text(&other.stdout).contains("pixels differ"),
+        "{}",
+        text(&other.stdout)
+    );
+    let sizes = compare("a.exr", "d.exr");
+    assert_one_line_error(&sizes, &["a.exr", "16x16", "8x8"]);
+}
