@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Times the stages of `bdpm render` for several binaries side by side, interleaved, N times
+# each, and prints the minimum and median of every stage (seconds, from each run's JSON report).
+# Used for the before/after figures in docs/performance.md. Example:
+#   scripts/ab.sh 5 cornell-lambert optimal 256x256 1 1 /tmp/bdpm-before target/release/bdpm
+# (N, scene, mode, resolution, passes, threads, then the binaries; build an older binary with
+# `git worktree add /tmp/old REV && (cd /tmp/old && cargo build --release)`).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+n=$1; scene=$2; mode=$3; res=$4; passes=$5; threads=$6; shift 6
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+for i in $(seq "$n"); do
+  for b in "$@"; do
+    key=$(echo "$b" | tr '/' '_')
+    "$b" render "scenes/$scene.toml" --mode "$mode" --resolution "$res" --passes "$passes" \
+      --threads "$threads" -o "$tmp/run.exr" --quiet > /dev/null
+    python3 - "$tmp/run.json" >> "$tmp/$key.txt" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1])); t = d["timing"]
+st = {s["name"]: s["seconds"] for s in t["pass_stages"]}
+print(t["prepare_s"], st.get("photons", 0.0), st.get("camera", 0.0), t["prepare_s"] + t["render_s"])
+PY
+  done
+done
+for b in "$@"; do
+  key=$(echo "$b" | tr '/' '_')
+  echo "$b"
+  python3 - "$tmp/$key.txt" <<'PY'
+import statistics, sys
+rows = [list(map(float, l.split())) for l in open(sys.argv[1]) if l.strip()]
+for k, name in enumerate(["prepare", "photons", "camera", "total"]):
+    v = sorted(r[k] for r in rows)
+    print(f"  {name:<8} min {v[0]:.3f}  median {statistics.median(v):.3f}")
+PY
+done
