@@ -2,10 +2,13 @@
 # Renders every mode on both Cornell scenes at small settings, or compares two such sets bit
 # for bit. Used to show that a performance change kept the image bits (docs/performance.md).
 #   scripts/bit-check.sh render DIR          # with the current build (cargo build --release)
+#   BDPM=/tmp/before/target/release/bdpm scripts/bit-check.sh render DIR   # another binary
 #   scripts/bit-check.sh compare DIR_A DIR_B # exits non-zero if any image differs
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bin=target/release/bdpm
+bin=${BDPM:-target/release/bdpm}
+# `compare` needs a binary that has the compare command, i.e. this checkout's.
+compare_bin=target/release/bdpm
 modes="path light bdd0 bdd1 threshold algebraic-direct algebraic optimal balance power"
 case "${1:-}" in
   render)
@@ -21,7 +24,7 @@ case "${1:-}" in
     fail=0
     for f in "$2"/*.exr; do
       g="$3/$(basename "$f")"
-      if out=$($bin compare "$f" "$g" --require-identical); then
+      if out=$($compare_bin compare "$f" "$g" --require-identical); then
         echo "same bits: $(basename "$f")"
       else
         echo "DIFFERENT: $(basename "$f"): $out"; fail=1
