@@ -354,7 +354,8 @@ impl<'a> Mix<'a> {
             self.start_sample(map, job, pixel, stats, slot);
         }
         for _ in 0..QUERY_STAGES {
-            for slot in slots.iter_mut().filter(|s| s.x0.is_some()) {
+            // Only this batch's slots: the others still hold an earlier batch's samples.
+            for slot in slots[..jobs.len()].iter_mut().filter(|s| s.x0.is_some()) {
                 if slot.second.is_some() {
                     map.advance_query(&mut slot.query1);
                 }

@@ -179,8 +179,8 @@ impl PhotonMap {
         );
         let positions: Vec<Vec3> = photons.par_iter().map(|p| p.position).collect();
         let (grid, order) = HashGrid::build(&positions, radius);
-        let photons: Vec<Photon> = order.par_iter().map(|&i| photons[i as usize]).collect();
-        let positions = photons.par_iter().map(|p| p.position).collect();
+        let photons = order.par_iter().map(|&i| photons[i as usize]).collect();
+        let positions = order.par_iter().map(|&i| positions[i as usize]).collect();
         PhotonMap {
             photons,
             positions,
@@ -310,14 +310,6 @@ impl PhotonMap {
             }
             Scan::No | Scan::Overflow => self.scan(q, |i| f(&self.photons[i])),
         }
-    }
-
-    /// Hints the CPU to fetch what [`Self::for_each_near`] at `x` will read first (the grid's
-    /// cell filter). Call it as soon as a query point is known and do other work before the
-    /// query; it never changes a result.
-    #[inline]
-    pub fn prefetch(&self, x: Vec3) {
-        let _ = self.start_query(x);
     }
 
     /// The path vertex with index `i` (a [`Photon::prev`] or [`Photon::vertex`]).
