@@ -2,7 +2,7 @@
 //! pool and the user-facing error type.
 use std::path::{Path, PathBuf};
 
-use bdpm_integrator::{Mode, RenderSettings};
+use bdpm_integrator::{Mode, NoiseModel, RenderSettings};
 use bdpm_load::{LoadReport, load_scene};
 use bdpm_scene::Scene;
 use clap::Args;
@@ -49,6 +49,11 @@ pub(crate) struct Overrides {
     /// model assumes) instead of jittering them over the pixel.
     #[arg(long)]
     pub(crate) no_jitter: bool,
+    /// Noise model of the model-based weights (algebraic-direct, algebraic, optimal): footprint
+    /// (N_eff per pixel from the overlap of the samples' merge disks) or pinhole (the preprint's
+    /// N_B; its weights assume every sample of a pixel shares x0).
+    #[arg(long)]
+    pub(crate) noise_model: Option<String>,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub(crate) threads: Option<usize>,
@@ -116,6 +121,14 @@ pub(crate) fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> C
     }
     if o.no_jitter {
         settings.pixel_jitter = false;
+    }
+    if let Some(name) = &o.noise_model {
+        settings.noise_model = NoiseModel::parse(name).ok_or_else(|| {
+            format!(
+                "--noise-model: unknown model '{name}'; expected one of {}",
+                NoiseModel::ALL_NAMES.join(", ")
+            )
+        })?;
     }
     if let Some(s) = o.seed {
         settings.seed = s;

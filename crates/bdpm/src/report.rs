@@ -71,6 +71,8 @@ struct SettingsOut {
     pixel_table_rays: u32,
     clamp_weights: bool,
     pixel_jitter: bool,
+    /// `pinhole` or `footprint` (method.md §12).
+    noise_model: &'static str,
 }
 
 #[derive(Serialize)]
@@ -152,6 +154,7 @@ fn settings_out(s: &RenderSettings, radius: f32) -> SettingsOut {
         pixel_table_rays: s.pixel_table_rays,
         clamp_weights: s.clamp_weights,
         pixel_jitter: s.pixel_jitter,
+        noise_model: s.noise_model.name(),
     }
 }
 
@@ -238,6 +241,8 @@ pub(crate) fn header_attributes(s: &RenderSettings, r: &Renderer<'_>) -> Vec<(St
         ("passes".into(), s.passes.to_string()),
         ("photons_per_pass".into(), s.photons.to_string()),
         ("spp".into(), s.spp.to_string()),
+        ("pixel_jitter".into(), s.pixel_jitter.to_string()),
+        ("noise_model".into(), s.noise_model.name().into()),
         // The radius in use, also when the scene left it to the default.
         ("radius_m".into(), r.radius().to_string()),
         (

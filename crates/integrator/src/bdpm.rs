@@ -6,9 +6,11 @@ use bdpm_bdf::{Bdf, Outgoing, luminance};
 use bdpm_cache::{CacheSlot, RadianceCache};
 use bdpm_geometry::Hit;
 use bdpm_geometry::{Frame, Rng};
-use bdpm_mis::{Budget, Heuristic, Needs, Pair, PathKind, PixelTerms};
+use bdpm_mis::{Budget, Heuristic, Needs, Pair, PathKind};
 use bdpm_photon::{PathVertex, PhotonMap, PhotonQuery, survival_at};
 use bdpm_scene::{Scene, Shading};
+
+use crate::table::PixelWeights;
 use glam::{DVec3, Vec3};
 
 /// The contributions of one camera sample, split by technique (for the debug layers).
@@ -321,8 +323,19 @@ impl<'a> Mix<'a> {
         (self.scene.light_probability(light) / (4.0 * PI) * cos / d2) as f64
     }
 
-    fn w1(&self, pair: &Pair, pixel: Option<&PixelTerms>, stats: &mut WeightStats) -> f64 {
-        let w = self.heuristic.weight(&self.budget, pair, pixel);
+    fn w1(&self, pair: &Pair, pixel: Option<&PixelWeights>, stats: &mut WeightStats) -> f64 {
+        // The pixel's N_eff stands in for N_B (method.md §12); it is N_B itself under the
+        // pinhole model and without jitter, so those weights keep their bits.
+        let budget = match pixel {
+            Some(p) => Budget {
+                camera_samples: p.camera_samples,
+                ..self.budget
+            },
+            None => self.budget,
+        };
+        let w = self
+            .heuristic
+            .weight(&budget, pair, pixel.map(|p| &p.terms));
         stats.evaluations += 1;
         stats.outside_unit += w.outside_unit as u64;
         stats.clamped_cb += w.clamped_cb as u64;
@@ -342,7 +355,7 @@ impl<'a> Mix<'a> {
         map: &PhotonMap,
         jobs: &mut [Job],
         slots: &mut Slots<'s>,
-        pixel: Option<&PixelTerms>,
+        pixel: Option<&PixelWeights>,
         stats: &mut WeightStats,
     ) {
         assert!(jobs.len() <= BATCH, "at most {BATCH} samples per batch");
@@ -383,7 +396,7 @@ impl<'a> Mix<'a> {
         &'s self,
         map: &PhotonMap,
         job: &mut Job,
-        pixel: Option<&PixelTerms>,
+        pixel: Option<&PixelWeights>,
         stats: &mut WeightStats,
         slot: &mut Slot<'s>,
     ) {
@@ -415,7 +428,7 @@ impl<'a> Mix<'a> {
         x0: &FirstVertex<'_>,
         map: &PhotonMap,
         rng: &mut Rng,
-        pixel: Option<&PixelTerms>,
+        pixel: Option<&PixelWeights>,
         stats: &mut WeightStats,
         query: &mut PhotonQuery,
     ) -> Option<Second> {
@@ -506,7 +519,7 @@ impl<'a> Mix<'a> {
         map: &PhotonMap,
         second: &Second,
         query: &PhotonQuery,
-        pixel: Option<&PixelTerms>,
+        pixel: Option<&PixelWeights>,
         stats: &mut WeightStats,
         t: &mut Techniques,
     ) {
@@ -561,7 +574,7 @@ impl<'a> Mix<'a> {
         x0: &FirstVertex<'_>,
         map: &PhotonMap,
         query: &PhotonQuery,
-        pixel: Option<&PixelTerms>,
+        pixel: Option<&PixelWeights>,
         camera_w1: Option<f64>,
         stats: &mut WeightStats,
         t: &mut Techniques,

@@ -19,8 +19,9 @@ mod table;
 mod weightmap;
 
 pub use bdpm::{Techniques, WeightStats, scene_default_radius};
+pub use bdpm_mis::NoiseModel;
 pub use film::Film;
 pub use render::{PassOutput, RenderError, Renderer, StageReport, render_path_pass};
 pub use settings::{Mode, RenderSettings, default_radius};
-pub use table::PixelTable;
+pub use table::{PixelTable, PixelWeights};
 pub use weightmap::{WeightMap, WeightTarget};

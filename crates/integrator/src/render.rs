@@ -7,13 +7,13 @@ use rayon::prelude::*;
 
 use bdpm_bdf::luminance;
 use bdpm_cache::{CacheSettings, RadianceCache};
-use bdpm_mis::{Budget, CB_EPSILON, Heuristic};
+use bdpm_mis::{Budget, CB_EPSILON, Heuristic, NoiseModel};
 use bdpm_photon::{PhotonMap, TraceOptions};
 
 use crate::bdpm::{BATCH, Job, Mix, Slots, Techniques, WeightStats, scene_default_radius};
 use crate::path::trace_path;
 use crate::settings::{Mode, RenderSettings, pixel_offset};
-use crate::table::{self, PixelTable};
+use crate::table::{self, PixelTable, TableSpec};
 
 /// Radiance-cache cells per largest scene extent: cells of ~9 cm in the 2.8 m Cornell box,
 /// far larger than the merge radius, as method.md §5 asks.
@@ -144,26 +144,70 @@ impl<'a> Renderer<'a> {
             });
             self.cache = Some(cache);
         }
-        if needs.pixel_table {
+        let footprint = self.footprint_model() && needs.effective_samples;
+        if needs.pixel_table || footprint {
             let start = std::time::Instant::now();
-            let table = table::build(&self.mix(h), s.width, s.height, s.pixel_table_rays, s.seed);
-            let c = self.budget().c();
+            let spec = TableSpec {
+                rays: needs.pixel_table.then_some(s.pixel_table_rays),
+                footprint,
+                radius: self.radius,
+                seed: s.seed,
+            };
+            let table = table::build(&self.mix(h), s.width, s.height, &spec);
+            let budget = self.budget();
+            // c·B with each pixel's own c = (N_F − 1)·S/(Φ·N_eff).
             let clamped = table
-                .terms()
+                .pixels()
                 .iter()
-                .filter(|t| c * t.b >= 1.0 - CB_EPSILON)
+                .filter(|p| {
+                    let c = Budget {
+                        camera_samples: p.camera_samples,
+                        ..budget
+                    }
+                    .c();
+                    c * p.terms.b >= 1.0 - CB_EPSILON
+                })
                 .count();
+            let (rho, n_eff) = table::mean_overlap(&table);
+            let overlap = if footprint {
+                format!(
+                    "footprint noise model: mean rho {rho:.4}, mean N_eff {n_eff:.2} of N_B {}",
+                    s.spp
+                )
+            } else {
+                format!("pinhole noise model (N_eff = N_B = {})", s.spp)
+            };
+            let detail = if needs.pixel_table {
+                format!(
+                    "A, B for {}x{} pixels, {} rays each; {} pixels with c*B clamped; {overlap}",
+                    s.width, s.height, s.pixel_table_rays, clamped
+                )
+            } else {
+                format!("rho, N_eff for {}x{} pixels; {overlap}", s.width, s.height)
+            };
             self.stages.push(StageReport {
-                name: "pixel table",
+                name: if needs.pixel_table {
+                    "pixel table"
+                } else {
+                    "pixel footprints"
+                },
                 seconds: start.elapsed().as_secs_f64(),
                 bytes: table.bytes(),
-                detail: format!(
-                    "A, B for {}x{} pixels, {} rays each; {} pixels with c*B clamped",
-                    s.width, s.height, s.pixel_table_rays, clamped
-                ),
+                detail,
             });
             self.table = Some(table);
         }
+    }
+
+    /// Whether the weights use per-pixel N_eff from footprints (method.md §12): the footprint
+    /// noise model with jittered samples (without jitter ρ = 1, so N_eff = N_B).
+    pub(crate) fn footprint_model(&self) -> bool {
+        self.settings.noise_model == NoiseModel::Footprint && self.settings.pixel_jitter
+    }
+
+    /// The per-pixel weight inputs (ρ, N_eff, A, B), when the mode uses them.
+    pub fn pixel_table(&self) -> Option<&PixelTable> {
+        self.table.as_ref()
     }
 
     /// The mix of mode `h` with this renderer's constants.

@@ -1,6 +1,6 @@
 use std::fmt;
 
-use bdpm_mis::Heuristic;
+use bdpm_mis::{Heuristic, NoiseModel};
 
 /// What a render computes: the unidirectional reference, or the BDPM mix with a weight mode.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -81,6 +81,10 @@ pub struct RenderSettings {
     /// pixel go through its centre and share x₀, the layout the preprint's noise model (and
     /// its optimal weights) assumes.
     pub pixel_jitter: bool,
+    /// How the model-based weights account for the photons that a pixel's camera samples
+    /// share at x₀ (method.md §12): `Footprint` (default) uses N_eff per pixel, `Pinhole` the
+    /// preprint's N_B. Without jitter both give N_eff = N_B.
+    pub noise_model: NoiseModel,
 }
 
 impl Default for RenderSettings {
@@ -102,6 +106,7 @@ impl Default for RenderSettings {
             clamp_weights: false,
             roulette_depth: 3,
             pixel_jitter: true,
+            noise_model: NoiseModel::Footprint,
         }
     }
 }

@@ -1,40 +1,64 @@
-//! The per-pixel A and B of method.md §6 (preprint §6.2): integrals over the second vertex of
-//! the partial weight W₁, computed once before the passes from their own random stream.
+//! The per-pixel inputs of the model-based weights, computed once before the passes from their
+//! own random stream and frozen: the overlap factor ρ and N_eff of method.md §12 (from the
+//! pixel's footprint), and the integrals A and B of method.md §6 (preprint §6.2) over the
+//! second vertex of the partial weight W₁ (computed with the pixel's N_eff).
 use bdpm_geometry::{Domain, Rng};
-use bdpm_mis::{PixelTerms, w1_partial};
+use bdpm_mis::{Budget, PixelTerms, effective_samples, overlap_factor, w1_partial};
+use bdpm_scene::{Scene, Shading};
 use rayon::prelude::*;
 
 use crate::bdpm::{FirstVertex, Mix, WeightVertex};
 
-/// A, B per pixel (luminances), row-major; frozen before rendering.
+/// What the weights of one pixel's camera samples need beyond the pair (x₀, x₁).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PixelWeights {
+    /// A, B of method.md §6 (zero unless the mode is `optimal`).
+    pub terms: PixelTerms,
+    /// The N_B that the weights use for this pixel: N_eff = 1 + (N_B − 1)·ρ under the
+    /// footprint noise model, N_B under the pinhole one (method.md §12).
+    pub camera_samples: f64,
+    /// ρ, the mean overlap of two samples' merge disks over the pixel's footprint (1 when
+    /// every sample goes through the pixel's centre or the model is `pinhole`).
+    pub overlap: f64,
+}
+
+/// Per-pixel weight inputs, row-major; frozen before rendering.
 #[derive(Clone, Debug)]
 pub struct PixelTable {
     width: u32,
-    terms: Vec<PixelTerms>,
+    pixels: Vec<PixelWeights>,
+    /// Whether A and B were computed (the `optimal` mode).
+    has_terms: bool,
 }
 
 impl PixelTable {
-    /// The terms of pixel (x, y).
+    /// The weight inputs of pixel (x, y).
     #[inline]
-    pub fn get(&self, x: u32, y: u32) -> &PixelTerms {
-        &self.terms[y as usize * self.width as usize + x as usize]
+    pub fn get(&self, x: u32, y: u32) -> &PixelWeights {
+        &self.pixels[y as usize * self.width as usize + x as usize]
     }
 
     /// Memory of the table, bytes.
     pub fn bytes(&self) -> u64 {
-        (self.terms.len() * std::mem::size_of::<PixelTerms>()) as u64
+        (self.pixels.len() * std::mem::size_of::<PixelWeights>()) as u64
     }
 
-    /// Mean of c·B over pixels with a surface (a stiffness indicator for the report).
-    pub fn terms(&self) -> &[PixelTerms] {
-        &self.terms
+    /// Every pixel's inputs, row-major.
+    pub fn pixels(&self) -> &[PixelWeights] {
+        &self.pixels
+    }
+
+    /// Whether A and B were computed (otherwise they are zero).
+    pub fn has_terms(&self) -> bool {
+        self.has_terms
     }
 }
 
-/// A and B for one first vertex: `rays` BDF-sampled directions from the stream keyed by
-/// (seed, `key`, ray).
+/// A and B for one first vertex with `budget` (whose N_B is the pixel's N_eff): `rays`
+/// BDF-sampled directions from the stream keyed by (seed, `key`, ray).
 pub(crate) fn pixel_terms(
     mix: &Mix<'_>,
+    budget: &Budget,
     x0: &FirstVertex<'_>,
     rays: u32,
     seed: u64,
@@ -61,7 +85,7 @@ pub(crate) fn pixel_terms(
         let x1 = WeightVertex::from_shading(scene, &sh1);
         let pair = mix.pair(x0, &x1, v, s.f);
         let l = pair.direct + pair.indirect;
-        let w1 = w1_partial(&mix.budget, pair.f_tilde, l, pair.b);
+        let w1 = w1_partial(budget, pair.f_tilde, l, pair.b);
         let cos_over_pdf = (s.wi.z / s.pdf) as f64;
         a += w1 * pair.f_tilde * l * cos_over_pdf;
         b += w1 * l * cos_over_pdf;
@@ -70,28 +94,126 @@ pub(crate) fn pixel_terms(
     PixelTerms { a: a / n, b: b / n }
 }
 
-/// Builds the table: for each pixel, the primary ray through its centre finds x₀, then `rays`
-/// directions v are sampled from the BDF at x₀ (no absorption) and
-/// A += W₁ f̃ L cos/p, B += W₁ L cos/p with L = L₀(x₁→x₀) + L_d(x₁→x₀), divided by `rays`.
-pub(crate) fn build(mix: &Mix<'_>, width: u32, height: u32, rays: u32, seed: u64) -> PixelTable {
+/// ρ for the camera samples of the pixel whose image point (x, y) (pixels) sees x₀ at `sh`:
+/// the footprint is the parallelogram where the rays through (x ± ½, y ± ½) cross x₀'s tangent
+/// plane (ray differentials, as pbrt does for texture filtering).
+///
+/// A footprint that crosses an edge or a silhouette is treated as if it continued on x₀'s
+/// plane. Pairs of samples on the two sides of the edge share no photons, but the pairs on each
+/// side share more; for footprints much larger than the merge disk the two effects cancel
+/// (ρ ≈ S/|F| either way), and for small ones ρ ≈ 1 either way. A footprint that reaches the
+/// horizon of the plane gives ρ = 0.
+pub(crate) fn footprint_overlap(scene: &Scene, sh: &Shading, x: f32, y: f32, radius: f32) -> f64 {
+    let cam = &scene.camera;
+    let n = sh.ng.as_dvec3();
+    let origin = cam.position.as_dvec3();
+    let plane = n.dot(sh.p.as_dvec3() - origin);
+    let cross = |px: f32, py: f32| {
+        let d = cam.ray_direction(px, py).as_dvec3();
+        let t = plane / n.dot(d);
+        // Behind the camera or parallel to the plane: an unbounded footprint.
+        if t > 0.0 && t.is_finite() {
+            origin + d * t
+        } else {
+            glam::DVec3::splat(f64::INFINITY)
+        }
+    };
+    let edge_x = cross(x + 0.5, y) - cross(x - 0.5, y);
+    let edge_y = cross(x, y + 0.5) - cross(x, y - 0.5);
+    overlap_factor(edge_x.to_array(), edge_y.to_array(), radius as f64)
+}
+
+/// How the table is built.
+pub(crate) struct TableSpec {
+    /// Backward rays per pixel for A and B; `None` skips A and B (modes other than `optimal`).
+    pub(crate) rays: Option<u32>,
+    /// Compute ρ from the footprint (footprint noise model with jittered samples); otherwise
+    /// ρ = 1 and N_eff = N_B.
+    pub(crate) footprint: bool,
+    /// Merge radius r, metres.
+    pub(crate) radius: f32,
+    /// Master seed.
+    pub(crate) seed: u64,
+}
+
+/// The weight inputs of the pixel whose image point (x, y) sees x₀ (`key` keys A and B's
+/// random stream).
+pub(crate) fn pixel_weights(
+    mix: &Mix<'_>,
+    x0: &FirstVertex<'_>,
+    (x, y): (f32, f32),
+    spec: &TableSpec,
+    key: u64,
+) -> PixelWeights {
+    let n_b = mix.budget.camera_samples;
+    let overlap = if spec.footprint {
+        footprint_overlap(mix.scene, &x0.sh, x, y, spec.radius)
+    } else {
+        1.0
+    };
+    let camera_samples = effective_samples(n_b, overlap);
+    let budget = Budget {
+        camera_samples,
+        ..mix.budget
+    };
+    let terms = spec.rays.map_or(PixelTerms::default(), |rays| {
+        pixel_terms(mix, &budget, x0, rays, spec.seed, key)
+    });
+    PixelWeights {
+        terms,
+        camera_samples,
+        overlap,
+    }
+}
+
+/// Builds the table: for each pixel, the primary ray through its centre finds x₀; ρ comes from
+/// the pixel's footprint there, and (with `spec.rays`) `rays` directions v are sampled from the
+/// BDF at x₀ (no absorption) and A += W₁ f̃ L cos/p, B += W₁ L cos/p with
+/// L = L₀(x₁→x₀) + L_d(x₁→x₀), divided by `rays`. A pixel whose centre sees nothing gets ρ = 0
+/// under the footprint model (its samples that hit land on whatever lies behind the
+/// silhouette, spread out) and A = B = 0.
+pub(crate) fn build(mix: &Mix<'_>, width: u32, height: u32, spec: &TableSpec) -> PixelTable {
     let scene = mix.scene;
     let cam = &scene.camera;
-    let mut terms = vec![PixelTerms::default(); width as usize * height as usize];
-    terms
+    let n_b = mix.budget.camera_samples;
+    let missed = PixelWeights {
+        terms: PixelTerms::default(),
+        overlap: if spec.footprint { 0.0 } else { 1.0 },
+        camera_samples: effective_samples(n_b, if spec.footprint { 0.0 } else { 1.0 }),
+    };
+    let mut pixels = vec![missed; width as usize * height as usize];
+    pixels
         .par_chunks_mut(width as usize)
         .enumerate()
         .for_each(|(y, row)| {
             for (x, out) in row.iter_mut().enumerate() {
                 let pixel = (y * width as usize + x) as u64;
-                let dir = cam.ray_direction(x as f32 + 0.5, y as f32 + 0.5);
+                let centre = (x as f32 + 0.5, y as f32 + 0.5);
+                let dir = cam.ray_direction(centre.0, centre.1);
                 let Some(hit0) = scene.geometry.intersect(cam.position, dir, f32::INFINITY) else {
                     continue;
                 };
                 let Some(x0) = mix.first_vertex(&hit0, -dir) else {
                     continue;
                 };
-                *out = pixel_terms(mix, &x0, rays, seed, pixel);
+                *out = pixel_weights(mix, &x0, centre, spec, pixel);
             }
         });
-    PixelTable { width, terms }
+    PixelTable {
+        width,
+        pixels,
+        has_terms: spec.rays.is_some(),
+    }
+}
+
+/// Mean of ρ and of N_eff over all pixels, for the run report.
+pub(crate) fn mean_overlap(table: &PixelTable) -> (f64, f64) {
+    let (mut rho, mut n, mut count) = (0.0, 0.0, 0usize);
+    for p in table.pixels() {
+        rho += p.overlap;
+        n += p.camera_samples;
+        count += 1;
+    }
+    let c = count.max(1) as f64;
+    (rho / c, n / c)
 }

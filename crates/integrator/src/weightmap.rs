@@ -6,7 +6,7 @@ use rayon::prelude::*;
 use crate::bdpm::WeightVertex;
 use crate::render::{RenderError, Renderer};
 use crate::settings::Mode;
-use crate::table::pixel_terms;
+use crate::table::{TableSpec, pixel_weights};
 
 /// Where x₀ is.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -81,11 +81,27 @@ impl Renderer<'_> {
             .first_vertex(&hit, -dir)
             .ok_or_else(|| RenderError::Settings("x0 faces away from the camera".into()))?;
         let s = self.settings();
-        let pixel = if h.needs().pixel_table {
-            Some(pixel_terms(&mix, &x0, s.pixel_table_rays, s.seed, u64::MAX))
+        let needs = h.needs();
+        let footprint = self.footprint_model() && needs.effective_samples;
+        let pixel = if needs.pixel_table || footprint {
+            let spec = TableSpec {
+                rays: needs.pixel_table.then_some(s.pixel_table_rays),
+                footprint,
+                radius: self.radius(),
+                seed: s.seed,
+            };
+            // The footprint of the image point that sees x₀.
+            let image_point = cam
+                .project(x0.sh.p)
+                .unwrap_or((cam.width as f32 * 0.5, cam.height as f32 * 0.5));
+            Some(pixel_weights(&mix, &x0, image_point, &spec, u64::MAX))
         } else {
             None
         };
+        let budget = pixel.map_or(mix.budget, |p| bdpm_mis::Budget {
+            camera_samples: p.camera_samples,
+            ..mix.budget
+        });
         let (w, hgt) = (cam.width as usize, cam.height as usize);
         let mut w0 = vec![f64::NAN; w * hgt];
         w0.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
@@ -113,7 +129,9 @@ impl Renderer<'_> {
                 };
                 let f0 = scene.eval(&x0.sh, x0.u, v_eval);
                 let pair = mix.pair(&x0, &x1, v, f0);
-                *out = h.weight(&mix.budget, &pair, pixel.as_ref()).w0();
+                *out = h
+                    .weight(&budget, &pair, pixel.as_ref().map(|p| &p.terms))
+                    .w0();
             }
         });
         let x0_pixel = cam

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use bdpm_bdf::Bdf;
 use bdpm_geometry::{Geometry, GeometryError, TriangleMesh};
-use bdpm_integrator::{Mode, RenderSettings, default_radius};
+use bdpm_integrator::{Mode, NoiseModel, RenderSettings, default_radius};
 use bdpm_scene::{Camera, Material, PointLight, Scene, SceneError};
 use glam::{Mat4, Vec3};
 
@@ -504,6 +504,18 @@ fn render_settings(
             )
         })?,
     };
+    let noise_model = match r.noise_model {
+        None => d.noise_model,
+        Some(name) => NoiseModel::parse(&name).ok_or_else(|| {
+            ctx.bad(
+                "render.noise_model",
+                format!(
+                    "unknown noise model '{name}'; expected one of {}",
+                    NoiseModel::ALL_NAMES.join(", ")
+                ),
+            )
+        })?,
+    };
     let radius = match r.radius {
         None => None,
         Some(v) => Some(ctx.positive("render.radius", v, "metres")?),
@@ -541,6 +553,7 @@ fn render_settings(
         )?,
         clamp_weights: r.clamp_weights.unwrap_or(d.clamp_weights),
         pixel_jitter: r.pixel_jitter.unwrap_or(d.pixel_jitter),
+        noise_model,
         roulette_depth: r.roulette_depth.unwrap_or(d.roulette_depth),
     };
     if let Some(out) = &r.output

@@ -44,6 +44,7 @@ pub(crate) struct RenderDef {
     pub(crate) pixel_table_rays: Option<u32>,
     pub(crate) clamp_weights: Option<bool>,
     pub(crate) pixel_jitter: Option<bool>,
+    pub(crate) noise_model: Option<String>,
     pub(crate) roulette_depth: Option<u32>,
 }
 

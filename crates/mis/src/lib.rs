@@ -45,6 +45,9 @@
 
 use std::fmt;
 
+mod overlap;
+pub use overlap::{NoiseModel, effective_samples, lens_fraction, overlap_factor};
+
 /// The per-pass budget and merge settings shared by every weight of one render.
 ///
 /// Preconditions: `camera_samples ≥ 1`, `photons ≥ 1`, `merge_area ≥ 0`, `flux > 0`.
@@ -110,6 +113,10 @@ pub struct Needs {
     pub pixel_table: bool,
     /// Path densities p_C, p_L are needed (`balance`, `power`).
     pub densities: bool,
+    /// The weight weighs BDD=0 against BDD=1 through N_B, so under the footprint noise
+    /// model (method.md §12) the renderer passes each pixel's N_eff as
+    /// [`Budget::camera_samples`] (`algebraic-direct`, `algebraic`, `optimal`).
+    pub effective_samples: bool,
 }
 
 /// What the weight of one (x₀, x₁) pair may depend on.
@@ -287,15 +294,18 @@ impl Heuristic {
             Heuristic::Threshold { .. } => mix,
             Heuristic::AlgebraicDirect => Needs {
                 direct_at_x1: true,
+                effective_samples: true,
                 ..mix
             },
             Heuristic::Algebraic => Needs {
                 direct_at_x1: true,
                 radiance_cache: true,
+                effective_samples: true,
                 ..mix
             },
             Heuristic::Optimal { .. } => Needs {
                 direct_at_x1: true,
+                effective_samples: true,
                 radiance_cache: true,
                 cache_b: true,
                 pixel_table: true,

@@ -373,6 +373,7 @@ fn needs_follow_method_table() {
     assert_eq!(needs("threshold"), mix);
     let direct = Needs {
         direct_at_x1: true,
+        effective_samples: true,
         ..mix
     };
     assert_eq!(needs("algebraic-direct"), direct);
