@@ -93,6 +93,7 @@ static INPUTS: LazyLock<Vec<Input>> = LazyLock::new(|| {
                 camera_density: log_uniform(&mut rng, 1e-2, 1e2),
                 light_density: log_uniform(&mut rng, 1e-2, 1e2),
                 emission_density: log_uniform(&mut rng, 1e-3, 1e1),
+                x1_scattering: log_uniform(&mut rng, 1e-2, 1e2),
             };
             let pixel = PixelTerms {
                 a: log_uniform(&mut rng, 1e-4, 1.0),

@@ -116,7 +116,7 @@ fn per_photon_weighting_is_unbiased_and_camera_x1_weighting_is_not() {
     );
 }
 
-/// `cornell-glossy`: `algebraic` and `optimal` against the `path` reference (the optimal-weights
+/// `cornell-glossy`: `algebraic`, `optimal` and `optimal-path` against the `path` reference (the optimal-weights
 /// issue's check). Two kinds of path here have heavy-tailed estimates: a glossy x₀ reflecting
 /// the light in a glossy x₁ (found by BDD=1 only when the sampled x₁ direction meets the light's
 /// lobe) and glossy merges with few photons in the lobe. A render whose passes missed the rare
@@ -127,7 +127,7 @@ fn per_photon_weighting_is_unbiased_and_camera_x1_weighting_is_not() {
 fn glossy_modes_agree_with_the_path_reference() {
     let (scene, settings) = glossy();
     let mut failures = Vec::new();
-    for mode in ["algebraic", "optimal"] {
+    for mode in ["algebraic", "optimal", "optimal-path"] {
         let mut s = with_mode(settings, mode, 96, 128, 250_000);
         s.radius = Some(0.015);
         let film = render(scene, &s);

@@ -22,7 +22,6 @@ fn modes_prepare_only_what_they_need() {
         "bdd0",
         "bdd1",
         "threshold",
-        "algebraic-direct",
         "balance",
         "power",
     ] {
@@ -31,16 +30,48 @@ fn modes_prepare_only_what_they_need() {
             "{mode} prepared something"
         );
     }
+    // The model-based weights use each pixel's N_eff (method.md §12): footprints, no cache.
+    let direct = stage_names("cornell-lambert.toml", "algebraic-direct");
+    assert_eq!(
+        direct.iter().map(|s| s.0.as_str()).collect::<Vec<_>>(),
+        ["pixel footprints"]
+    );
     let algebraic = stage_names("cornell-lambert.toml", "algebraic");
     assert_eq!(
         algebraic.iter().map(|s| s.0.as_str()).collect::<Vec<_>>(),
-        ["radiance cache"]
+        ["radiance cache", "pixel footprints"]
     );
-    let optimal = stage_names("cornell-lambert.toml", "optimal");
-    assert_eq!(
-        optimal.iter().map(|s| s.0.as_str()).collect::<Vec<_>>(),
-        ["radiance cache", "pixel table"]
-    );
+    for mode in ["optimal", "optimal-split", "optimal-path"] {
+        let stages = stage_names("cornell-lambert.toml", mode);
+        assert_eq!(
+            stages.iter().map(|s| s.0.as_str()).collect::<Vec<_>>(),
+            ["radiance cache", "pixel table"],
+            "{mode}"
+        );
+        assert!(stages[1].1.contains("footprint noise model"), "{stages:?}");
+    }
+}
+
+/// Without jitter every sample of a pixel shares x₀ (ρ = 1), and under the pinhole model the
+/// weights use N_B: either way no footprints are computed.
+#[test]
+fn centred_samples_and_the_pinhole_model_need_no_footprints() {
+    let (scene, settings) = load("cornell-lambert.toml", 16, 16);
+    for (jitter, model) in [
+        (false, bdpm_integrator::NoiseModel::Footprint),
+        (true, bdpm_integrator::NoiseModel::Pinhole),
+    ] {
+        let mut s = with_mode(&settings, "algebraic-direct", 1, 1, 20_000);
+        s.pixel_jitter = jitter;
+        s.noise_model = model;
+        let r = Renderer::new(&scene, &s).unwrap();
+        assert!(r.stages().is_empty(), "{:?}", r.stages());
+        let mut s = with_mode(&settings, "optimal", 1, 1, 20_000);
+        s.pixel_jitter = jitter;
+        s.noise_model = model;
+        let r = Renderer::new(&scene, &s).unwrap();
+        assert!(r.stages()[1].detail.contains("pinhole"), "{:?}", r.stages());
+    }
 }
 
 #[test]

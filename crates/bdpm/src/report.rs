@@ -68,6 +68,8 @@ struct SettingsOut {
     seed: u64,
     threshold_radius_m: f32,
     cache_bins: u32,
+    /// Photons traced for the radiance cache (N_F unless set).
+    cache_photons: u64,
     pixel_table_rays: u32,
     clamp_weights: bool,
     pixel_jitter: bool,
@@ -151,6 +153,7 @@ fn settings_out(s: &RenderSettings, radius: f32) -> SettingsOut {
         seed: s.seed,
         threshold_radius_m: s.threshold_radius,
         cache_bins: s.cache_bins,
+        cache_photons: s.cache_photons.unwrap_or(s.photons),
         pixel_table_rays: s.pixel_table_rays,
         clamp_weights: s.clamp_weights,
         pixel_jitter: s.pixel_jitter,

@@ -314,6 +314,16 @@ impl<'a> Mix<'a> {
         (p_c as f64, p_l as f64)
     }
 
+    /// f₁(ω₂, x₁→x₀): the BDF at the candidate x₁ (luminance, sr⁻¹) for a light path arriving
+    /// from `incoming` (unit, pointing away from x₁) and leaving towards x₀ (along −`v`), in
+    /// the geometric-normal frame: the same evaluation for the camera's x₁ and a photon's
+    /// previous vertex, so both techniques see the same weight (method.md §2).
+    fn x1_scattering(&self, x1: &WeightVertex, incoming: Vec3, v: Vec3) -> f64 {
+        let frame = Frame::from_normal(x1.n);
+        let bdf = self.scene.bdf(x1.material);
+        luminance(bdf.eval(frame.to_local(-v), frame.to_local(incoming))) as f64
+    }
+
     /// Emission density p_L(light→x₁) in area measure (choice of light included).
     fn emission_density(&self, light: usize, x1: &WeightVertex) -> f64 {
         let l = &self.scene.lights[light];
@@ -467,6 +477,21 @@ impl<'a> Mix<'a> {
         } else {
             self.w1(&pair, pixel, stats)
         };
+        // `optimal-split` weighs the one-bounce paths (through L₀(x₁)) apart from the merge
+        // paths (through the photons at x₁, weighted by `w_const`).
+        let by_kind = matches!(
+            self.heuristic,
+            Heuristic::OptimalSplit { .. } | Heuristic::OptimalPath { .. }
+        );
+        let w_direct = if by_kind && lights != 0 {
+            let pair = Pair {
+                path: PathKind::OneBounce,
+                ..pair
+            };
+            self.w1(&pair, pixel, stats)
+        } else {
+            w_const
+        };
         for (l, light) in scene.lights.iter().enumerate() {
             // The visibility bits already hold the shadow rays of the first 32 lights.
             let c = if l < 32 {
@@ -493,7 +518,7 @@ impl<'a> Mix<'a> {
                 };
                 self.w1(&pair, pixel, stats)
             } else {
-                w_const
+                w_direct
             };
             direct_weighted += c * w as f32;
         }
@@ -537,6 +562,7 @@ impl<'a> Mix<'a> {
         } = second;
         let wo1 = -v;
         let per_light = self.needs.densities;
+        let per_photon = self.needs.x1_scattering;
         let mut ph_raw = Vec3::ZERO;
         let mut ph_weighted = Vec3::ZERO;
         map.finish_query(query, |ph| {
@@ -554,6 +580,12 @@ impl<'a> Mix<'a> {
                     path: PathKind::Merge,
                     camera_density: pc,
                     light_density: pl,
+                    ..pair
+                };
+                self.w1(&pair, pixel, stats)
+            } else if per_photon {
+                let pair = Pair {
+                    x1_scattering: self.x1_scattering(&x1, wp, v),
                     ..pair
                 };
                 self.w1(&pair, pixel, stats)
@@ -606,6 +638,13 @@ impl<'a> Mix<'a> {
                 let y = WeightVertex::from_photon_vertex(prev);
                 let f0 = scene.eval(&x0.sh, x0.u, v);
                 let mut pair = self.pair(x0, &y, v, f0);
+                // A photon whose previous vertex was reached straight from the light closes a
+                // one-bounce path light→y→x₀ (weights that tell path kinds apart read this).
+                if prev.depth == 0 {
+                    pair.path = PathKind::OneBounce;
+                } else if self.needs.x1_scattering {
+                    pair.x1_scattering = self.x1_scattering(&y, prev.incoming, v);
+                }
                 if self.needs.densities {
                     let (pc, pl) = self.densities(x0, &y, v, dist2, prev.incoming);
                     pair.camera_density = pc;

@@ -87,10 +87,23 @@ impl<'a> Renderer<'a> {
         let radius = s.radius.unwrap_or_else(|| scene_default_radius(scene));
         let mut settings = s.clone();
         settings.radius = Some(radius);
-        if let Mode::Bdpm(Heuristic::Optimal { .. }) = settings.mode {
-            settings.mode = Mode::Bdpm(Heuristic::Optimal {
-                clamp_weights: s.clamp_weights,
-            });
+        match settings.mode {
+            Mode::Bdpm(Heuristic::Optimal { .. }) => {
+                settings.mode = Mode::Bdpm(Heuristic::Optimal {
+                    clamp_weights: s.clamp_weights,
+                });
+            }
+            Mode::Bdpm(Heuristic::OptimalSplit { .. }) => {
+                settings.mode = Mode::Bdpm(Heuristic::OptimalSplit {
+                    clamp_weights: s.clamp_weights,
+                });
+            }
+            Mode::Bdpm(Heuristic::OptimalPath { .. }) => {
+                settings.mode = Mode::Bdpm(Heuristic::OptimalPath {
+                    clamp_weights: s.clamp_weights,
+                });
+            }
+            _ => {}
         }
         if let Mode::Bdpm(Heuristic::Threshold { .. }) = settings.mode {
             settings.mode = Mode::Bdpm(Heuristic::Threshold {
@@ -123,7 +136,7 @@ impl<'a> Renderer<'a> {
             let settings = CacheSettings {
                 bins: s.cache_bins,
                 cell_size: (hi - lo).max_element() / CACHE_CELLS_PER_EXTENT,
-                photons: s.photons,
+                photons: s.cache_photons.unwrap_or(s.photons),
                 seed: s.seed,
             };
             let cache = RadianceCache::build(self.scene, &settings);

@@ -71,6 +71,9 @@ pub struct RenderSettings {
     pub threshold_radius: f32,
     /// Angular bins K per radiance-cache cell (one bin is used for Lambert-only scenes).
     pub cache_bins: u32,
+    /// Photons traced for the radiance cache (`None` = N_F, one pass's worth). More photons
+    /// with more bins make an "oracle" cache, to tell cache error from model error.
+    pub cache_photons: Option<u64>,
     /// Backward rays per pixel of the A/B pre-pass, N.
     pub pixel_table_rays: u32,
     /// Clamp optimal weights to [0, 1] (the mix stays unbiased either way).
@@ -102,6 +105,7 @@ impl Default for RenderSettings {
             mode: Mode::Bdpm(Heuristic::Balance),
             threshold_radius: 0.2,
             cache_bins: 100,
+            cache_photons: None,
             pixel_table_rays: 64,
             clamp_weights: false,
             roulette_depth: 3,

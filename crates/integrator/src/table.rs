@@ -3,7 +3,10 @@
 //! pixel's footprint), and the integrals A and B of method.md §6 (preprint §6.2) over the
 //! second vertex of the partial weight W₁ (computed with the pixel's N_eff).
 use bdpm_geometry::{Domain, Rng};
-use bdpm_mis::{Budget, PixelTerms, effective_samples, overlap_factor, w1_partial};
+use bdpm_mis::{
+    Budget, Heuristic, PixelTerms, effective_samples, overlap_factor, split_weighted_radiance,
+    w1_partial,
+};
 use bdpm_scene::{Scene, Shading};
 use rayon::prelude::*;
 
@@ -65,6 +68,10 @@ pub(crate) fn pixel_terms(
     key: u64,
 ) -> PixelTerms {
     let scene = mix.scene;
+    let split = matches!(
+        mix.heuristic,
+        Heuristic::OptimalSplit { .. } | Heuristic::OptimalPath { .. }
+    );
     let (mut a, mut b) = (0.0f64, 0.0f64);
     for j in 0..rays {
         let mut rng = Rng::new(seed, Domain::PixelTable, [key, j as u64, 0]);
@@ -84,11 +91,18 @@ pub(crate) fn pixel_terms(
         let sh1 = scene.shade(&hit1, -v);
         let x1 = WeightVertex::from_shading(scene, &sh1);
         let pair = mix.pair(x0, &x1, v, s.f);
-        let l = pair.direct + pair.indirect;
-        let w1 = w1_partial(budget, pair.f_tilde, l, pair.b);
         let cos_over_pdf = (s.wi.z / s.pdf) as f64;
-        a += w1 * pair.f_tilde * l * cos_over_pdf;
-        b += w1 * l * cos_over_pdf;
+        if split {
+            let wl =
+                split_weighted_radiance(budget, pair.f_tilde, pair.direct, pair.indirect, pair.b);
+            a += wl * pair.f_tilde * cos_over_pdf;
+            b += wl * cos_over_pdf;
+        } else {
+            let l = pair.direct + pair.indirect;
+            let w1 = w1_partial(budget, pair.f_tilde, l, pair.b);
+            a += w1 * pair.f_tilde * l * cos_over_pdf;
+            b += w1 * l * cos_over_pdf;
+        }
     }
     let n = rays.max(1) as f64;
     PixelTerms { a: a / n, b: b / n }

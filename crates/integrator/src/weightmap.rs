@@ -43,7 +43,7 @@ impl Renderer<'_> {
                 self.settings().mode
             )));
         };
-        if h.needs().densities {
+        if h.needs().densities || h.needs().x1_scattering {
             return Err(RenderError::Settings(format!(
                 "mode '{}' weighs each light path by its incoming direction at x1, so it has no map over x1 alone",
                 h.name()

@@ -545,6 +545,10 @@ fn render_settings(
             1,
             limits::MAX_CACHE_BINS,
         )?,
+        cache_photons: match r.cache_photons {
+            None => None,
+            Some(n) => Some(ctx.count("render.cache_photons", n, 1, limits::MAX_PHOTONS)?),
+        },
         pixel_table_rays: ctx.count(
             "render.pixel_table_rays",
             r.pixel_table_rays.unwrap_or(d.pixel_table_rays),

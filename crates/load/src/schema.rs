@@ -41,6 +41,7 @@ pub(crate) struct RenderDef {
     pub(crate) output: Option<PathBuf>,
     pub(crate) threshold_radius: Option<f32>,
     pub(crate) cache_bins: Option<u32>,
+    pub(crate) cache_photons: Option<u64>,
     pub(crate) pixel_table_rays: Option<u32>,
     pub(crate) clamp_weights: Option<bool>,
     pub(crate) pixel_jitter: Option<bool>,

@@ -117,6 +117,9 @@ pub struct Needs {
     /// model (method.md §12) the renderer passes each pixel's N_eff as
     /// [`Budget::camera_samples`] (`algebraic-direct`, `algebraic`, `optimal`).
     pub effective_samples: bool,
+    /// The BDF at x₁ for each light path's incoming direction towards x₀
+    /// ([`Pair::x1_scattering`]; `optimal-path`).
+    pub x1_scattering: bool,
 }
 
 /// What the weight of one (x₀, x₁) pair may depend on.
@@ -135,8 +138,11 @@ pub struct Pair {
     pub b: f64,
     /// The smallest distance |x₁ − x_LS| over all lights, m (`threshold` only).
     pub light_distance: f64,
-    /// Which full path this weight is for (`balance`, `power` only).
+    /// Which full path this weight is for (`balance`, `power`, `optimal-split`, `optimal-path`).
     pub path: PathKind,
+    /// f₁(ω₂, x₁→x₀): the BDF at x₁ (luminance, sr⁻¹) for the light path's incoming
+    /// direction ω₂ and the outgoing direction towards x₀ (`optimal-path`, merge paths only).
+    pub x1_scattering: f64,
     /// p_C(x₀→x₁), area measure, m⁻²; the camera path at x₀ never absorbs.
     pub camera_density: f64,
     /// p_L(x₁→x₀), area measure, m⁻², including the photon's Russian roulette at x₁.
@@ -220,6 +226,21 @@ pub enum Heuristic {
         /// Clamp w₁ to [0, 1] (the unclamped weight is unbiased too).
         clamp_weights: bool,
     },
+    /// Eq. 8 over a richer family: separate weights for the one-bounce paths light→x₁→x₀
+    /// (BDD=1 gets them exactly through L₀(x₁)) and the merge paths …x₂→x₁→x₀ (BDD=1 merges
+    /// photons at x₁ for them), each optimal for the noise model (method-notes.md, "optimal-split").
+    OptimalSplit {
+        /// Clamp w₁ to [0, 1] (the unclamped weight is unbiased too).
+        clamp_weights: bool,
+    },
+    /// The optimal weight over the family w₁(x₀, x₁, ω₂) that may also depend on the light
+    /// path's incoming direction at x₁: `optimal-split` for one-bounce paths, and for merge
+    /// paths the photon's own BDF value f₁(ω₂, x₁→x₀) in place of its cell average b/L_d
+    /// (method-notes.md, "optimal-path").
+    OptimalPath {
+        /// Clamp w₁ to [0, 1] (the unclamped weight is unbiased too).
+        clamp_weights: bool,
+    },
     /// Veach's balance heuristic on path densities (method.md §8).
     Balance,
     /// Veach's power heuristic (exponent 2) on path densities (method.md §8).
@@ -235,6 +256,8 @@ impl Heuristic {
         "algebraic-direct",
         "algebraic",
         "optimal",
+        "optimal-split",
+        "optimal-path",
         "balance",
         "power",
     ];
@@ -248,6 +271,8 @@ impl Heuristic {
             Heuristic::AlgebraicDirect => "algebraic-direct",
             Heuristic::Algebraic => "algebraic",
             Heuristic::Optimal { .. } => "optimal",
+            Heuristic::OptimalSplit { .. } => "optimal-split",
+            Heuristic::OptimalPath { .. } => "optimal-path",
             Heuristic::Balance => "balance",
             Heuristic::Power => "power",
         }
@@ -265,6 +290,12 @@ impl Heuristic {
             "algebraic-direct" => Heuristic::AlgebraicDirect,
             "algebraic" => Heuristic::Algebraic,
             "optimal" => Heuristic::Optimal {
+                clamp_weights: false,
+            },
+            "optimal-split" => Heuristic::OptimalSplit {
+                clamp_weights: false,
+            },
+            "optimal-path" => Heuristic::OptimalPath {
                 clamp_weights: false,
             },
             "balance" => Heuristic::Balance,
@@ -303,12 +334,21 @@ impl Heuristic {
                 effective_samples: true,
                 ..mix
             },
-            Heuristic::Optimal { .. } => Needs {
+            Heuristic::Optimal { .. } | Heuristic::OptimalSplit { .. } => Needs {
                 direct_at_x1: true,
                 effective_samples: true,
                 radiance_cache: true,
                 cache_b: true,
                 pixel_table: true,
+                ..mix
+            },
+            Heuristic::OptimalPath { .. } => Needs {
+                direct_at_x1: true,
+                effective_samples: true,
+                radiance_cache: true,
+                cache_b: true,
+                pixel_table: true,
+                x1_scattering: true,
                 ..mix
             },
             Heuristic::Balance | Heuristic::Power => Needs {
@@ -343,6 +383,17 @@ impl Heuristic {
             }
             // method.md §4, eq. 8–9.
             Heuristic::Optimal { clamp_weights } => optimal(budget, pair, pixel, clamp_weights),
+            Heuristic::OptimalSplit { clamp_weights } => {
+                let f1 = split_scattering(pair);
+                optimal_per_path(budget, pair, pixel, f1, clamp_weights)
+            }
+            Heuristic::OptimalPath { clamp_weights } => {
+                let f1 = match pair.path {
+                    PathKind::Merge => nonneg(pair.x1_scattering),
+                    PathKind::OneBounce => 0.0,
+                };
+                optimal_per_path(budget, pair, pixel, f1, clamp_weights)
+            }
             // method.md §8.
             Heuristic::Balance => Weight::plain(density_share(budget, pair, 1)),
             Heuristic::Power => Weight::plain(density_share(budget, pair, 2)),
@@ -360,6 +411,12 @@ impl fmt::Display for Heuristic {
             Heuristic::Optimal {
                 clamp_weights: true,
             } => f.write_str("optimal (clamped)"),
+            Heuristic::OptimalSplit {
+                clamp_weights: true,
+            } => f.write_str("optimal-split (clamped)"),
+            Heuristic::OptimalPath {
+                clamp_weights: true,
+            } => f.write_str("optimal-path (clamped)"),
             _ => f.write_str(self.name()),
         }
     }
@@ -374,6 +431,26 @@ impl fmt::Display for Heuristic {
 pub fn w1_partial(budget: &Budget, f_tilde: f64, radiance: f64, b: f64) -> f64 {
     let terms = OptimalTerms::new(budget, f_tilde, radiance, b);
     terms.partial()
+}
+
+/// The integrand factor of the pixel integrals for `optimal-split`, in W·m⁻²·sr⁻²: the
+/// radiance of the direction weighted as the split weights weigh it without their correlation
+/// term, N_B f̃·M with M = [L₀(N_B f̃ + β) + L_d N_B f̃]/D″ (method-notes.md, "optimal-split").
+/// The renderer accumulates A += (this)·f̃·cos/p and B += (this)·cos/p; for `optimal` the same
+/// role is played by W₁·L. Inputs as in [`Pair`]; the result is finite and non-negative.
+pub fn split_weighted_radiance(
+    budget: &Budget,
+    f_tilde: f64,
+    direct: f64,
+    indirect: f64,
+    b: f64,
+) -> f64 {
+    let t = SplitTerms::new(budget, f_tilde, direct, indirect, b);
+    if t.denominator == 0.0 {
+        return 0.0;
+    }
+    let m = sat(mul(nonneg(direct), t.camera + t.beta) + mul(nonneg(indirect), t.camera));
+    sat(t.camera * ratio_sat(m, t.denominator))
 }
 
 /// L = L₀ + L_d of one pair, W·m⁻²·sr⁻¹.
@@ -447,6 +524,94 @@ fn optimal(budget: &Budget, pair: &Pair, pixel: Option<&PixelTerms>, clamp: bool
         sat(terms.partial() + sat(correlation / terms.denominator))
     };
 
+    let outside_unit = !(0.0..=1.0).contains(&w1);
+    Weight {
+        w1: if clamp { w1.clamp(0.0, 1.0) } else { w1 },
+        clamped_cb,
+        outside_unit,
+    }
+}
+
+/// The scalars of the split weights for one direction: N_B f̃, β = b/L_d, and
+/// D″ = (N_B f̃ + β)(N_B f̃ + κ(L₀)) + κ(L_d)·N_B f̃.
+struct SplitTerms {
+    /// N_B f̃, sr⁻¹.
+    camera: f64,
+    /// β = b/L_d, sr⁻¹ (0 where L_d = 0: no secondary light, so no photon noise at x₁).
+    beta: f64,
+    /// D″, sr⁻².
+    denominator: f64,
+}
+
+impl SplitTerms {
+    fn new(budget: &Budget, f_tilde: f64, direct: f64, indirect: f64, b: f64) -> Self {
+        let camera = mul(nonneg(budget.camera_samples), nonneg(f_tilde));
+        let indirect = nonneg(indirect);
+        let beta = if indirect == 0.0 {
+            0.0
+        } else {
+            ratio_sat(nonneg(b), indirect)
+        };
+        let denominator = sat(mul(sat(camera + beta), sat(camera + budget.kappa(direct)))
+            + mul(budget.kappa(indirect), camera));
+        SplitTerms {
+            camera,
+            beta,
+            denominator,
+        }
+    }
+}
+
+/// The x₁ scattering that `optimal-split` assumes for a path: none for one-bounce paths (L₀(x₁)
+/// is exact), the cell's average β = b/L_d for merge paths.
+fn split_scattering(pair: &Pair) -> f64 {
+    match pair.path {
+        PathKind::OneBounce => 0.0,
+        PathKind::Merge => {
+            let indirect = nonneg(pair.indirect);
+            if indirect == 0.0 {
+                0.0
+            } else {
+                ratio_sat(nonneg(pair.b), indirect)
+            }
+        }
+    }
+}
+
+/// The optimal weight of a path whose x₁ scatters it with BDF value `f1` (sr⁻¹; 0 for a
+/// one-bounce path, whose L₀(x₁) BDD=1 computes exactly). Stationarity of the §12 functional
+/// over weights that may depend on the light path's incoming direction at x₁ gives
+/// w₁ = (N_B f̃ + g)/[(N_B f̃ + f₁)(1 + κ(Q))] with Q = L₀/(N_B f̃) + ∫ ℓ/(N_B f̃ + f₁) dω₂,
+/// g = N_B·c·G̃; approximating f₁ by β = b/L_d inside Q, in division-safe form:
+/// w₁ = (N_B f̃ + g)·(N_B f̃ + β)·[N_B f̃/(N_B f̃ + f₁)] / D″ (method-notes.md).
+/// `optimal-split` passes f₁ = β for merge paths, `optimal-path` the photon's own value.
+fn optimal_per_path(
+    budget: &Budget,
+    pair: &Pair,
+    pixel: Option<&PixelTerms>,
+    f1: f64,
+    clamp: bool,
+) -> Weight {
+    let t = SplitTerms::new(budget, pair.f_tilde, pair.direct, pair.indirect, pair.b);
+    let (a, b) = pixel.map_or((0.0, 0.0), |p| (nonneg(p.a), nonneg(p.b)));
+    let cb = mul(budget.c(), b);
+    let clamped_cb = 1.0 - cb <= CB_EPSILON;
+    let one_minus_cb = if clamped_cb { CB_EPSILON } else { 1.0 - cb };
+    let g = mul(budget.correlation_factor(), sat(a / one_minus_cb));
+    let w1 = if t.denominator == 0.0 {
+        0.0
+    } else {
+        // N_B f̃/(N_B f̃ + f₁): 1 for one-bounce paths, 0 where f̃ = 0 and f₁ > 0.
+        let share = if f1 == 0.0 {
+            1.0
+        } else if t.camera == 0.0 {
+            0.0
+        } else {
+            t.camera / sat(t.camera + f1)
+        };
+        let numerator = mul(mul(sat(t.camera + g), sat(t.camera + t.beta)), share);
+        sat(numerator / t.denominator)
+    };
     let outside_unit = !(0.0..=1.0).contains(&w1);
     Weight {
         w1: if clamp { w1.clamp(0.0, 1.0) } else { w1 },

@@ -331,6 +331,8 @@ fn names_round_trip() {
         Heuristic::Optimal {
             clamp_weights: false,
         },
+        SPLIT,
+        PATH,
         Heuristic::Balance,
         Heuristic::Power,
     ];
@@ -443,4 +445,157 @@ fn extreme_inputs_stay_finite() {
             }
         }
     }
+}
+
+const SPLIT: Heuristic = Heuristic::OptimalSplit {
+    clamp_weights: false,
+};
+const PATH: Heuristic = Heuristic::OptimalPath {
+    clamp_weights: false,
+};
+
+fn kind(pair: Pair, path: PathKind) -> Pair {
+    Pair { path, ..pair }
+}
+
+#[test]
+fn split_weights_reduce_to_eq8_for_a_single_kind_of_light() {
+    let pixel = PixelTerms { a: 0.3, b: 0.7 };
+    // Only secondary light at x₁: the merge weight is eq. 8.
+    let indirect_only = lit(0.4, 0.0, 1.5, 0.6);
+    let eq8 = OPTIMAL.weight(&SIMPLE, &indirect_only, Some(&pixel)).w1;
+    let split = SPLIT
+        .weight(&SIMPLE, &kind(indirect_only, PathKind::Merge), Some(&pixel))
+        .w1;
+    assert!((split - eq8).abs() < 1e-14, "{split} vs {eq8}");
+    // Only direct light at x₁ (b = 0): the one-bounce weight is eq. 8.
+    let direct_only = lit(0.4, 2.0, 0.0, 0.0);
+    let eq8 = OPTIMAL.weight(&SIMPLE, &direct_only, Some(&pixel)).w1;
+    let split = SPLIT
+        .weight(
+            &SIMPLE,
+            &kind(direct_only, PathKind::OneBounce),
+            Some(&pixel),
+        )
+        .w1;
+    assert!((split - eq8).abs() < 1e-14, "{split} vs {eq8}");
+}
+
+#[test]
+fn split_weights_match_hand_values() {
+    // N_B = 2, κ(L) = L, c = ¼ (SIMPLE); f̃ = 0.5, L₀ = 1, L_d = 2, b = 1 (β = ½), no pixel terms.
+    // N_B f̃ = 1, D″ = (1 + ½)(1 + 1) + 2·1 = 5: w^d = 1·1/5, w⁰ = 1·1.5/5.
+    let pair = lit(0.5, 1.0, 2.0, 1.0);
+    assert_close(
+        SPLIT.weight(&SIMPLE, &kind(pair, PathKind::Merge), None).w1,
+        0.2,
+    );
+    assert_close(
+        SPLIT
+            .weight(&SIMPLE, &kind(pair, PathKind::OneBounce), None)
+            .w1,
+        0.3,
+    );
+    // optimal-path with the photon's own f₁ = 2 instead of β: 1·1.5·(1/(1 + 2))/5 = 0.1.
+    let photon = Pair {
+        x1_scattering: 2.0,
+        ..kind(pair, PathKind::Merge)
+    };
+    assert_close(PATH.weight(&SIMPLE, &photon, None).w1, 0.1);
+    // With f₁ = β it is the split weight, and one-bounce paths ignore f₁.
+    let at_beta = Pair {
+        x1_scattering: 0.5,
+        ..photon
+    };
+    assert_close(PATH.weight(&SIMPLE, &at_beta, None).w1, 0.2);
+    let one = Pair {
+        path: PathKind::OneBounce,
+        ..photon
+    };
+    assert_close(PATH.weight(&SIMPLE, &one, None).w1, 0.3);
+}
+
+/// The split weights make the §12 noise functional stationary: for a discretised pixel (a few
+/// directions v with probabilities π, exact BDF sampling so that cos/p = 1/f̃) whose x₁ scatter
+/// with a fixed β (Lambert), the gradient of
+/// F = α N E[f̃((1−w⁰)²L₀ + (1−w^d)²L_d)] + E[m²] − (1 − 1/N_F)E[m]² + α E[(w^d)² β L_d],
+/// m = w⁰L₀ + w^d L_d, vanishes at the weights the crate returns (with A, B from
+/// [`split_weighted_radiance`] as the renderer accumulates them).
+#[test]
+fn split_weights_are_stationary_points_of_the_noise_functional() {
+    let budget = Budget {
+        camera_samples: 3.0,
+        photons: 50.0,
+        merge_area: 0.02,
+        flux: 1.0,
+    };
+    let alpha = budget.flux / (budget.photons * budget.merge_area);
+    let n = budget.camera_samples;
+    // (π, f̃, L₀, L_d, β)
+    let dirs = [
+        (0.2, 0.3, 0.0, 0.8, 0.15),
+        (0.3, 0.3, 2.5, 0.4, 0.15),
+        (0.1, 1.2, 0.7, 1.9, 0.4),
+        (0.4, 0.05, 6.0, 0.0, 0.1),
+    ];
+    let (mut a, mut b) = (0.0, 0.0);
+    for &(p, f, l0, ld, beta) in &dirs {
+        let wl = split_weighted_radiance(&budget, f, l0, ld, beta * ld);
+        a += p * wl;
+        b += p * wl / f;
+    }
+    let pixel = PixelTerms { a, b };
+    let weights: Vec<(f64, f64)> = dirs
+        .iter()
+        .map(|&(_, f, l0, ld, beta)| {
+            let pair = lit(f, l0, ld, beta * ld);
+            let w0 = SPLIT.weight(&budget, &kind(pair, PathKind::OneBounce), Some(&pixel));
+            let wd = SPLIT.weight(&budget, &kind(pair, PathKind::Merge), Some(&pixel));
+            (w0.w1, wd.w1)
+        })
+        .collect();
+    let mean_m: f64 = dirs
+        .iter()
+        .zip(&weights)
+        .map(|(&(p, _, l0, ld, _), &(w0, wd))| p * (w0 * l0 + wd * ld))
+        .sum();
+    let corr = 1.0 - 1.0 / budget.photons;
+    for (&(p, f, l0, ld, beta), &(w0, wd)) in dirs.iter().zip(&weights) {
+        let m = w0 * l0 + wd * ld;
+        let d_w0 =
+            p * (-2.0 * alpha * n * f * (1.0 - w0) * l0 + 2.0 * m * l0 - 2.0 * corr * mean_m * l0);
+        let d_wd = p
+            * (-2.0 * alpha * n * f * (1.0 - wd) * ld + 2.0 * m * ld - 2.0 * corr * mean_m * ld
+                + 2.0 * alpha * beta * wd * ld);
+        // The terms are O(1); a wrong formula leaves O(0.1) or more.
+        assert!(
+            d_w0.abs() < 1e-12 && d_wd.abs() < 1e-12,
+            "{d_w0} {d_wd} at f̃ = {f}"
+        );
+    }
+}
+
+#[test]
+fn split_and_path_weights_guard_degenerate_inputs() {
+    for h in [SPLIT, PATH] {
+        for path in [PathKind::Merge, PathKind::OneBounce] {
+            // Nothing at all: 0, not NaN.
+            let w = h.weight(&SIMPLE, &kind(Pair::default(), path), None);
+            assert_eq!(w.w1, 0.0);
+            // f̃ = 0 with light at x₁.
+            let w = h.weight(&SIMPLE, &kind(lit(0.0, 1.0, 1.0, 0.5), path), None);
+            assert!(w.w1.is_finite() && w.w1 >= 0.0, "{h}: {w:?}");
+            // Huge and NaN inputs.
+            let w = h.weight(
+                &SIMPLE,
+                &Pair {
+                    x1_scattering: f64::NAN,
+                    ..kind(lit(1e300, 1e300, 1e300, f64::NAN), path)
+                },
+                Some(&PixelTerms { a: 1e300, b: 1e300 }),
+            );
+            assert!(w.w1.is_finite(), "{h}: {w:?}");
+        }
+    }
+    assert_eq!(split_weighted_radiance(&SIMPLE, 0.0, 0.0, 0.0, 0.0), 0.0);
 }

@@ -47,10 +47,14 @@ fn pair() -> impl Strategy<Value = Pair> {
             density(),
             density(),
             density(),
+            zero_or(-30.0, 30.0),
         ),
     )
         .prop_map(
-            |((f_tilde, direct, indirect, b, light_distance), (path, camera, light, emission))| {
+            |(
+                (f_tilde, direct, indirect, b, light_distance),
+                (path, camera, light, emission, x1_scattering),
+            )| {
                 Pair {
                     f_tilde,
                     direct,
@@ -61,6 +65,7 @@ fn pair() -> impl Strategy<Value = Pair> {
                     camera_density: camera,
                     light_density: light,
                     emission_density: emission,
+                    x1_scattering,
                 }
             },
         )
