@@ -1,6 +1,7 @@
-//! False-colour images with a legend: a perceptual colour map, an RGB canvas, and the layout of
-//! a map (upscaled when small, so that the legend text stays legible) beside a colour bar with
-//! numeric ticks. Used by the noise map of `bdpm render` and the weight map of `bdpm weights`.
+//! False-colour images with a legend: a perceptual and a diverging colour map, an RGB canvas,
+//! and the layout of a map (upscaled when small, so that the legend text stays legible) beside a
+//! colour bar with numeric ticks. Used by the noise map of `bdpm render`, the weight map of
+//! `bdpm weights` and the ratio map of `bdpm predict`.
 use crate::font;
 
 /// Matplotlib's viridis at t = 0, 0.1, …, 1 (sRGB): perceptually uniform, monotonic in
@@ -27,10 +28,38 @@ const TEXT: [u8; 3] = [235, 235, 235];
 /// interpolation between the control points.
 pub(crate) fn viridis(t: f64) -> [u8; 3] {
     let t = if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) };
-    let x = t * (VIRIDIS.len() - 1) as f64;
-    let i = (x.floor() as usize).min(VIRIDIS.len() - 2);
+    interpolate(&VIRIDIS, t)
+}
+
+/// A diverging blue–white–red map (ColorBrewer RdBu, reversed) at t = 0, 0.1, …, 1: blue
+/// below the midpoint, white at it, red above; for signed quantities such as a log ratio.
+const DIVERGING: [[u8; 3]; 11] = [
+    [0x05, 0x30, 0x61],
+    [0x21, 0x66, 0xac],
+    [0x43, 0x93, 0xc3],
+    [0x92, 0xc5, 0xde],
+    [0xd1, 0xe5, 0xf0],
+    [0xf7, 0xf7, 0xf7],
+    [0xfd, 0xdb, 0xc7],
+    [0xf4, 0xa5, 0x82],
+    [0xd6, 0x60, 0x4d],
+    [0xb2, 0x18, 0x2b],
+    [0x67, 0x00, 0x1f],
+];
+
+/// The diverging colour at `t` ∈ [0, 1] (clamped; NaN gives the white midpoint): t = ½ is
+/// white, 0 dark blue, 1 dark red.
+pub(crate) fn diverging(t: f64) -> [u8; 3] {
+    let t = if t.is_nan() { 0.5 } else { t.clamp(0.0, 1.0) };
+    interpolate(&DIVERGING, t)
+}
+
+/// Linear interpolation between 11 equally spaced control colours.
+fn interpolate(points: &[[u8; 3]; 11], t: f64) -> [u8; 3] {
+    let x = t * (points.len() - 1) as f64;
+    let i = (x.floor() as usize).min(points.len() - 2);
     let f = x - i as f64;
-    let (a, b) = (VIRIDIS[i], VIRIDIS[i + 1]);
+    let (a, b) = (points[i], points[i + 1]);
     std::array::from_fn(|c| (a[c] as f64 + f * (b[c] as f64 - a[c] as f64)).round() as u8)
 }
 
@@ -244,6 +273,14 @@ mod tests {
         assert_eq!(viridis(-3.0), VIRIDIS[0]);
         assert_eq!(viridis(f64::NAN), VIRIDIS[0]);
         assert_eq!(viridis(0.05), [0x46, 0x13, 0x65]);
+    }
+
+    #[test]
+    fn diverging_is_white_in_the_middle() {
+        assert_eq!(diverging(0.5), [0xf7, 0xf7, 0xf7]);
+        assert_eq!(diverging(f64::NAN), [0xf7, 0xf7, 0xf7]);
+        assert_eq!(diverging(-1.0), DIVERGING[0]);
+        assert_eq!(diverging(2.0), DIVERGING[10]);
     }
 
     #[test]

@@ -8,6 +8,7 @@ mod common;
 mod compare;
 mod font;
 mod output;
+mod predict;
 mod render;
 mod report;
 mod signal;
@@ -36,6 +37,11 @@ enum Command {
     /// OUT.exr (channel w0) and OUT.png (log scale 0.008–1, x₀ marked). Modes whose weights
     /// depend on x₁ alone: bdd0, bdd1, threshold, algebraic-direct, algebraic, optimal.
     Weights(weights::WeightsArgs),
+    /// Evaluate the noise model of method.md §12 per pixel for a mode's weights and compare it
+    /// with the per-pass variance V of a render made with the same settings (--measured):
+    /// OUT.exr (predicted and measured V, ratio, terms T0, T1, T2, T_jitter), OUT.png
+    /// (log2 predicted/measured) and OUT.json (correlations, ratio quantiles, term shares).
+    Predict(predict::PredictArgs),
     /// Error against run time for several modes: CSV, plots and a markdown table.
     Study(study::StudyArgs),
     /// Throughput benchmarks: photons/s and camera samples/s per mode, 1 and N threads.
@@ -51,6 +57,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => render::run(args),
         Command::Weights(args) => weights::run(args).map(success),
+        Command::Predict(args) => predict::run(args).map(success),
         Command::Study(args) => study::run(args).map(success),
         Command::Bench(args) => bench::run(args).map(success),
         Command::Compare(args) => compare::run(args),

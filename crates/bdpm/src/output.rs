@@ -148,6 +148,20 @@ pub(crate) fn write_exr_single(
     write_channels(path, size, channels, attributes)
 }
 
+/// Writes a float32 EXR with several single-value channels (name, per-pixel values).
+pub(crate) fn write_exr_channels(
+    path: &Path,
+    size: (u32, u32),
+    named: &[(&str, &[f64])],
+    attributes: &[(String, String)],
+) -> Result<(), String> {
+    let channels = named
+        .iter()
+        .map(|(name, values)| channel(name, values.iter().map(|v| *v as f32)))
+        .collect();
+    write_channels(path, size, channels, attributes)
+}
+
 /// Writes `channels` as one EXR layer with `attributes` as `bdpm.*` text header attributes.
 fn write_channels(
     path: &Path,

@@ -295,7 +295,7 @@ impl<'a> Mix<'a> {
 
     /// Area-measure densities of §8 for a full path …→x₁→x₀ whose light path arrives at x₁
     /// from direction `incoming` (unit, pointing away from x₁). Returns (p_C(x₀→x₁), p_L(x₁→x₀)).
-    fn densities(
+    pub(crate) fn densities(
         &self,
         x0: &FirstVertex<'_>,
         x1: &WeightVertex,
@@ -325,7 +325,7 @@ impl<'a> Mix<'a> {
     }
 
     /// Emission density p_L(light→x₁) in area measure (choice of light included).
-    fn emission_density(&self, light: usize, x1: &WeightVertex) -> f64 {
+    pub(crate) fn emission_density(&self, light: usize, x1: &WeightVertex) -> f64 {
         let l = &self.scene.lights[light];
         let to = l.position - x1.p;
         let d2 = to.length_squared();

@@ -129,34 +129,10 @@ impl<'a> Renderer<'a> {
     /// Builds the radiance cache and the A/B table when (and only when) `h` needs them.
     fn prepare(&mut self, h: Heuristic) {
         let needs = h.needs();
-        let s = &self.settings;
         if needs.radiance_cache {
-            let start = std::time::Instant::now();
-            let (lo, hi) = self.scene.geometry.bounds();
-            let settings = CacheSettings {
-                bins: s.cache_bins,
-                cell_size: (hi - lo).max_element() / CACHE_CELLS_PER_EXTENT,
-                photons: s.cache_photons.unwrap_or(s.photons),
-                seed: s.seed,
-            };
-            let cache = RadianceCache::build(self.scene, &settings);
-            let st = cache.stats();
-            self.stages.push(StageReport {
-                name: "radiance cache",
-                seconds: start.elapsed().as_secs_f64(),
-                bytes: st.bytes,
-                detail: format!(
-                    "{} cells x 2 sides, {} bin(s) per side, b {}, {} photons emitted, {} arrivals, {:.1}% of cell sides hit",
-                    st.cells,
-                    st.bins,
-                    if st.stores_b { "stored" } else { "derived (Lambert-only scene)" },
-                    settings.photons,
-                    st.arrivals,
-                    100.0 * st.filled_fraction
-                ),
-            });
-            self.cache = Some(cache);
+            self.build_cache();
         }
+        let s = &self.settings;
         let footprint = self.footprint_model() && needs.effective_samples;
         if needs.pixel_table || footprint {
             let start = std::time::Instant::now();
@@ -210,6 +186,46 @@ impl<'a> Renderer<'a> {
             });
             self.table = Some(table);
         }
+    }
+
+    /// Builds the radiance cache of method.md §5 from its own photon stream.
+    fn build_cache(&mut self) {
+        let s = &self.settings;
+        let start = std::time::Instant::now();
+        let (lo, hi) = self.scene.geometry.bounds();
+        let settings = CacheSettings {
+            bins: s.cache_bins,
+            cell_size: (hi - lo).max_element() / CACHE_CELLS_PER_EXTENT,
+            photons: s.cache_photons.unwrap_or(s.photons),
+            seed: s.seed,
+        };
+        let cache = RadianceCache::build(self.scene, &settings);
+        let st = cache.stats();
+        self.stages.push(StageReport {
+            name: "radiance cache",
+            seconds: start.elapsed().as_secs_f64(),
+            bytes: st.bytes,
+            detail: format!(
+                "{} cells x 2 sides, {} bin(s) per side, b {}, {} photons emitted, {} arrivals, {:.1}% of cell sides hit",
+                st.cells,
+                st.bins,
+                if st.stores_b { "stored" } else { "derived (Lambert-only scene)" },
+                settings.photons,
+                st.arrivals,
+                100.0 * st.filled_fraction
+            ),
+        });
+        self.cache = Some(cache);
+    }
+
+    /// Also builds the radiance cache when the mode does not need it, for the noise model of
+    /// [`Renderer::predict_variance`], which needs L_d and b for every mode. Rendering is
+    /// unchanged: the mix reads the cache only when its mode needs it.
+    pub fn with_model_inputs(mut self) -> Self {
+        if self.cache.is_none() {
+            self.build_cache();
+        }
+        self
     }
 
     /// Whether the weights use per-pixel N_eff from footprints (method.md §12): the footprint

@@ -1,0 +1,555 @@
+//! `bdpm predict`: the noise model of method.md §12 evaluated per pixel for a mode's weights
+//! ([`bdpm_integrator::Renderer::predict_variance`]) against the per-pass variance V measured
+//! by a render made with the same settings. Writes OUT.exr (predicted and measured V, their
+//! ratio and the model's four terms), OUT.png (log₂ of predicted/measured in a diverging false
+//! colour) and OUT.json, and prints the summary.
+//!
+//! Measured V per pixel is taken from the render's `noise` layer (√V per pass, RGB) as
+//! 0.2126·R² + 0.7152·G² + 0.0722·B² of √V: exactly the variance of the luminance when the
+//! three channels' noise is fully correlated, as in grey scenes; for coloured scenes it is a
+//! luminance-weighted mean of the channel variances, an approximation.
+use std::path::{Path, PathBuf};
+
+use bdpm_integrator::{Mode, Prediction, RenderSettings, Renderer};
+use clap::Args;
+use exr::prelude::{AttributeValue, FlatSamples, read_all_flat_layers_from_file};
+use serde::Serialize;
+
+use crate::colormap::{Legend, compose, diverging};
+use crate::common::{CliResult, Overrides, prepare, say, thread_pool};
+use crate::output;
+
+/// Side of the pixel blocks over which V is also compared (summed over the block's pixels):
+/// blocks average out most of the measured V's own sampling error.
+const BLOCK: u32 = 8;
+/// The PNG's colour scale spans log₂(predicted/measured) from −LOG2_RANGE to +LOG2_RANGE
+/// (a factor of 8 either way).
+const LOG2_RANGE: f64 = 3.0;
+/// Colour of pixels that are not compared (no surface, or no measured noise).
+const NOT_COMPARED: [u8; 3] = [0, 0, 0];
+
+/// Arguments of this subcommand.
+#[derive(Args, Debug)]
+pub(crate) struct PredictArgs {
+    /// Scene file (TOML).
+    scene: PathBuf,
+    #[command(flatten)]
+    overrides: Overrides,
+    /// The render to compare with (EXR with a `noise` layer, from `bdpm render` with the same
+    /// scene, mode and settings).
+    #[arg(long)]
+    measured: PathBuf,
+    /// Output EXR path (default: the measured file's stem + `-predict.exr`); the PNG and JSON
+    /// go beside it.
+    #[arg(short = 'o', long = "output")]
+    output: Option<PathBuf>,
+}
+
+/// The measured render: √V per pixel (RGB) and its `bdpm.*` header attributes.
+struct Measured {
+    width: u32,
+    height: u32,
+    /// Per-pass variance of the pixel luminance (see the module docs), (W·m⁻²·sr⁻¹)².
+    variance: Vec<f64>,
+    attributes: Vec<(String, String)>,
+}
+
+impl Measured {
+    fn attribute(&self, key: &str) -> Option<&str> {
+        self.attributes
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, v)| v.as_str())
+    }
+}
+
+fn read_measured(path: &Path) -> CliResult<Measured> {
+    let image = read_all_flat_layers_from_file(path)
+        .map_err(|e| format!("{}: cannot read EXR: {e}", path.display()))?;
+    let layer = image
+        .layer_data
+        .first()
+        .ok_or_else(|| format!("{}: EXR has no layer", path.display()))?;
+    let (w, h) = (layer.size.width(), layer.size.height());
+    let find = |name: &str| -> CliResult<Vec<f64>> {
+        let c = layer
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name.to_string() == name)
+            .ok_or_else(|| {
+                format!(
+                    "{}: no channel {name} (the noise layer of `bdpm render`)",
+                    path.display()
+                )
+            })?;
+        Ok(match &c.sample_data {
+            FlatSamples::F16(v) => v.iter().map(|x| x.to_f64()).collect(),
+            FlatSamples::F32(v) => v.iter().map(|x| *x as f64).collect(),
+            FlatSamples::U32(v) => v.iter().map(|x| *x as f64).collect(),
+        })
+    };
+    let (r, g, b) = (find("noise.R")?, find("noise.G")?, find("noise.B")?);
+    let variance = r
+        .iter()
+        .zip(&g)
+        .zip(&b)
+        .map(|((r, g), b)| 0.2126 * r * r + 0.7152 * g * g + 0.0722 * b * b)
+        .collect();
+    let attributes = layer
+        .attributes
+        .other
+        .iter()
+        .filter_map(|(k, v)| match v {
+            AttributeValue::Text(t) => Some((
+                k.to_string().trim_start_matches("bdpm.").to_string(),
+                t.to_string(),
+            )),
+            _ => None,
+        })
+        .collect();
+    Ok(Measured {
+        width: w as u32,
+        height: h as u32,
+        variance,
+        attributes,
+    })
+}
+
+/// The settings that change V and that the render's header records: a mismatch makes the
+/// comparison meaningless, so it is an error (the seed may differ).
+fn check_settings(
+    m: &Measured,
+    s: &RenderSettings,
+    r: &Renderer<'_>,
+    path: &Path,
+) -> CliResult<()> {
+    let expected = [
+        ("mode", s.mode.name().to_string()),
+        ("spp", s.spp.to_string()),
+        ("photons_per_pass", s.photons.to_string()),
+        ("pixel_jitter", s.pixel_jitter.to_string()),
+        ("noise_model", s.noise_model.name().to_string()),
+        ("radius_m", r.radius().to_string()),
+    ];
+    let mismatches: Vec<String> = expected
+        .iter()
+        .filter_map(|(k, v)| match m.attribute(k) {
+            Some(got) if got != v => Some(format!("{k} {got} (prediction: {v})")),
+            None => Some(format!("{k} missing (prediction: {v})")),
+            _ => None,
+        })
+        .collect();
+    if mismatches.is_empty() {
+        Ok(())
+    } else {
+        Err(format!(
+            "{}: rendered with other settings: {}",
+            path.display(),
+            mismatches.join(", ")
+        ))
+    }
+}
+
+/// Agreement of predicted and measured V over a set of samples (pixels or blocks).
+#[derive(Serialize, Debug, Clone, PartialEq)]
+pub(crate) struct Agreement {
+    /// Samples compared (both V finite and positive).
+    count: usize,
+    /// Pearson correlation of ln V (predicted against measured).
+    correlation_log: f64,
+    /// Pearson correlation of V.
+    correlation: f64,
+    /// Median of predicted/measured.
+    ratio_median: f64,
+    /// 10 % quantile of predicted/measured.
+    ratio_q10: f64,
+    /// 90 % quantile of predicted/measured.
+    ratio_q90: f64,
+}
+
+/// Shares of the model's terms in the predicted total, summed over the compared pixels.
+#[derive(Serialize, Debug, Clone, PartialEq)]
+struct Shares {
+    t0: f64,
+    t1: f64,
+    t2: f64,
+    t_jitter: f64,
+}
+
+#[derive(Serialize)]
+struct Report<'a> {
+    scene: String,
+    measured: String,
+    mode: &'a str,
+    width: u32,
+    height: u32,
+    spp: u32,
+    photons_per_pass: u64,
+    pixel_jitter: bool,
+    noise_model: &'a str,
+    radius_m: f32,
+    pixel_table_rays: u32,
+    /// Passes K of the measured render.
+    passes: u32,
+    /// √(2/(K − 1)): relative standard error of one pixel's measured V (Gaussian pass
+    /// estimates); a block's is smaller, by up to √(pixels in the block).
+    measured_relative_se_per_pixel: f64,
+    pixels_without_surface: usize,
+    pixels_without_measured_noise: usize,
+    /// Image means over the pixels with a surface, W²·m⁻⁴·sr⁻².
+    image_mean_predicted_v: f64,
+    image_mean_measured_v: f64,
+    term_shares: Shares,
+    per_pixel: Agreement,
+    block_size: u32,
+    blocks: Agreement,
+}
+
+/// Pearson correlation of two equally long samples (NaN for fewer than two or no spread).
+fn pearson(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len() as f64;
+    if a.len() < 2 {
+        return f64::NAN;
+    }
+    let (ma, mb) = (a.iter().sum::<f64>() / n, b.iter().sum::<f64>() / n);
+    let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
+    for (x, y) in a.iter().zip(b) {
+        sab += (x - ma) * (y - mb);
+        saa += (x - ma).powi(2);
+        sbb += (y - mb).powi(2);
+    }
+    sab / (saa * sbb).sqrt()
+}
+
+/// The q-quantile of sorted values, interpolated linearly between order statistics.
+fn quantile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    let x = q * (sorted.len() - 1) as f64;
+    let i = x.floor() as usize;
+    let j = (i + 1).min(sorted.len() - 1);
+    sorted[i] + (x - i as f64) * (sorted[j] - sorted[i])
+}
+
+/// Compares pairs (predicted, measured); pairs where either is not finite and positive are
+/// left out.
+pub(crate) fn agreement(pairs: &[(f64, f64)]) -> Agreement {
+    let kept: Vec<(f64, f64)> = pairs
+        .iter()
+        .copied()
+        .filter(|(p, m)| p.is_finite() && m.is_finite() && *p > 0.0 && *m > 0.0)
+        .collect();
+    let (p, m): (Vec<f64>, Vec<f64>) = kept.iter().copied().unzip();
+    let lp: Vec<f64> = p.iter().map(|x| x.ln()).collect();
+    let lm: Vec<f64> = m.iter().map(|x| x.ln()).collect();
+    let mut ratio: Vec<f64> = kept.iter().map(|(p, m)| p / m).collect();
+    ratio.sort_by(f64::total_cmp);
+    Agreement {
+        count: kept.len(),
+        correlation_log: pearson(&lp, &lm),
+        correlation: pearson(&p, &m),
+        ratio_median: quantile(&ratio, 0.5),
+        ratio_q10: quantile(&ratio, 0.1),
+        ratio_q90: quantile(&ratio, 0.9),
+    }
+}
+
+/// Sums predicted and measured V over `BLOCK`×`BLOCK` blocks, over the pixels with a surface
+/// and a finite measurement; blocks without such pixels are left out.
+fn block_sums(predicted: &[f64], measured: &[f64], width: u32, height: u32) -> Vec<(f64, f64)> {
+    let mut out = Vec::new();
+    for by in (0..height).step_by(BLOCK as usize) {
+        for bx in (0..width).step_by(BLOCK as usize) {
+            let (mut p, mut m, mut n) = (0.0, 0.0, 0usize);
+            for y in by..(by + BLOCK).min(height) {
+                for x in bx..(bx + BLOCK).min(width) {
+                    let i = (y * width + x) as usize;
+                    if predicted[i].is_finite() && measured[i].is_finite() {
+                        p += predicted[i];
+                        m += measured[i];
+                        n += 1;
+                    }
+                }
+            }
+            if n > 0 {
+                out.push((p, m));
+            }
+        }
+    }
+    out
+}
+
+/// Default output: beside the measured render, `<stem>-predict.exr`.
+fn default_output(measured: &Path) -> PathBuf {
+    let stem = measured
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "render".into());
+    measured.with_file_name(format!("{stem}-predict.exr"))
+}
+
+/// Runs the subcommand.
+pub(crate) fn run(args: PredictArgs) -> CliResult<()> {
+    let loaded = prepare(&args.scene, &args.overrides)?;
+    let (scene, settings) = (loaded.scene, loaded.settings);
+    let mode = settings.mode;
+    if matches!(mode, Mode::Path | Mode::Light) {
+        return Err(format!(
+            "--mode {mode}: the noise model is for the BDPM modes ({})",
+            bdpm_mis::Heuristic::ALL_NAMES.join(", ")
+        ));
+    }
+    let measured = read_measured(&args.measured)?;
+    if (measured.width, measured.height) != (settings.width, settings.height) {
+        return Err(format!(
+            "{}: the render is {}x{} but the prediction is for {}x{} (give --resolution)",
+            args.measured.display(),
+            measured.width,
+            measured.height,
+            settings.width,
+            settings.height
+        ));
+    }
+    let passes: u32 = measured
+        .attribute("passes")
+        .and_then(|p| p.parse().ok())
+        .ok_or_else(|| format!("{}: no bdpm.passes attribute", args.measured.display()))?;
+    if passes < 2 {
+        return Err(format!(
+            "{}: {passes} pass: V was not measured (need at least 2 passes)",
+            args.measured.display()
+        ));
+    }
+    let exr_path = args
+        .output
+        .unwrap_or_else(|| default_output(&args.measured))
+        .with_extension("exr");
+    let png_path = exr_path.with_extension("png");
+    let json_path = exr_path.with_extension("json");
+    let pool = thread_pool(args.overrides.threads)?;
+
+    let renderer = pool
+        .install(|| Renderer::new(&scene, &settings).map(Renderer::with_model_inputs))
+        .map_err(|e| format!("{}: {e}", args.scene.display()))?;
+    check_settings(&measured, &settings, &renderer, &args.measured)?;
+    let prediction = pool
+        .install(|| renderer.predict_variance())
+        .map_err(|e| e.to_string())?;
+
+    let p = &prediction;
+    let mv = &measured.variance;
+    let ratio: Vec<f64> = p
+        .total
+        .iter()
+        .zip(mv)
+        .map(|(p, m)| if *m > 0.0 { p / m } else { f64::NAN })
+        .collect();
+    let surface: Vec<usize> = (0..mv.len()).filter(|&i| p.total[i].is_finite()).collect();
+    let compared: Vec<usize> = surface
+        .iter()
+        .copied()
+        .filter(|&i| mv[i].is_finite() && mv[i] > 0.0)
+        .collect();
+    let sum = |v: &[f64]| compared.iter().map(|&i| v[i]).sum::<f64>();
+    let total = sum(&p.total);
+    let share = |v: &[f64]| {
+        if total > 0.0 {
+            sum(v) / total
+        } else {
+            f64::NAN
+        }
+    };
+    let n = compared.len().max(1) as f64;
+    let pairs: Vec<(f64, f64)> = p.total.iter().copied().zip(mv.iter().copied()).collect();
+    // Blocks: only surface pixels count, in both sums.
+    let measured_on_surface: Vec<f64> = mv
+        .iter()
+        .zip(&p.total)
+        .map(|(m, t)| if t.is_finite() { *m } else { f64::NAN })
+        .collect();
+    let blocks = block_sums(
+        &p.total,
+        &measured_on_surface,
+        settings.width,
+        settings.height,
+    );
+    let report = Report {
+        scene: args.scene.display().to_string(),
+        measured: args.measured.display().to_string(),
+        mode: mode.name(),
+        width: settings.width,
+        height: settings.height,
+        spp: settings.spp,
+        photons_per_pass: settings.photons,
+        pixel_jitter: settings.pixel_jitter,
+        noise_model: settings.noise_model.name(),
+        radius_m: renderer.radius(),
+        pixel_table_rays: settings.pixel_table_rays,
+        passes,
+        measured_relative_se_per_pixel: (2.0 / (passes as f64 - 1.0)).sqrt(),
+        pixels_without_surface: mv.len() - surface.len(),
+        pixels_without_measured_noise: surface.len() - compared.len(),
+        image_mean_predicted_v: total / n,
+        image_mean_measured_v: sum(mv) / n,
+        term_shares: Shares {
+            t0: share(&p.t0),
+            t1: share(&p.t1),
+            t2: share(&p.t2),
+            t_jitter: share(&p.t_jitter),
+        },
+        per_pixel: agreement(&pairs),
+        block_size: BLOCK,
+        blocks: agreement(&blocks),
+    };
+
+    let attributes = vec![
+        ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
+        ("scene".into(), args.scene.display().to_string()),
+        ("measured".into(), args.measured.display().to_string()),
+        ("mode".into(), mode.name().into()),
+        ("passes".into(), passes.to_string()),
+        ("spp".into(), settings.spp.to_string()),
+        ("photons_per_pass".into(), settings.photons.to_string()),
+        ("radius_m".into(), renderer.radius().to_string()),
+        ("units".into(), "V and terms in W2 m-4 sr-2".into()),
+    ];
+    let measured_out: Vec<f64> = measured_on_surface;
+    output::write_exr_channels(
+        &exr_path,
+        (settings.width, settings.height),
+        &[
+            ("predicted_V", &p.total),
+            ("measured_V", &measured_out),
+            ("ratio", &ratio),
+            ("T0", &p.t0),
+            ("T1", &p.t1),
+            ("T2", &p.t2),
+            ("T_jitter", &p.t_jitter),
+        ],
+        &attributes,
+    )
+    .map_err(|e| format!("{}: {e}", exr_path.display()))?;
+    let canvas = ratio_png(p, &ratio);
+    output::write_png_rgb8(&png_path, canvas.width, canvas.height, &canvas.rgb)
+        .map_err(|e| format!("{}: {e}", png_path.display()))?;
+    let json = serde_json::to_string_pretty(&report).map_err(|e| format!("JSON: {e}"))?;
+    output::write_atomic(&json_path, json.as_bytes())
+        .map_err(|e| format!("{}: {e}", json_path.display()))?;
+
+    print_summary(&report);
+    say!(
+        "wrote {}, {}, {}",
+        exr_path.display(),
+        png_path.display(),
+        json_path.display()
+    );
+    Ok(())
+}
+
+fn print_summary(r: &Report<'_>) {
+    say!(
+        "predict {} mode {}: measured V from K = {} passes (relative SE per pixel ~{:.2}, less over blocks)",
+        r.scene,
+        r.mode,
+        r.passes,
+        r.measured_relative_se_per_pixel
+    );
+    say!(
+        "image mean V: predicted {:.4e}, measured {:.4e} (ratio {:.3}); {} pixels without a surface, {} without measured noise",
+        r.image_mean_predicted_v,
+        r.image_mean_measured_v,
+        r.image_mean_predicted_v / r.image_mean_measured_v,
+        r.pixels_without_surface,
+        r.pixels_without_measured_noise
+    );
+    let s = &r.term_shares;
+    say!(
+        "term shares of predicted V: T0 {:.1}%, T1 {:.1}%, T2 {:.1}%, T_jitter {:.1}%",
+        100.0 * s.t0,
+        100.0 * s.t1,
+        100.0 * s.t2,
+        100.0 * s.t_jitter
+    );
+    for (name, a) in [
+        ("per pixel", &r.per_pixel),
+        (&format!("{0}x{0} blocks", r.block_size) as &str, &r.blocks),
+    ] {
+        say!(
+            "{name} ({}): predicted/measured median {:.3} [10% {:.3}, 90% {:.3}], correlation of log V {:.3}, of V {:.3}",
+            a.count,
+            a.ratio_median,
+            a.ratio_q10,
+            a.ratio_q90,
+            a.correlation_log,
+            a.correlation
+        );
+    }
+}
+
+/// The PNG: log₂(predicted/measured) from −3 (blue, model too low) through 0 (white) to +3
+/// (red, model too high), black where nothing is compared, with the colour bar.
+fn ratio_png(p: &Prediction, ratio: &[f64]) -> crate::colormap::Canvas {
+    let position = |r: f64| (r.log2() / LOG2_RANGE + 1.0) * 0.5;
+    let colours: Vec<[u8; 3]> = ratio
+        .iter()
+        .map(|&r| {
+            if r.is_finite() && r > 0.0 {
+                diverging(position(r))
+            } else {
+                NOT_COMPARED
+            }
+        })
+        .collect();
+    let ticks = [0.125, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0]
+        .iter()
+        .map(|&r| (position(r), crate::colormap::format_value(r)))
+        .collect();
+    let legend = Legend {
+        title: vec![
+            "predicted / measured V".into(),
+            "log2 scale".into(),
+            "black: not compared".into(),
+        ],
+        ticks,
+    };
+    compose(p.width, p.height, &colours, &legend, diverging).canvas
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn agreement_of_identical_and_scaled_samples() {
+        let pairs: Vec<(f64, f64)> = (1..=20).map(|i| (2.0 * i as f64, i as f64)).collect();
+        let a = agreement(&pairs);
+        assert_eq!(a.count, 20);
+        assert!((a.correlation - 1.0).abs() < 1e-12);
+        assert!((a.correlation_log - 1.0).abs() < 1e-12);
+        assert_eq!((a.ratio_median, a.ratio_q10, a.ratio_q90), (2.0, 2.0, 2.0));
+        // Non-positive or non-finite pairs are left out.
+        let b = agreement(&[(1.0, 0.0), (f64::NAN, 1.0), (1.0, 1.0), (2.0, 1.0)]);
+        assert_eq!(b.count, 2);
+        assert_eq!(b.ratio_median, 1.5);
+    }
+
+    #[test]
+    fn quantiles_interpolate() {
+        let v = [1.0, 2.0, 3.0, 4.0, 5.0];
+        assert_eq!(quantile(&v, 0.5), 3.0);
+        assert!((quantile(&v, 0.1) - 1.4).abs() < 1e-12);
+        assert!(quantile(&[], 0.5).is_nan());
+    }
+
+    #[test]
+    fn blocks_sum_surface_pixels_only() {
+        // 9×9: four blocks (8×8, 1×8, 8×1, 1×1); one pixel without a surface.
+        let mut p = vec![1.0; 81];
+        let m = vec![2.0; 81];
+        p[0] = f64::NAN;
+        let b = block_sums(&p, &m, 9, 9);
+        assert_eq!(b, vec![(63.0, 126.0), (8.0, 16.0), (8.0, 16.0), (1.0, 2.0)]);
+    }
+}

@@ -1,0 +1,373 @@
+//! The noise model of method.md §12 evaluated per pixel for a mode's weights: the per-pass
+//! variance V that the functional predicts, split into its terms, for comparison with the
+//! variance a render measures (`bdpm predict`).
+//!
+//! For the pixel's centre x₀ (u towards the camera) and directions v drawn from the BDF's
+//! sampling pdf p(v) at x₀ (N = `pixel_table_rays`, their own random stream), with x₁ the
+//! point v hits, L = L₀(x₁→x₀) + L_d(x₁→x₀) (shadow rays and the radiance cache), b from the
+//! cache, f = f(v, u; x₀) and cos = cos θ_v at x₀ (luminances), α = Φ/(N_F·S):
+//!
+//! ```text
+//! T0 = α·N_eff/N_B · E_p[(1 − w)²·f²·L·cos/p]           ∫ (1 − w₁)² f² L cos dv
+//! T1 = 1/N_B · Var_p[w·f·L·cos/p]                        ∫ w₁² f² L² cos²/p dv − (∫ w₁ f L cos dv)²
+//! T2 = α/N_B · E_p[w²·f²·cos²·b/p²]                      ∫ w₁² f² cos²/p · b dv
+//! T_jitter = 1/N_B · Var_{x₀ in pixel}[L₀(x₀→u) + L_d(x₀→u)]     (only with pixel jitter)
+//! ```
+//!
+//! Each estimator is the integral on its right written as an expectation over v ~ p
+//! (∫ g dv = E_p[g/p]); T1 is the sample variance (divisor N − 1) of the BDD=1 sample value
+//! w·E·L with E = f·cos/p, counting directions that find no x₁ as zeros, as the renderer does.
+//! T0 is the photon noise of the merges at x₀ (each photon carries Φ/N_F; a gather's variance
+//! is α∫f²L cos dv, and the N_B jittered gathers of a pass act like N_B/N_eff independent ones),
+//! T1 the jumps of x₁, T2 the photon noise of the merges at x₁ (b = ∫ f² J dv′ at x₁), and
+//! T_jitter the spread of the pixel's mean radiance over its footprint, which the functional of
+//! §12 leaves out (it is the same for every mode) but a measured V contains.
+//!
+//! **Which N_eff.** T0's N_eff = 1 + (N_B − 1)·ρ uses ρ from the pixel's footprint whenever the
+//! samples are jittered, whatever the noise model of the weights: it describes how the render
+//! shares photons, not what the weights assume. The weights themselves use the budget the
+//! renderer gives them (the pixel table's N_eff under the footprint model, N_B otherwise).
+//!
+//! **Weights that depend on the photon's incoming direction at x₁** (`balance`, `power`): for
+//! a direction v, the one-bounce paths light→x₁→x₀ have a weight w_ob,l per light l (incoming
+//! direction: towards the light) and the longer paths a weight w_m, evaluated with the incoming
+//! direction along x₁'s normal. The effective weight of the direction is
+//! w = (Σ_l L₀,l·w_ob,l + L_d·w_m)/L, which is exactly what the BDD=1 mean needs (T1). The
+//! squared weights of T0 and T2 are taken per part instead of from w:
+//! (1 − w)²L → Σ_l L₀,l (1 − w_ob,l)² + L_d (1 − w_m)² (each photon at x₀ carries its own
+//! weight) and w²b → w_m²·b (b comes from the merge photons at x₁ only). For every other mode
+//! w_ob = w_m = w and both readings coincide.
+//!
+//! Units: every term is a variance of a radiance, W²·m⁻⁴·sr⁻².
+use bdpm_bdf::luminance;
+use bdpm_geometry::{Domain, Rng};
+use bdpm_mis::{Budget, Heuristic, Pair, PathKind, effective_samples};
+use rayon::prelude::*;
+
+use crate::bdpm::{FirstVertex, Mix, WeightVertex};
+use crate::render::{RenderError, Renderer};
+use crate::settings::Mode;
+use crate::table::footprint_overlap;
+
+/// Jittered primary rays per pixel for T_jitter (method.md §12 leaves this term out; 16 gives
+/// its per-pixel value to about ±35 %, far less over blocks of pixels).
+pub const JITTER_RAYS: u32 = 16;
+
+/// Normals within about 8° count as the same surface for T_jitter's L_d (a tessellated sphere
+/// of 20480 facets turns by about 2° from facet to facet).
+const SAME_PLANE_COS: f32 = 0.99;
+
+/// The predicted per-pass variance of each pixel's luminance, split into its terms; row-major,
+/// W²·m⁻⁴·sr⁻² (NaN where the ray through the pixel centre sees no surface, or its back).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Prediction {
+    /// Width, pixels.
+    pub width: u32,
+    /// Height, pixels.
+    pub height: u32,
+    /// T0: photon noise of the merges at x₀ (BDD=0).
+    pub t0: Vec<f64>,
+    /// T1: the jumps of x₁ (BDD=1's camera sampling at x₀).
+    pub t1: Vec<f64>,
+    /// T2: photon noise of the merges at x₁ (BDD=1).
+    pub t2: Vec<f64>,
+    /// T_jitter: variance of the pixel's mean radiance over its footprint, divided by N_B
+    /// (0 without pixel jitter).
+    pub t_jitter: Vec<f64>,
+    /// T0 + T1 + T2 + T_jitter.
+    pub total: Vec<f64>,
+    /// ρ of T0's N_eff = 1 + (N_B − 1)·ρ (1 without jitter; dimensionless).
+    pub overlap: Vec<f64>,
+}
+
+/// The four terms of one pixel, W²·m⁻⁴·sr⁻².
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Terms {
+    t0: f64,
+    t1: f64,
+    t2: f64,
+    jitter: f64,
+    overlap: f64,
+}
+
+/// One direction's contributions before the constant factors.
+#[derive(Clone, Copy, Debug, Default)]
+struct Direction {
+    /// w·E·L, the BDD=1 sample value (luminance), W·m⁻²·sr⁻¹.
+    value: f64,
+    /// Σ (1 − w)²·L over the parts, times f²·cos/p.
+    photons_x0: f64,
+    /// w_m²·E²·b.
+    photons_x1: f64,
+}
+
+impl Renderer<'_> {
+    /// Evaluates the noise model of method.md §12 per pixel for this renderer's mode and
+    /// settings (see the module documentation of `predict.rs` for the estimators).
+    ///
+    /// Needs the radiance cache for every mode: build the renderer with
+    /// [`Renderer::with_model_inputs`]. The `path` and `light` modes have no model and give an
+    /// error. Deterministic: the directions come from the `PixelTable` stream keyed by pixel
+    /// (distinct from the A/B rays' keys), the jittered rays likewise.
+    pub fn predict_variance(&self) -> Result<Prediction, RenderError> {
+        let Mode::Bdpm(h) = self.settings().mode else {
+            return Err(RenderError::Settings(format!(
+                "mode '{}' has no noise model to predict",
+                self.settings().mode
+            )));
+        };
+        let mut mix = self.mix(h);
+        if mix.cache.is_none() {
+            return Err(RenderError::Settings(
+                "the noise model needs the radiance cache: build the renderer with with_model_inputs()"
+                    .into(),
+            ));
+        }
+        // The model needs L₀ and L_d at x₁ for every mode; these needs change only what the
+        // pair carries, not the weights (a mode reads only the fields it needs).
+        mix.needs.direct_at_x1 = true;
+        mix.needs.radiance_cache = true;
+        let s = self.settings();
+        let (w, hgt) = (s.width as usize, s.height as usize);
+        let mut terms = vec![None; w * hgt];
+        terms.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+            for (x, out) in row.iter_mut().enumerate() {
+                *out = self.pixel_terms(&mix, h, x as u32, y as u32);
+            }
+        });
+        let pick = |f: fn(&Terms) -> f64| -> Vec<f64> {
+            terms
+                .iter()
+                .map(|t| t.as_ref().map_or(f64::NAN, f))
+                .collect()
+        };
+        Ok(Prediction {
+            width: s.width,
+            height: s.height,
+            t0: pick(|t| t.t0),
+            t1: pick(|t| t.t1),
+            t2: pick(|t| t.t2),
+            t_jitter: pick(|t| t.jitter),
+            total: pick(|t| t.t0 + t.t1 + t.t2 + t.jitter),
+            overlap: pick(|t| t.overlap),
+        })
+    }
+
+    /// The terms of pixel (x, y), or None if its centre sees no surface facing the camera.
+    fn pixel_terms(&self, mix: &Mix<'_>, h: Heuristic, x: u32, y: u32) -> Option<Terms> {
+        let scene = self.scene();
+        let s = self.settings();
+        let cam = &scene.camera;
+        let pixel = y as u64 * s.width as u64 + x as u64;
+        let centre = (x as f32 + 0.5, y as f32 + 0.5);
+        let dir = cam.ray_direction(centre.0, centre.1);
+        let hit0 = scene.geometry.intersect(cam.position, dir, f32::INFINITY)?;
+        let x0 = mix.first_vertex(&hit0, -dir)?;
+
+        let n_b = s.spp as f64;
+        let overlap = if s.pixel_jitter {
+            footprint_overlap(scene, &x0.sh, centre.0, centre.1, self.radius())
+        } else {
+            1.0
+        };
+        let n_eff = effective_samples(n_b, overlap);
+        // The weights' inputs exactly as the renderer passes them.
+        let table = self.pixel_table().map(|t| t.get(x, y));
+        let budget = table.map_or(mix.budget, |p| Budget {
+            camera_samples: p.camera_samples,
+            ..mix.budget
+        });
+        let pixel_terms = table.map(|p| &p.terms);
+
+        let rays = s.pixel_table_rays.max(2);
+        let (mut sum, mut sum_sq, mut photons_x0, mut photons_x1) = (0.0, 0.0, 0.0, 0.0);
+        for j in 0..rays {
+            // Key slot 1: the A/B rays of table.rs use slot 0 with the same pixel and ray.
+            let mut rng = Rng::new(s.seed, Domain::PixelTable, [pixel, j as u64, 1]);
+            let d = direction(mix, h, &budget, pixel_terms, &x0, &mut rng).unwrap_or_default();
+            sum += d.value;
+            sum_sq += d.value * d.value;
+            photons_x0 += d.photons_x0;
+            photons_x1 += d.photons_x1;
+        }
+        let n = rays as f64;
+        let b = &mix.budget;
+        // α = Φ/(N_F·S), W·m⁻².
+        let alpha = b.flux / (b.photons * b.merge_area);
+        // Sample variance of the BDD=1 value (unbiased, divisor N − 1).
+        let jumps = ((sum_sq - sum * sum / n) / (n - 1.0)).max(0.0);
+        let jitter = if s.pixel_jitter {
+            self.jitter_variance(mix, &x0, x, y, pixel) / n_b
+        } else {
+            0.0
+        };
+        Some(Terms {
+            t0: alpha * n_eff / n_b * photons_x0 / n,
+            t1: jumps / n_b,
+            t2: alpha / n_b * photons_x1 / n,
+            jitter,
+            overlap,
+        })
+    }
+
+    /// Var over the pixel's footprint of L₀(x₀→u) + L_d(x₀→u), from [`JITTER_RAYS`]
+    /// uniformly jittered primary rays; rays that miss, or see a surface's back, count with the
+    /// value the renderer gives them (0, or the direct light alone).
+    ///
+    /// L_d comes from the radiance cache, but on x₀'s own plane it is taken at x₀ (`centre`)
+    /// for every ray: the cache is piecewise constant with a few percent to tens of percent
+    /// of photon noise per cell, and a footprint that straddles a cell boundary would count
+    /// that noise as variation over the pixel (in the sphere furnace, ten times the true
+    /// jitter variance). Indirect light varies little within a pixel on one surface; across
+    /// an edge to another surface, its change is real and the cache's value there is used.
+    fn jitter_variance(
+        &self,
+        mix: &Mix<'_>,
+        centre: &FirstVertex<'_>,
+        x: u32,
+        y: u32,
+        pixel: u64,
+    ) -> f64 {
+        let scene = self.scene();
+        let cam = &scene.camera;
+        let seed = self.settings().seed;
+        let cache = mix.cache;
+        let n0 = centre.sh.ng;
+        let ld_centre = cache.map_or(0.0, |c| {
+            c.lookup(centre.sh.prim, centre.sh.p, centre.u).0 as f64
+        });
+        let (mut sum, mut sum_sq) = (0.0, 0.0);
+        for m in 0..JITTER_RAYS {
+            let mut rng = Rng::new(seed, Domain::PixelTable, [pixel, m as u64, 2]);
+            let [jx, jy] = rng.uniform2();
+            let dir = cam.ray_direction(x as f32 + jx, y as f32 + jy);
+            let value = scene
+                .geometry
+                .intersect(cam.position, dir, f32::INFINITY)
+                .map_or(0.0, |hit| {
+                    let u = -dir;
+                    let sh = scene.shade(&hit, u);
+                    let direct = luminance(scene.direct(&sh, u)) as f64;
+                    let faces = sh.frame.to_local(u).z > 0.0;
+                    let same_plane = sh.ng.dot(n0) > SAME_PLANE_COS
+                        && (n0.dot(sh.p - centre.sh.p)).abs() < self.radius();
+                    let ld = match cache {
+                        _ if !faces => 0.0,
+                        _ if same_plane => ld_centre,
+                        Some(c) => c.lookup(hit.prim, hit.p, u).0 as f64,
+                        None => 0.0,
+                    };
+                    direct + ld
+                });
+            sum += value;
+            sum_sq += value * value;
+        }
+        let m = JITTER_RAYS as f64;
+        ((sum_sq - sum * sum / m) / (m - 1.0)).max(0.0)
+    }
+}
+
+/// One BDF-sampled direction v at x₀: its BDD=1 value and its photon-noise integrands, or None
+/// when the sample finds no x₁ (it then contributes zero, as in the renderer).
+fn direction(
+    mix: &Mix<'_>,
+    h: Heuristic,
+    budget: &Budget,
+    terms: Option<&bdpm_mis::PixelTerms>,
+    x0: &FirstVertex<'_>,
+    rng: &mut Rng,
+) -> Option<Direction> {
+    let scene = mix.scene;
+    let s = x0.bdf.sample_at(&x0.out, rng.uniform3())?;
+    let v = x0.sh.frame.to_world(s.wi);
+    if x0.sh.ng.dot(v) <= 0.0 || s.pdf <= 0.0 {
+        return None;
+    }
+    let hit1 = scene
+        .geometry
+        .intersect(scene.spawn(&x0.sh, v), v, f32::INFINITY)?;
+    let wo1 = -v;
+    let sh1 = scene.shade(&hit1, wo1);
+    let x1 = WeightVertex::from_shading(scene, &sh1);
+    let pair = mix.pair(x0, &x1, v, s.f);
+    let dist2 = (x1.p - x0.sh.p).length_squared();
+    let per_light = h.needs().densities;
+    let w_merge = if per_light {
+        // The longer paths' weight with the photon arriving along x₁'s normal.
+        let (pc, pl) = mix.densities(x0, &x1, v, dist2, x1.n);
+        let merge = Pair {
+            path: PathKind::Merge,
+            camera_density: pc,
+            light_density: pl,
+            ..pair
+        };
+        h.weight(budget, &merge, terms).w1
+    } else {
+        // `optimal-path` weighs each photon by its own f₁ at x₁; the model has only the cell's
+        // average, β = b/L_d (which makes it `optimal-split`).
+        let merge = Pair {
+            x1_scattering: if pair.indirect > 0.0 {
+                pair.b / pair.indirect
+            } else {
+                0.0
+            },
+            ..pair
+        };
+        h.weight(budget, &merge, terms).w1
+    };
+    // Weights that tell one-bounce paths from merge paths (`optimal-split`, `optimal-path`).
+    let w_direct = match h {
+        Heuristic::OptimalSplit { .. } | Heuristic::OptimalPath { .. } => {
+            let one = Pair {
+                path: PathKind::OneBounce,
+                ..pair
+            };
+            h.weight(budget, &one, terms).w1
+        }
+        _ => w_merge,
+    };
+
+    // L₀(x₁→x₀) light by light, as BDD=1 evaluates it (shading normal, visibility bits).
+    let (mut l0_w, mut l0_w0_sq) = (0.0f64, 0.0f64);
+    for (l, light) in scene.lights.iter().enumerate() {
+        let c = if l < 32 {
+            if x1.lights & (1 << l) == 0 {
+                continue;
+            }
+            scene.direct_unshadowed(&sh1, wo1, light)
+        } else {
+            scene.direct_from(&sh1, wo1, light)
+        };
+        let c = luminance(c) as f64;
+        if c == 0.0 {
+            continue;
+        }
+        let w = if per_light {
+            let incoming = (light.position - x1.p).normalize();
+            let (pc, pl) = mix.densities(x0, &x1, v, dist2, incoming);
+            let one_bounce = Pair {
+                path: PathKind::OneBounce,
+                camera_density: pc,
+                light_density: pl,
+                emission_density: mix.emission_density(l, &x1),
+                ..pair
+            };
+            h.weight(budget, &one_bounce, terms).w1
+        } else {
+            w_direct
+        };
+        l0_w += c * w;
+        l0_w0_sq += c * (1.0 - w) * (1.0 - w);
+    }
+    let ld = pair.indirect;
+    let f = luminance(s.f) as f64;
+    let cos = s.wi.z as f64;
+    let pdf = s.pdf as f64;
+    // E = f·cos/p, the camera path's weight after the scattering at x₀.
+    let e = f * cos / pdf;
+    Some(Direction {
+        value: e * (l0_w + ld * w_merge),
+        photons_x0: (l0_w0_sq + ld * (1.0 - w_merge).powi(2)) * f * f * cos / pdf,
+        photons_x1: w_merge * w_merge * e * e * pair.b,
+    })
+}

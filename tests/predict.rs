@@ -1,0 +1,153 @@
+//! The noise model of method.md §12 (`Renderer::predict_variance`) against a case whose answer
+//! is known: BDD=0 in the sphere furnace (method.md §10). There the merges at x₀ are the only
+//! noise besides the jitter of x₀, every photon carries exactly Φ/N_F (Lambert k = 0.5 with
+//! survival q = k), and a gather's variance is α·(k/π)²·E_ind with α = Φ/(N_F·S), E_ind the
+//! uniform indirect irradiance: T0 has a closed form, and the measured V must agree with it.
+
+use bdpm_integrator::{RenderSettings, Renderer};
+use bdpm_suite::{Furnace, load, with_mode};
+use glam::DVec3;
+
+/// Image-mean measured per-pass variance (luminance) and its standard error, from the spread
+/// of the per-pass image means of the squared deviations: pixels share photons, so their
+/// variance estimates are correlated and a per-pixel formula would understate the error.
+fn measured_mean_variance(renderer: &Renderer<'_>) -> (f64, f64) {
+    let s = renderer.settings();
+    let passes: Vec<Vec<f64>> = (0..s.passes)
+        .map(|p| {
+            let out = renderer.render_pass(p, &|_| {});
+            out.estimates.iter().map(|c| lum(*c)).collect()
+        })
+        .collect();
+    let k = passes.len() as f64;
+    let n = passes[0].len();
+    let mean: Vec<f64> = (0..n)
+        .map(|i| passes.iter().map(|p| p[i]).sum::<f64>() / k)
+        .collect();
+    // m_k: the image mean of pass k's squared deviation, scaled so that mean_k m_k is the
+    // image mean of the unbiased per-pixel variances.
+    let m: Vec<f64> = passes
+        .iter()
+        .map(|p| {
+            p.iter()
+                .zip(&mean)
+                .map(|(x, m)| (x - m).powi(2))
+                .sum::<f64>()
+                / n as f64
+                * k
+                / (k - 1.0)
+        })
+        .collect();
+    let v = m.iter().sum::<f64>() / k;
+    let var_m = m.iter().map(|x| (x - v).powi(2)).sum::<f64>() / (k - 1.0);
+    (v, (var_m / k).sqrt())
+}
+
+fn lum(c: DVec3) -> f64 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
+/// Image means of the prediction's total and of its T0.
+fn predicted_means(renderer: &Renderer<'_>) -> (f64, f64, f64) {
+    let p = renderer.predict_variance().expect("bdd0 has a noise model");
+    let mean = |v: &[f64]| {
+        assert!(
+            v.iter().all(|x| x.is_finite()),
+            "the closed sphere fills every pixel"
+        );
+        v.iter().sum::<f64>() / v.len() as f64
+    };
+    assert!(
+        p.t1.iter().chain(&p.t2).all(|t| *t == 0.0),
+        "bdd0 has no x1 part"
+    );
+    (mean(&p.total), mean(&p.t0), mean(&p.t_jitter))
+}
+
+fn furnace_settings(spp: u32, jitter: bool) -> (bdpm_scene::Scene, RenderSettings) {
+    let (scene, settings) = load("sphere-furnace.toml", 32, 32);
+    let mut s = with_mode(&settings, "bdd0", 24, spp, 40_000);
+    s.radius = Some(0.05);
+    s.pixel_jitter = jitter;
+    (scene, s)
+}
+
+/// Tolerance: the measured image mean has a standard error σ_m of about 2 % here (24 passes,
+/// 1024 correlated pixels); the prediction's own error is bounded by the closed-form check
+/// (T0 within 3 % of α(k/π)²E_ind: 64 rays per pixel and the cache's L_d noise). Agreement is
+/// required within 4σ_m plus that 3 %, so the test fails if the model is off by more than
+/// about 11 %, and a correct model fails it with a probability below 10⁻⁴.
+fn check(spp: u32, jitter: bool) {
+    let (scene, settings) = furnace_settings(spp, jitter);
+    let renderer = Renderer::new(&scene, &settings)
+        .expect("valid settings")
+        .with_model_inputs();
+    let (total, t0, t_jitter) = predicted_means(&renderer);
+
+    let furnace = Furnace::of(&scene);
+    let k = furnace.albedo;
+    let s_area = std::f64::consts::PI * 0.05f64.powi(2);
+    // Φ is the luminance of the flux (1 W per channel: 1 W).
+    let alpha = furnace.flux / (settings.photons as f64 * s_area);
+    let exact_t0 = alpha * (k / std::f64::consts::PI).powi(2) * furnace.indirect_irradiance();
+    // N_eff/N_B = 1 in both layouts: ρ = 1 when every sample goes through the centre, and
+    // N_eff = N_B = 1 with one sample per pixel.
+    let expected_t0 = exact_t0;
+
+    let (measured, se) = measured_mean_variance(&renderer);
+    eprintln!(
+        "furnace bdd0 spp {spp} jitter {jitter}: T0 {t0:.4e} (closed form {expected_t0:.4e}), \
+         T_jitter {t_jitter:.3e}, predicted {total:.4e}, measured {measured:.4e} ± {se:.2e} \
+         (ratio {:.3})",
+        total / measured
+    );
+    assert!(
+        (t0 / expected_t0 - 1.0).abs() < 0.03,
+        "T0 {t0} against the closed form {expected_t0}"
+    );
+    assert!(
+        se < 0.03 * measured,
+        "the measurement is too noisy to test: {se} of {measured}"
+    );
+    assert!(
+        (total - measured).abs() < 4.0 * se + 0.03 * total,
+        "predicted {total} against measured {measured} ± {se}"
+    );
+}
+
+/// Every sample through the pixel centre: the N_B gathers of a pass are one gather (ρ = 1),
+/// and x₀ does not move, so V = T0 exactly.
+#[test]
+fn bdd0_furnace_prediction_matches_without_jitter() {
+    check(4, false);
+}
+
+/// One jittered sample per pixel: N_eff = 1 whatever ρ is, so the model is exact again, now
+/// with the jitter of x₀ over the pixel (T_jitter) added.
+#[test]
+fn bdd0_furnace_prediction_matches_with_one_jittered_sample() {
+    check(1, true);
+}
+
+/// Building the cache for the model does not change what a render computes (the mix reads
+/// the cache only when its mode needs it): the same image bits with and without it.
+#[test]
+fn model_inputs_keep_the_image_bits() {
+    let (scene, settings) = load("cornell-lambert.toml", 16, 16);
+    for mode in ["bdd0", "bdd1", "balance"] {
+        let s = with_mode(&settings, mode, 1, 2, 5_000);
+        let plain = Renderer::new(&scene, &s).expect("valid settings");
+        let with_cache = Renderer::new(&scene, &s)
+            .expect("valid settings")
+            .with_model_inputs();
+        assert!(
+            with_cache
+                .stages()
+                .iter()
+                .any(|st| st.name == "radiance cache")
+        );
+        let a = plain.render_pass(0, &|_| {}).estimates;
+        let b = with_cache.render_pass(0, &|_| {}).estimates;
+        assert_eq!(a, b, "{mode}");
+    }
+}
