@@ -25,6 +25,7 @@ fn modes_prepare_only_what_they_need() {
         "algebraic-direct",
         "balance",
         "power",
+        "camis",
     ] {
         assert!(
             stage_names("cornell-lambert.toml", mode).is_empty(),
