@@ -79,7 +79,7 @@ static INPUTS: LazyLock<Vec<Input>> = LazyLock::new(|| {
                 log_uniform(&mut rng, 1e-4, 1.0)
             };
             let indirect = log_uniform(&mut rng, 1e-4, 1e-1);
-            let pair = Pair {
+            let mut pair = Pair {
                 f_tilde,
                 direct,
                 indirect,
@@ -93,12 +93,17 @@ static INPUTS: LazyLock<Vec<Input>> = LazyLock::new(|| {
                 camera_density: log_uniform(&mut rng, 1e-2, 1e2),
                 light_density: log_uniform(&mut rng, 1e-2, 1e2),
                 emission_density: log_uniform(&mut rng, 1e-3, 1e1),
-                x1_scattering: log_uniform(&mut rng, 1e-2, 1e2),
+                ..Pair::default()
             };
             let pixel = PixelTerms {
                 a: log_uniform(&mut rng, 1e-4, 1.0),
                 b: log_uniform(&mut rng, 1e-4, 1.0),
             };
+            // Drawn last so that the other modes' inputs stay those of earlier runs.
+            pair.acceptance_area = log_uniform(&mut rng, 1e-3, 1e-1);
+            pair.primary_density = log_uniform(&mut rng, 1e2, 1e4);
+            pair.light_suffix = log_uniform(&mut rng, 1e-9, 1.0);
+            pair.x1_scattering = log_uniform(&mut rng, 1e-2, 1e2);
             Input { pair, pixel }
         })
         .collect()

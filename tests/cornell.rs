@@ -123,11 +123,13 @@ fn per_photon_weighting_is_unbiased_and_camera_x1_weighting_is_not() {
 /// large values reads low with a small standard error, so the per-pixel 4σ criterion needs
 /// enough camera samples and photons per gather: 128 samples per pixel per pass and r = 1.5 cm
 /// (its kernel bias is a few 0.1% in the image mean; seeds 1–4 gave −0.7% … −0.3%, SE 0.3%).
+/// `camis` is here too because its weight walks the light path through glossy vertices, where
+/// a mismatch between its two evaluations would show.
 #[test]
 fn glossy_modes_agree_with_the_path_reference() {
     let (scene, settings) = glossy();
     let mut failures = Vec::new();
-    for mode in ["algebraic", "optimal", "optimal-path"] {
+    for mode in ["algebraic", "optimal", "optimal-path", "camis"] {
         let mut s = with_mode(settings, mode, 96, 128, 250_000);
         s.radius = Some(0.015);
         let film = render(scene, &s);

@@ -24,6 +24,7 @@ fn modes_prepare_only_what_they_need() {
         "threshold",
         "balance",
         "power",
+        "camis",
     ] {
         assert!(
             stage_names("cornell-lambert.toml", mode).is_empty(),

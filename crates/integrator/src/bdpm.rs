@@ -6,7 +6,7 @@ use bdpm_bdf::{Bdf, Outgoing, luminance};
 use bdpm_cache::{CacheSlot, RadianceCache};
 use bdpm_geometry::Hit;
 use bdpm_geometry::{Frame, Rng};
-use bdpm_mis::{Budget, Heuristic, Needs, Pair, PathKind};
+use bdpm_mis::{Budget, Heuristic, Needs, Pair, PathKind, acceptance_area, acceptance_probability};
 use bdpm_photon::{PathVertex, PhotonMap, PhotonQuery, survival_at};
 use bdpm_scene::{Scene, Shading};
 
@@ -207,7 +207,17 @@ pub(crate) struct FirstVertex<'s> {
     pub(crate) bdf: &'s Bdf,
     /// Luminance of the directional albedo µ(u; x₀).
     pub(crate) albedo: f32,
+    /// `camis` only (else 0): its acceptance area A at x₀'s distance from the camera, m².
+    pub(crate) acceptance_area: f64,
+    /// `camis` only (else 0): p_C(x₀), the camera's density of x₀ within its pixel, m⁻².
+    pub(crate) primary_density: f64,
 }
+
+/// `camis` stops walking a light path once its β has fallen below this fraction of the camera
+/// prefix's a: every further factor is ≤ 1, so β only shrinks, and r = a/(a + β(1 − a)) is
+/// then within 1e-9 of 1. The cut is a deterministic function of the path, so both techniques
+/// still evaluate the same weight.
+const SUFFIX_CUTOFF: f64 = 1e-9;
 
 impl<'a> Mix<'a> {
     /// f̃ = f/µ at x₀ for direction `v` (luminances), sr⁻¹.
@@ -233,13 +243,35 @@ impl<'a> Mix<'a> {
         }
         let bdf = self.scene.bdf(sh.material);
         let out = bdf.outgoing(u_local);
+        let (acceptance_area, primary_density) = if self.heuristic == Heuristic::Camis {
+            self.primary_terms(&sh, u)
+        } else {
+            (0.0, 0.0)
+        };
         Some(FirstVertex {
             sh,
             u,
             out,
             bdf,
             albedo: luminance(bdf.albedo_at(&out)),
+            acceptance_area,
+            primary_density,
         })
+    }
+
+    /// `camis`'s acceptance area A (m²) and p_C(x₀) (m⁻²) for x₀ at `sh` seen along −u.
+    ///
+    /// Both are functions of x₀ alone. A pixel is sampled uniformly over its area a_pix on
+    /// the image plane at unit distance; dω = cos³θ_c·dA_image and dA(x₀) = d₀²·dω/cos θ₀,
+    /// hence p_C(x₀) = cos θ₀/(d₀²·a_pix·cos³θ_c).
+    fn primary_terms(&self, sh: &Shading, u: Vec3) -> (f64, f64) {
+        let cam = &self.scene.camera;
+        let d2 = (sh.p - cam.position).length_squared() as f64;
+        let cos0 = sh.ng.dot(u).abs() as f64;
+        let cos_c = cam.forward.dot(-u).max(0.0) as f64;
+        let image = d2 * cam.pixel_area() as f64 * cos_c * cos_c * cos_c;
+        let density = if image > 0.0 { cos0 / image } else { 0.0 };
+        (acceptance_area(d2.sqrt()), density)
     }
 
     /// The pair data shared by both path kinds for x₀ and a candidate x₁ at `x1`.
@@ -267,6 +299,8 @@ impl<'a> Mix<'a> {
     ) -> Pair {
         let mut pair = Pair {
             f_tilde: self.f_tilde(x0, f0),
+            acceptance_area: x0.acceptance_area,
+            primary_density: x0.primary_density,
             ..Pair::default()
         };
         if self.needs.direct_at_x1 {
@@ -322,6 +356,61 @@ impl<'a> Mix<'a> {
         let frame = Frame::from_normal(x1.n);
         let bdf = self.scene.bdf(x1.material);
         luminance(bdf.eval(frame.to_local(-v), frame.to_local(incoming))) as f64
+    }
+
+    /// `camis`'s β for a merge path …→x₂→x₁→x₀ (method-notes.md, "camis"): the product of
+    /// min(p_L·A, 1) over the light path's densities of x₁ (from x₂), of x₂ (from x₃), … and
+    /// of its first vertex (from the light). `start` is x₂'s index in the photon map, whose
+    /// vertices are stored path by path, so each vertex of depth k > 0 follows its
+    /// predecessor. `camera_density` is p_C(x₀→x₁) (m⁻²), which sets the cut-off.
+    ///
+    /// The camera's x₁ and a photon's previous vertex y_p enter only through their position
+    /// and normal, and everything beyond them is read from the same stored vertices, so both
+    /// techniques get the same β for the same path.
+    fn light_suffix(
+        &self,
+        map: &PhotonMap,
+        x0: &FirstVertex<'_>,
+        x1: &WeightVertex,
+        start: u32,
+        camera_density: f64,
+    ) -> f64 {
+        let area = x0.acceptance_area;
+        let camera = acceptance_probability(x0.primary_density, area)
+            * acceptance_probability(camera_density, area);
+        let cutoff = camera * SUFFIX_CUTOFF;
+        let (mut to_p, mut to_n) = (x1.p, x1.n);
+        let mut index = start;
+        let mut beta = 1.0;
+        loop {
+            let y = map.vertex(index);
+            let d = to_p - y.position;
+            let d2 = d.length_squared();
+            if d2 <= 0.0 {
+                return beta;
+            }
+            let dir = d / d2.sqrt();
+            let frame = Frame::from_normal(y.normal);
+            let bdf = self.scene.bdf(y.material);
+            let out = bdf.outgoing(frame.to_local(y.incoming));
+            let p = y.survival * bdf.pdf_at(&out, frame.to_local(dir)) * to_n.dot(dir).abs() / d2;
+            beta *= acceptance_probability(p as f64, area);
+            if beta <= cutoff {
+                return beta;
+            }
+            if y.depth == 0 {
+                let emission =
+                    self.emission_density(y.light as usize, &WeightVertex::from_photon_vertex(y));
+                return beta * acceptance_probability(emission, area);
+            }
+            // A map not stored path by path (hand-made in tests) ends the walk here.
+            if index == 0 || map.vertex(index - 1).depth + 1 != y.depth {
+                debug_assert!(false, "light-path vertices are not consecutive");
+                return beta;
+            }
+            (to_p, to_n) = (y.position, y.normal);
+            index -= 1;
+        }
     }
 
     /// Emission density p_L(light→x₁) in area measure (choice of light included).
@@ -563,6 +652,7 @@ impl<'a> Mix<'a> {
         let wo1 = -v;
         let per_light = self.needs.densities;
         let per_photon = self.needs.x1_scattering;
+        let camis = self.heuristic == Heuristic::Camis;
         let mut ph_raw = Vec3::ZERO;
         let mut ph_weighted = Vec3::ZERO;
         map.finish_query(query, |ph| {
@@ -576,10 +666,16 @@ impl<'a> Mix<'a> {
             ph_raw += c;
             let w = if per_light {
                 let (pc, pl) = self.densities(x0, &x1, v, dist2, wp);
+                let light_suffix = if camis {
+                    self.light_suffix(map, x0, &x1, ph.prev, pc)
+                } else {
+                    0.0
+                };
                 let pair = Pair {
                     path: PathKind::Merge,
                     camera_density: pc,
                     light_density: pl,
+                    light_suffix,
                     ..pair
                 };
                 self.w1(&pair, pixel, stats)
@@ -652,6 +748,9 @@ impl<'a> Mix<'a> {
                     if prev.depth == 0 {
                         pair.path = PathKind::OneBounce;
                         pair.emission_density = self.emission_density(prev.light as usize, &y);
+                    } else if self.heuristic == Heuristic::Camis {
+                        // y_p = x₁ was scattered into from x₂, the vertex stored before it.
+                        pair.light_suffix = self.light_suffix(map, x0, &y, ph.prev - 1, pc);
                     }
                 }
                 1.0 - self.w1(&pair, pixel, stats)

@@ -2,7 +2,8 @@
 //!
 //! This crate owns the weight functions of `method.md` §4 (eq. 8–11: `bdd0`, `bdd1`,
 //! `threshold`, `algebraic-direct`, `algebraic`, `optimal`) and §8 (the peers'
-//! `balance` and `power` heuristics on path densities). Every mode is a variant of one
+//! `balance` and `power` heuristics on path densities, and `camis`, the balance heuristic
+//! with the correlation-aware factor of Grittmann et al. 2021). Every mode is a variant of one
 //! [`Heuristic`] enum; [`Heuristic::weight`] returns the weight w₁ of BDD=1 (the camera
 //! path continues to x₁ and merges photons there) for one pair (x₀, x₁). The weight of
 //! BDD=0 is w₀ = 1 − w₁ exactly ([`Weight::w0`]), which keeps the mix unbiased for any
@@ -138,7 +139,8 @@ pub struct Pair {
     pub b: f64,
     /// The smallest distance |x₁ − x_LS| over all lights, m (`threshold` only).
     pub light_distance: f64,
-    /// Which full path this weight is for (`balance`, `power`, `optimal-split`, `optimal-path`).
+    /// Which full path this weight is for (`balance`, `power`, `camis`, `optimal-split`,
+    /// `optimal-path`).
     pub path: PathKind,
     /// f₁(ω₂, x₁→x₀): the BDF at x₁ (luminance, sr⁻¹) for the light path's incoming
     /// direction ω₂ and the outgoing direction towards x₀ (`optimal-path`, merge paths only).
@@ -150,6 +152,18 @@ pub struct Pair {
     /// p_L(light→x₁), area measure, m⁻², including the choice of light
     /// ([`PathKind::OneBounce`] only).
     pub emission_density: f64,
+    /// A, the acceptance area of `camis`'s surrogate probabilities, m²: a disk of angular
+    /// radius 1° seen from the camera at x₀'s distance ([`acceptance_area`]). 0 (unset) makes
+    /// the correlation factor 1, i.e. `camis` = `balance`.
+    pub acceptance_area: f64,
+    /// p_C(x₀), the camera's density of x₀ within its pixel, area measure, m⁻² (the inverse
+    /// of the pixel's footprint area at x₀; `camis` only).
+    pub primary_density: f64,
+    /// β, dimensionless in [0, 1]: the surrogate probability that the light subpath of a
+    /// [`PathKind::Merge`] path lands in its acceptance regions, ∏ [`acceptance_probability`]
+    /// over the light's densities of x₁ (from x₂), of x₂ (from x₃), … and of the first vertex
+    /// (from the light, choice of light included) (`camis` only).
+    pub light_suffix: f64,
 }
 
 /// Which full path a density-based weight is for (method.md §8).
@@ -245,6 +259,21 @@ pub enum Heuristic {
     Balance,
     /// Veach's power heuristic (exponent 2) on path densities (method.md §8).
     Power,
+    /// The balance heuristic with the correlation-aware factor of Grittmann, Georgiev and
+    /// Slusallek (Eurographics 2021) on BDD=1's merge at x₁ (method-notes.md, "camis").
+    ///
+    /// For a [`PathKind::Merge`] path, BDD=1 merges at x₁ the photons of N_F light paths
+    /// with one camera prefix (x₀, x₁), so those N_F paths are correlated through the prefix.
+    /// The paper scales that merge's sample count by r = a/(a + β − a·β), with
+    /// a = [`acceptance_probability`](p_C(x₀))·[`acceptance_probability`](p_C(x₀→x₁)) the
+    /// camera prefix's and β ([`Pair::light_suffix`]) the light subpath's surrogate
+    /// probability, giving w₁ = r·p_C/(r·p_C + p_L). BDD=0 merges at the primary vertex,
+    /// which the paper (and its code) leaves uncorrelated (factor 1): x₀ is fixed by the
+    /// pixel up to its footprint. For a [`PathKind::OneBounce`] path BDD=1 is a connection
+    /// (L₀(x₁), next-event estimation), not a merge, so no factor applies and `camis` is
+    /// exactly `balance`. r ∈ [0, 1] and r = 1 when β = 0, so `camis` never favours BDD=1
+    /// more than `balance` does.
+    Camis,
 }
 
 impl Heuristic {
@@ -260,6 +289,7 @@ impl Heuristic {
         "optimal-path",
         "balance",
         "power",
+        "camis",
     ];
 
     /// The mode's name as used on the command line and in reports.
@@ -275,6 +305,7 @@ impl Heuristic {
             Heuristic::OptimalPath { .. } => "optimal-path",
             Heuristic::Balance => "balance",
             Heuristic::Power => "power",
+            Heuristic::Camis => "camis",
         }
     }
 
@@ -300,6 +331,7 @@ impl Heuristic {
             },
             "balance" => Heuristic::Balance,
             "power" => Heuristic::Power,
+            "camis" => Heuristic::Camis,
             _ => return None,
         })
     }
@@ -351,7 +383,9 @@ impl Heuristic {
                 x1_scattering: true,
                 ..mix
             },
-            Heuristic::Balance | Heuristic::Power => Needs {
+            // camis's extra inputs (acceptance area, p_C(x₀), β) come from the same geometry
+            // and light-path vertices as the densities, so it needs nothing more.
+            Heuristic::Balance | Heuristic::Power | Heuristic::Camis => Needs {
                 densities: true,
                 ..mix
             },
@@ -397,6 +431,7 @@ impl Heuristic {
             // method.md §8.
             Heuristic::Balance => Weight::plain(density_share(budget, pair, 1)),
             Heuristic::Power => Weight::plain(density_share(budget, pair, 2)),
+            Heuristic::Camis => Weight::plain(camis(budget, pair)),
         }
     }
 }
@@ -636,6 +671,62 @@ fn density_share(budget: &Budget, pair: &Pair, power: i32) -> f64 {
         ]),
     };
     share(camera, light, power, 0.5)
+}
+
+/// tan 1°: the angular radius of `camis`'s acceptance disk, the value the paper's code uses.
+pub const ACCEPTANCE_ANGLE_TAN: f64 = 0.017_455_064_928_217_585;
+
+/// The acceptance area A = π·(d₀·tan 1°)² of `camis`'s surrogate probabilities, m², for x₀ at
+/// distance `primary_distance` (m) from the camera: a disk that subtends 1° from the camera,
+/// a fixed fraction of the image rather than of the merge radius, so the surrogate does not
+/// depend on r. NaN or negative distances give 0; saturates at `f64::MAX`.
+pub fn acceptance_area(primary_distance: f64) -> f64 {
+    let radius = mul(nonneg(primary_distance), ACCEPTANCE_ANGLE_TAN);
+    mul(std::f64::consts::PI, mul(radius, radius))
+}
+
+/// min(p·A, 1), the surrogate probability that a vertex sampled with area density `density`
+/// (m⁻²) lands in an acceptance region of area `area` (m²); dimensionless in [0, 1].
+/// NaN or negative inputs count as 0, and 0·∞ = 0.
+pub fn acceptance_probability(density: f64, area: f64) -> f64 {
+    mul(nonneg(density), nonneg(area)).min(1.0)
+}
+
+/// The correlation-aware factor r = a/(a + β − a·β) for camera-prefix and light-subpath
+/// surrogate probabilities a, β (clamped into [0, 1]), written as a/(a + β(1 − a)) so that it
+/// stays in [0, 1] after rounding. a = β = 0 gives 1 (no information: no correction, as in the
+/// paper's code); β = 0 with a > 0 gives exactly 1, and a = 1 gives exactly 1.
+pub fn correlation_factor(camera: f64, light: f64) -> f64 {
+    let a = nonneg(camera).min(1.0);
+    let b = nonneg(light).min(1.0);
+    if a == 0.0 {
+        if b == 0.0 { 1.0 } else { 0.0 }
+    } else {
+        a / (a + b * (1.0 - a))
+    }
+}
+
+/// [`Heuristic::Camis`]: the balance heuristic with BDD=1's merge at x₁ counted r times.
+fn camis(budget: &Budget, pair: &Pair) -> f64 {
+    match pair.path {
+        // BDD=1 connects to the light at x₁ and BDD=0 merges at the primary vertex: neither
+        // merge is correlated in the paper's sense, so this is `balance` bit for bit.
+        PathKind::OneBounce => density_share(budget, pair, 1),
+        PathKind::Merge => {
+            let area = nonneg(pair.acceptance_area);
+            // Without an acceptance area there is no surrogate to compare: no correction.
+            let r = if area == 0.0 {
+                1.0
+            } else {
+                let camera = acceptance_probability(pair.primary_density, area)
+                    * acceptance_probability(pair.camera_density, area);
+                correlation_factor(camera, pair.light_suffix)
+            };
+            // Unsaturated, with 0·∞ = 0, so that r = 1 reproduces `balance` exactly, ∞ included.
+            let camera_density = product(&[r, nonneg(pair.camera_density)]);
+            share(camera_density, nonneg(pair.light_density), 1, 0.5)
+        }
+    }
 }
 
 /// aᵖ/(aᵖ + bᵖ) for a, b ≥ 0 (possibly +∞), as 1/(1 + (b/a)ᵖ).

@@ -318,6 +318,148 @@ fn density_guards() {
     }
 }
 
+/// A merge pair for `camis`: A = 2 m², p_C(x₀) = 1 m⁻² (so the primary factor is 1).
+fn camis_merge(camera: f64, light: f64, suffix: f64) -> Pair {
+    Pair {
+        acceptance_area: 2.0,
+        primary_density: 1.0,
+        light_suffix: suffix,
+        ..densities(PathKind::Merge, camera, light, 0.0)
+    }
+}
+
+#[test]
+fn acceptance_area_and_probability_match_hand_values() {
+    // A = π (d tan 1°)²; d = 1/tan 1° gives a disk of radius 1 m.
+    assert_close(acceptance_area(1.0 / ACCEPTANCE_ANGLE_TAN), PI);
+    assert_close(
+        acceptance_area(10.0),
+        PI * (10.0 * 1f64.to_radians().tan()).powi(2),
+    );
+    assert_close(acceptance_probability(0.25, 2.0), 0.5);
+    assert_eq!(acceptance_probability(3.0, 2.0), 1.0);
+    assert_eq!(acceptance_probability(0.0, f64::INFINITY), 0.0);
+    assert_eq!(acceptance_probability(f64::NAN, 1.0), 0.0);
+    assert_eq!(acceptance_probability(-1.0, 1.0), 0.0);
+    assert_eq!(acceptance_area(f64::NAN), 0.0);
+    assert_eq!(acceptance_area(-3.0), 0.0);
+}
+
+#[test]
+fn correlation_factor_matches_hand_values() {
+    // r = a/(a + β − aβ): a = ½, β = ½ → ½/(¾) = ⅔; a = 0.1, β = 0.3 → 0.1/0.37.
+    assert_close(correlation_factor(0.5, 0.5), 2.0 / 3.0);
+    assert_close(correlation_factor(0.1, 0.3), 0.1 / 0.37);
+    // No correlation information, or a certain camera prefix: factor 1 exactly.
+    assert_eq!(correlation_factor(0.0, 0.0), 1.0);
+    assert_eq!(correlation_factor(0.3, 0.0), 1.0);
+    assert_eq!(correlation_factor(1.0, 0.7), 1.0);
+    // A certain light subpath: r = a.
+    assert_close(correlation_factor(0.2, 1.0), 0.2);
+    assert_eq!(correlation_factor(0.0, 0.5), 0.0);
+    // Out-of-range inputs are clamped into [0, 1].
+    assert_eq!(correlation_factor(f64::NAN, 0.5), 0.0);
+    assert_eq!(correlation_factor(f64::INFINITY, 0.5), 1.0);
+    assert_close(correlation_factor(0.5, f64::INFINITY), 0.5);
+}
+
+#[test]
+fn camis_matches_hand_values() {
+    // p_C = ¼, p_L = ⅛, A = 2: a = min(1·2, 1)·min(¼·2, 1) = ½; β = ½ → r = ⅔;
+    // w₁ = (⅔·¼)/(⅔·¼ + ⅛) = (1/6)/(7/24) = 4/7.
+    let w = Heuristic::Camis.weight(&SIMPLE, &camis_merge(0.25, 0.125, 0.5), None);
+    assert_close(w.w1, 4.0 / 7.0);
+    assert_eq!(w.w0() + w.w1, 1.0);
+    assert!(!w.outside_unit && !w.clamped_cb);
+    // A pixel footprint larger than A (p_C(x₀)·A = ½) halves a: a = ¼, β = ½ → r = 0.4;
+    // w₁ = 0.1/(0.1 + ⅛) = 4/9.
+    let pair = Pair {
+        primary_density: 0.25,
+        ..camis_merge(0.25, 0.125, 0.5)
+    };
+    assert_close(Heuristic::Camis.weight(&SIMPLE, &pair, None).w1, 4.0 / 9.0);
+    // The factor only ever moves weight to BDD=0.
+    let balance = Heuristic::Balance.weight(&SIMPLE, &pair, None).w1;
+    assert_close(balance, 2.0 / 3.0);
+}
+
+#[test]
+fn camis_with_factor_one_is_balance() {
+    for (camera, light) in [
+        (0.25, 0.125),
+        (3.0, 1e-9),
+        (0.0, 2.0),
+        (0.0, 0.0),
+        (1e300, 1e-300),
+    ] {
+        let balance = Heuristic::Balance
+            .weight(
+                &SIMPLE,
+                &densities(PathKind::Merge, camera, light, 0.0),
+                None,
+            )
+            .w1;
+        // β = 0 (light subpath never concentrated), or A = 0 (no surrogate at all).
+        for pair in [
+            camis_merge(camera, light, 0.0),
+            Pair {
+                acceptance_area: 0.0,
+                ..camis_merge(camera, light, 0.7)
+            },
+        ] {
+            assert_eq!(Heuristic::Camis.weight(&SIMPLE, &pair, None).w1, balance);
+        }
+    }
+    // One-bounce paths: BDD=1 is a connection, so camis is balance whatever β says.
+    let one_bounce = Pair {
+        acceptance_area: 2.0,
+        primary_density: 1.0,
+        light_suffix: 1.0,
+        ..densities(PathKind::OneBounce, 0.25, 0.5, 0.3)
+    };
+    assert_eq!(
+        Heuristic::Camis.weight(&SIMPLE, &one_bounce, None).w1,
+        Heuristic::Balance.weight(&SIMPLE, &one_bounce, None).w1
+    );
+}
+
+#[test]
+fn camis_guards() {
+    let camis = |pair: &Pair| Heuristic::Camis.weight(&SIMPLE, pair, None).w1;
+    // Infinite densities: the factor is still in [0, 1] and the weight finite.
+    assert_eq!(camis(&camis_merge(f64::INFINITY, f64::INFINITY, 0.0)), 0.5);
+    assert_eq!(camis(&camis_merge(f64::INFINITY, 1.0, 0.5)), 1.0);
+    assert_eq!(camis(&camis_merge(1.0, f64::INFINITY, 0.5)), 0.0);
+    // Zero densities: the both-zero convention of balance.
+    assert_eq!(camis(&camis_merge(0.0, 0.0, 0.5)), 0.5);
+    assert_eq!(camis(&camis_merge(0.0, 1.0, 0.5)), 0.0);
+    // A camera prefix that never lands (p_C(x₀) = 0) against a light subpath that does: r = 0.
+    let unseen = Pair {
+        primary_density: 0.0,
+        ..camis_merge(0.25, 0.125, 0.5)
+    };
+    assert_eq!(camis(&unseen), 0.0);
+    // NaN and negative inputs count as 0; infinite A and β saturate the probabilities at 1.
+    for x in [f64::NAN, -1.0, 0.0, f64::INFINITY] {
+        for pair in [
+            camis_merge(x, 0.125, 0.5),
+            camis_merge(0.25, x, 0.5),
+            camis_merge(0.25, 0.125, x),
+            Pair {
+                acceptance_area: x,
+                ..camis_merge(0.25, 0.125, 0.5)
+            },
+            Pair {
+                primary_density: x,
+                ..camis_merge(0.25, 0.125, 0.5)
+            },
+        ] {
+            let w = camis(&pair);
+            assert!((0.0..=1.0).contains(&w), "{w} for {pair:?}");
+        }
+    }
+}
+
 #[test]
 fn names_round_trip() {
     let all = [
@@ -335,6 +477,7 @@ fn names_round_trip() {
         PATH,
         Heuristic::Balance,
         Heuristic::Power,
+        Heuristic::Camis,
     ];
     let names: Vec<_> = all.iter().map(Heuristic::name).collect();
     assert_eq!(names, Heuristic::ALL_NAMES);
@@ -398,6 +541,7 @@ fn needs_follow_method_table() {
     };
     assert_eq!(needs("balance"), density);
     assert_eq!(needs("power"), density);
+    assert_eq!(needs("camis"), density);
 }
 
 #[test]

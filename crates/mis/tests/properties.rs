@@ -49,11 +49,17 @@ fn pair() -> impl Strategy<Value = Pair> {
             density(),
             zero_or(-30.0, 30.0),
         ),
+        (
+            density(),
+            density(),
+            prop_oneof![zero_or(-30.0, 0.0), Just(1.0)],
+        ),
     )
         .prop_map(
             |(
                 (f_tilde, direct, indirect, b, light_distance),
                 (path, camera, light, emission, x1_scattering),
+                (acceptance_area, primary_density, light_suffix),
             )| {
                 Pair {
                     f_tilde,
@@ -66,6 +72,9 @@ fn pair() -> impl Strategy<Value = Pair> {
                     light_density: light,
                     emission_density: emission,
                     x1_scattering,
+                    acceptance_area,
+                    primary_density,
+                    light_suffix,
                 }
             },
         )
@@ -78,7 +87,7 @@ fn pixel() -> impl Strategy<Value = Option<PixelTerms>> {
     ]
 }
 
-const BOUNDED: [Heuristic; 7] = [
+const BOUNDED: [Heuristic; 8] = [
     Heuristic::Bdd0,
     Heuristic::Bdd1,
     Heuristic::Threshold { radius: 0.2 },
@@ -86,6 +95,7 @@ const BOUNDED: [Heuristic; 7] = [
     Heuristic::Algebraic,
     Heuristic::Balance,
     Heuristic::Power,
+    Heuristic::Camis,
 ];
 
 proptest! {
@@ -96,6 +106,19 @@ proptest! {
             prop_assert!((0.0..=1.0).contains(&w.w1), "{heuristic}: {w:?}");
             prop_assert_eq!(w.w0() + w.w1, 1.0);
             prop_assert!(!w.outside_unit && !w.clamped_cb);
+        }
+    }
+
+    /// The correlation factor is in [0, 1] and scales BDD=1 only: camis never gives BDD=1
+    /// more weight than balance, and is balance on one-bounce paths.
+    #[test]
+    fn camis_never_exceeds_balance(budget in budget(), pair in pair()) {
+        let camis = Heuristic::Camis.weight(&budget, &pair, None).w1;
+        let balance = Heuristic::Balance.weight(&budget, &pair, None).w1;
+        if pair.path == PathKind::OneBounce {
+            prop_assert_eq!(camis, balance);
+        } else if pair.camera_density > 0.0 || pair.light_density > 0.0 {
+            prop_assert!(camis <= balance, "{camis} > {balance}");
         }
     }
 
