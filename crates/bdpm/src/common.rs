@@ -24,7 +24,7 @@ pub(crate) type CliResult<T> = Result<T, String>;
 #[derive(Args, Debug, Clone, Default)]
 pub(crate) struct Overrides {
     /// Integrator and weight mode: path, light, bdd0, bdd1, threshold, algebraic-direct, algebraic,
-    /// optimal, balance, power.
+    /// optimal, optimal-split, optimal-path, balance, power, camis.
     #[arg(long)]
     pub(crate) mode: Option<String>,
     /// Number of passes.
@@ -49,7 +49,8 @@ pub(crate) struct Overrides {
     /// model assumes) instead of jittering them over the pixel.
     #[arg(long)]
     pub(crate) no_jitter: bool,
-    /// Noise model of the model-based weights (algebraic-direct, algebraic, optimal): footprint
+    /// Noise model of the model-based weights (algebraic-direct, algebraic, optimal,
+    /// optimal-split, optimal-path): footprint
     /// (N_eff per pixel from the overlap of the samples' merge disks) or pinhole (the preprint's
     /// N_B; its weights assume every sample of a pixel shares x0).
     #[arg(long)]

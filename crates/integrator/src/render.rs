@@ -87,20 +87,26 @@ impl<'a> Renderer<'a> {
         let radius = s.radius.unwrap_or_else(|| scene_default_radius(scene));
         let mut settings = s.clone();
         settings.radius = Some(radius);
+        // Under the footprint model the weights are clamped to [0, 1] (method-notes.md,
+        // "Clamping"): unclamped, the correlation term pushes many of them outside, and the
+        // two techniques' contributions then cancel with a heavy-tailed sum. The pinhole model
+        // and centred samples keep the preprint's unclamped weights unless asked.
+        let clamp = s.clamp_weights || (s.noise_model == NoiseModel::Footprint && s.pixel_jitter);
+        settings.clamp_weights = clamp;
         match settings.mode {
             Mode::Bdpm(Heuristic::Optimal { .. }) => {
                 settings.mode = Mode::Bdpm(Heuristic::Optimal {
-                    clamp_weights: s.clamp_weights,
+                    clamp_weights: clamp,
                 });
             }
             Mode::Bdpm(Heuristic::OptimalSplit { .. }) => {
                 settings.mode = Mode::Bdpm(Heuristic::OptimalSplit {
-                    clamp_weights: s.clamp_weights,
+                    clamp_weights: clamp,
                 });
             }
             Mode::Bdpm(Heuristic::OptimalPath { .. }) => {
                 settings.mode = Mode::Bdpm(Heuristic::OptimalPath {
-                    clamp_weights: s.clamp_weights,
+                    clamp_weights: clamp,
                 });
             }
             _ => {}

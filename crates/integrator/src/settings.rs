@@ -76,7 +76,9 @@ pub struct RenderSettings {
     pub cache_photons: Option<u64>,
     /// Backward rays per pixel of the A/B pre-pass, N.
     pub pixel_table_rays: u32,
-    /// Clamp optimal weights to [0, 1] (the mix stays unbiased either way).
+    /// Clamp the `optimal*` weights to [0, 1] (the mix stays unbiased either way). The
+    /// footprint noise model with jittered samples always clamps (method-notes.md,
+    /// "Clamping"); `Renderer::settings` reports the clamp in force.
     pub clamp_weights: bool,
     /// Path-tracing depth after which Russian roulette starts.
     pub roulette_depth: u32,
