@@ -478,6 +478,8 @@ fn weight_map_shows_the_ceiling_spot() {
         .arg("weights")
         .arg(scene("cornell-lambert.toml"))
         .args(["--x0", "1.05,0.4125,0.4475", "--mode", "algebraic"])
+        // The preprint's figure is drawn with its own (pinhole) noise model: N_B = 30.
+        .args(["--noise-model", "pinhole"])
         .args(["--resolution", &format!("{n}x{n}")])
         .args(["--photons", "1000000", "--spp", "30", "-o"])
         .arg(dir.path("w.exr")));
