@@ -140,7 +140,9 @@ fn standard_error_of_mean(samples: &[[f64; 3]]) -> [f64; 3] {
     out
 }
 
-fn settings_out(s: &RenderSettings, radius: f32) -> SettingsOut {
+/// The settings as asked for, with the merge radius and the weight clamp in force (the
+/// footprint noise model always clamps).
+fn settings_out(s: &RenderSettings, radius: f32, clamp_weights: bool) -> SettingsOut {
     SettingsOut {
         mode: s.mode.name().to_string(),
         width: s.width,
@@ -155,7 +157,7 @@ fn settings_out(s: &RenderSettings, radius: f32) -> SettingsOut {
         cache_bins: s.cache_bins,
         cache_photons: s.cache_photons.unwrap_or(s.photons),
         pixel_table_rays: s.pixel_table_rays,
-        clamp_weights: s.clamp_weights,
+        clamp_weights,
         pixel_jitter: s.pixel_jitter,
         noise_model: s.noise_model.name(),
     }
@@ -178,7 +180,11 @@ impl RunReport {
                 materials: f.load.materials,
                 lights: f.load.lights,
             },
-            settings: settings_out(f.settings, f.renderer.radius()),
+            settings: settings_out(
+                f.settings,
+                f.renderer.radius(),
+                f.renderer.settings().clamp_weights,
+            ),
             threads: f.threads,
             passes_done: f.film.passes(),
             interrupted: f.interrupted,
