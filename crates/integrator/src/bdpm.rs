@@ -413,6 +413,28 @@ impl<'a> Mix<'a> {
         }
     }
 
+    /// `pair` completed for the one-bounce path light `light`→x₁→x₀ with the densities of the
+    /// density-based weights (method.md §8); `v` is the unit direction x₀→x₁, `dist2` = |x₁ − x₀|².
+    pub(crate) fn one_bounce_pair(
+        &self,
+        x0: &FirstVertex<'_>,
+        x1: &WeightVertex,
+        v: Vec3,
+        dist2: f32,
+        light: usize,
+        pair: Pair,
+    ) -> Pair {
+        let incoming = (self.scene.lights[light].position - x1.p).normalize();
+        let (pc, pl) = self.densities(x0, x1, v, dist2, incoming);
+        Pair {
+            path: PathKind::OneBounce,
+            camera_density: pc,
+            light_density: pl,
+            emission_density: self.emission_density(light, x1),
+            ..pair
+        }
+    }
+
     /// Emission density p_L(light→x₁) in area measure (choice of light included).
     pub(crate) fn emission_density(&self, light: usize, x1: &WeightVertex) -> f64 {
         let l = &self.scene.lights[light];
@@ -596,15 +618,7 @@ impl<'a> Mix<'a> {
             }
             direct_raw += c;
             let w = if per_light {
-                let incoming = (light.position - x1.p).normalize();
-                let (pc, pl) = self.densities(x0, &x1, v, dist2, incoming);
-                let pair = Pair {
-                    path: PathKind::OneBounce,
-                    camera_density: pc,
-                    light_density: pl,
-                    emission_density: self.emission_density(l, &x1),
-                    ..pair
-                };
+                let pair = self.one_bounce_pair(x0, &x1, v, dist2, l, pair);
                 self.w1(&pair, pixel, stats)
             } else {
                 w_direct

@@ -343,15 +343,7 @@ fn direction(
             continue;
         }
         let w = if per_light {
-            let incoming = (light.position - x1.p).normalize();
-            let (pc, pl) = mix.densities(x0, &x1, v, dist2, incoming);
-            let one_bounce = Pair {
-                path: PathKind::OneBounce,
-                camera_density: pc,
-                light_density: pl,
-                emission_density: mix.emission_density(l, &x1),
-                ..pair
-            };
+            let one_bounce = mix.one_bounce_pair(x0, &x1, v, dist2, l, pair);
             h.weight(budget, &one_bounce, terms).w1
         } else {
             w_direct
