@@ -7,11 +7,74 @@ use std::path::{Path, PathBuf};
 use bdpm_integrator::Film;
 use exr::prelude::{
     AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, Layer, LayerAttributes,
-    SmallVec, Text, WritableImage,
+    SmallVec, Text, WritableImage, read_all_flat_layers_from_file,
 };
 use glam::DVec3;
 
 use crate::colormap::{Legend, compose, linear_ticks, viridis};
+
+/// The first layer of an EXR file read back: its size, every channel as f64 (any sample
+/// type) and its text attributes (`bdpm.` prefix removed). The one EXR reader of the driver.
+pub(crate) struct ExrLayer {
+    /// Width, pixels.
+    pub(crate) width: u32,
+    /// Height, pixels.
+    pub(crate) height: u32,
+    channels: Vec<(String, Vec<f64>)>,
+    /// Text header attributes as (key without `bdpm.`, value).
+    pub(crate) attributes: Vec<(String, String)>,
+}
+
+impl ExrLayer {
+    /// Reads the first layer of `path`; errors name the file.
+    pub(crate) fn read(path: &Path) -> Result<ExrLayer, String> {
+        let image = read_all_flat_layers_from_file(path)
+            .map_err(|e| format!("{}: cannot read EXR: {e}", path.display()))?;
+        let layer = image
+            .layer_data
+            .first()
+            .ok_or_else(|| format!("{}: EXR has no layer", path.display()))?;
+        let channels = layer
+            .channel_data
+            .list
+            .iter()
+            .map(|c| {
+                let values = match &c.sample_data {
+                    FlatSamples::F16(v) => v.iter().map(|x| x.to_f64()).collect(),
+                    FlatSamples::F32(v) => v.iter().map(|x| *x as f64).collect(),
+                    FlatSamples::U32(v) => v.iter().map(|x| *x as f64).collect(),
+                };
+                (c.name.to_string(), values)
+            })
+            .collect();
+        let attributes = layer
+            .attributes
+            .other
+            .iter()
+            .filter_map(|(k, v)| match v {
+                AttributeValue::Text(t) => Some((
+                    k.to_string().trim_start_matches("bdpm.").to_string(),
+                    t.to_string(),
+                )),
+                _ => None,
+            })
+            .collect();
+        Ok(ExrLayer {
+            width: layer.size.width() as u32,
+            height: layer.size.height() as u32,
+            channels,
+            attributes,
+        })
+    }
+
+    /// The channel called `name` (e.g. `R`, `noise.G`), if present.
+    pub(crate) fn channel(&self, name: &str) -> Option<&[f64]> {
+        self.channels
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v.as_slice())
+    }
+}
 
 /// The files of one render, with the same stem.
 #[derive(Clone, Debug)]

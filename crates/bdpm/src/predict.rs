@@ -12,7 +12,6 @@ use std::path::{Path, PathBuf};
 
 use bdpm_integrator::{Mode, Prediction, RenderSettings, Renderer};
 use clap::Args;
-use exr::prelude::{AttributeValue, FlatSamples, read_all_flat_layers_from_file};
 use serde::Serialize;
 
 use crate::colormap::{Legend, compose, diverging};
@@ -64,55 +63,27 @@ impl Measured {
 }
 
 fn read_measured(path: &Path) -> CliResult<Measured> {
-    let image = read_all_flat_layers_from_file(path)
-        .map_err(|e| format!("{}: cannot read EXR: {e}", path.display()))?;
-    let layer = image
-        .layer_data
-        .first()
-        .ok_or_else(|| format!("{}: EXR has no layer", path.display()))?;
-    let (w, h) = (layer.size.width(), layer.size.height());
-    let find = |name: &str| -> CliResult<Vec<f64>> {
-        let c = layer
-            .channel_data
-            .list
-            .iter()
-            .find(|c| c.name.to_string() == name)
-            .ok_or_else(|| {
-                format!(
-                    "{}: no channel {name} (the noise layer of `bdpm render`)",
-                    path.display()
-                )
-            })?;
-        Ok(match &c.sample_data {
-            FlatSamples::F16(v) => v.iter().map(|x| x.to_f64()).collect(),
-            FlatSamples::F32(v) => v.iter().map(|x| *x as f64).collect(),
-            FlatSamples::U32(v) => v.iter().map(|x| *x as f64).collect(),
+    let layer = output::ExrLayer::read(path)?;
+    let find = |name: &str| -> CliResult<&[f64]> {
+        layer.channel(name).ok_or_else(|| {
+            format!(
+                "{}: no channel {name} (the noise layer of `bdpm render`)",
+                path.display()
+            )
         })
     };
     let (r, g, b) = (find("noise.R")?, find("noise.G")?, find("noise.B")?);
     let variance = r
         .iter()
-        .zip(&g)
-        .zip(&b)
+        .zip(g)
+        .zip(b)
         .map(|((r, g), b)| 0.2126 * r * r + 0.7152 * g * g + 0.0722 * b * b)
         .collect();
-    let attributes = layer
-        .attributes
-        .other
-        .iter()
-        .filter_map(|(k, v)| match v {
-            AttributeValue::Text(t) => Some((
-                k.to_string().trim_start_matches("bdpm.").to_string(),
-                t.to_string(),
-            )),
-            _ => None,
-        })
-        .collect();
     Ok(Measured {
-        width: w as u32,
-        height: h as u32,
+        width: layer.width,
+        height: layer.height,
         variance,
-        attributes,
+        attributes: layer.attributes,
     })
 }
 

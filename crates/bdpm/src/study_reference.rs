@@ -6,11 +6,10 @@ use std::time::Instant;
 
 use bdpm_integrator::{Film, Mode, RenderSettings, Renderer};
 use bdpm_scene::Scene;
-use exr::prelude::{FlatSamples, read_all_flat_layers_from_file};
 use glam::DVec3;
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::output::write_exr;
+use crate::output::{ExrLayer, write_exr};
 
 /// Seed offset of the reference render, so that its random streams are independent of the
 /// study's (the streams are keyed by the seed).
@@ -75,25 +74,9 @@ pub(crate) fn cache_path(scene_path: &Path, settings: &RenderSettings) -> Result
 /// Reads the RGB mean (channels `R`, `G`, `B`) and, when present, the `stderr.R/G/B` layer of
 /// an EXR file.
 pub(crate) fn read_exr(path: &Path) -> Result<Reference, String> {
-    let image = read_all_flat_layers_from_file(path)
-        .map_err(|e| format!("{}: cannot read EXR: {e}", path.display()))?;
-    let layer = image
-        .layer_data
-        .first()
-        .ok_or_else(|| format!("{}: EXR has no layer", path.display()))?;
-    let (w, h) = (layer.size.width(), layer.size.height());
-    let find = |name: &str| -> Option<Vec<f64>> {
-        layer
-            .channel_data
-            .list
-            .iter()
-            .find(|c| c.name.to_string() == name)
-            .map(|c| match &c.sample_data {
-                FlatSamples::F16(v) => v.iter().map(|x| x.to_f64()).collect(),
-                FlatSamples::F32(v) => v.iter().map(|x| *x as f64).collect(),
-                FlatSamples::U32(v) => v.iter().map(|x| *x as f64).collect(),
-            })
-    };
+    let layer = ExrLayer::read(path)?;
+    let (w, h) = (layer.width as usize, layer.height as usize);
+    let find = |name: &str| layer.channel(name).map(<[f64]>::to_vec);
     let rgb = |prefix: &str| -> Option<Vec<DVec3>> {
         let [r, g, b] = ["R", "G", "B"].map(|c| find(&format!("{prefix}{c}")));
         let (r, g, b) = (r?, g?, b?);
