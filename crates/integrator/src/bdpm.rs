@@ -588,13 +588,9 @@ impl<'a> Mix<'a> {
         } else {
             self.w1(&pair, pixel, stats)
         };
-        // `optimal-split` weighs the one-bounce paths (through L₀(x₁)) apart from the merge
-        // paths (through the photons at x₁, weighted by `w_const`).
-        let by_kind = matches!(
-            self.heuristic,
-            Heuristic::OptimalSplit { .. } | Heuristic::OptimalPath { .. }
-        );
-        let w_direct = if by_kind && lights != 0 {
+        // Weights by path kind give the one-bounce paths (through L₀(x₁)) their own weight; the
+        // merge paths (through the photons at x₁) keep `w_const`.
+        let w_direct = if self.needs.path_kinds && lights != 0 {
             let pair = Pair {
                 path: PathKind::OneBounce,
                 ..pair

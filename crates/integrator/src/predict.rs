@@ -316,15 +316,14 @@ fn direction(
         h.weight(budget, &merge, terms).w1
     };
     // Weights that tell one-bounce paths from merge paths (`optimal-split`, `optimal-path`).
-    let w_direct = match h {
-        Heuristic::OptimalSplit { .. } | Heuristic::OptimalPath { .. } => {
-            let one = Pair {
-                path: PathKind::OneBounce,
-                ..pair
-            };
-            h.weight(budget, &one, terms).w1
-        }
-        _ => w_merge,
+    let w_direct = if h.needs().path_kinds {
+        let one = Pair {
+            path: PathKind::OneBounce,
+            ..pair
+        };
+        h.weight(budget, &one, terms).w1
+    } else {
+        w_merge
     };
 
     // L₀(x₁→x₀) light by light, as BDD=1 evaluates it (shading normal, visibility bits).

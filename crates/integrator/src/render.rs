@@ -93,23 +93,8 @@ impl<'a> Renderer<'a> {
         // and centred samples keep the preprint's unclamped weights unless asked.
         let clamp = s.clamp_weights || (s.noise_model == NoiseModel::Footprint && s.pixel_jitter);
         settings.clamp_weights = clamp;
-        match settings.mode {
-            Mode::Bdpm(Heuristic::Optimal { .. }) => {
-                settings.mode = Mode::Bdpm(Heuristic::Optimal {
-                    clamp_weights: clamp,
-                });
-            }
-            Mode::Bdpm(Heuristic::OptimalSplit { .. }) => {
-                settings.mode = Mode::Bdpm(Heuristic::OptimalSplit {
-                    clamp_weights: clamp,
-                });
-            }
-            Mode::Bdpm(Heuristic::OptimalPath { .. }) => {
-                settings.mode = Mode::Bdpm(Heuristic::OptimalPath {
-                    clamp_weights: clamp,
-                });
-            }
-            _ => {}
+        if let Mode::Bdpm(h) = settings.mode {
+            settings.mode = Mode::Bdpm(h.with_weight_clamp(clamp));
         }
         if let Mode::Bdpm(Heuristic::Threshold { .. }) = settings.mode {
             settings.mode = Mode::Bdpm(Heuristic::Threshold {

@@ -4,8 +4,7 @@
 //! second vertex of the partial weight W₁ (computed with the pixel's N_eff).
 use bdpm_geometry::{Domain, Rng};
 use bdpm_mis::{
-    Budget, Heuristic, PixelTerms, effective_samples, overlap_factor, split_weighted_radiance,
-    w1_partial,
+    Budget, PixelTerms, effective_samples, overlap_factor, split_weighted_radiance, w1_partial,
 };
 use bdpm_scene::{Scene, Shading};
 use rayon::prelude::*;
@@ -68,10 +67,8 @@ pub(crate) fn pixel_terms(
     key: u64,
 ) -> PixelTerms {
     let scene = mix.scene;
-    let split = matches!(
-        mix.heuristic,
-        Heuristic::OptimalSplit { .. } | Heuristic::OptimalPath { .. }
-    );
+    // Weights by path kind accumulate their own weighted radiance (method-notes.md).
+    let split = mix.needs.path_kinds;
     let (mut a, mut b) = (0.0f64, 0.0f64);
     for j in 0..rays {
         let mut rng = Rng::new(seed, Domain::PixelTable, [key, j as u64, 0]);

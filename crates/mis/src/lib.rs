@@ -121,6 +121,9 @@ pub struct Needs {
     /// The BDF at x₁ for each light path's incoming direction towards x₀
     /// ([`Pair::x1_scattering`]; `optimal-path`).
     pub x1_scattering: bool,
+    /// One-bounce paths (L₀(x₁)) get another weight than merge paths at the same (x₀, x₁),
+    /// so the two are weighted apart ([`Pair::path`]; `optimal-split`, `optimal-path`).
+    pub path_kinds: bool,
 }
 
 /// What the weight of one (x₀, x₁) pair may depend on.
@@ -336,6 +339,23 @@ impl Heuristic {
         })
     }
 
+    /// The same mode with its optional clamp of w₁ to [0, 1] set to `clamp` (the `optimal*`
+    /// modes; the others are returned unchanged, their weights are in [0, 1] already).
+    pub fn with_weight_clamp(self, clamp: bool) -> Heuristic {
+        match self {
+            Heuristic::Optimal { .. } => Heuristic::Optimal {
+                clamp_weights: clamp,
+            },
+            Heuristic::OptimalSplit { .. } => Heuristic::OptimalSplit {
+                clamp_weights: clamp,
+            },
+            Heuristic::OptimalPath { .. } => Heuristic::OptimalPath {
+                clamp_weights: clamp,
+            },
+            other => other,
+        }
+    }
+
     /// What the integrator must compute for this mode (method.md §4 table and §7).
     pub fn needs(&self) -> Needs {
         // Every mixing mode gathers at x₀ and traces x₁; the pure strategies drop one.
@@ -366,12 +386,21 @@ impl Heuristic {
                 effective_samples: true,
                 ..mix
             },
-            Heuristic::Optimal { .. } | Heuristic::OptimalSplit { .. } => Needs {
+            Heuristic::Optimal { .. } => Needs {
                 direct_at_x1: true,
                 effective_samples: true,
                 radiance_cache: true,
                 cache_b: true,
                 pixel_table: true,
+                ..mix
+            },
+            Heuristic::OptimalSplit { .. } => Needs {
+                direct_at_x1: true,
+                effective_samples: true,
+                radiance_cache: true,
+                cache_b: true,
+                pixel_table: true,
+                path_kinds: true,
                 ..mix
             },
             Heuristic::OptimalPath { .. } => Needs {
@@ -381,6 +410,7 @@ impl Heuristic {
                 cache_b: true,
                 pixel_table: true,
                 x1_scattering: true,
+                path_kinds: true,
                 ..mix
             },
             // camis's extra inputs (acceptance area, p_C(x₀), β) come from the same geometry
