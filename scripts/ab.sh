@@ -4,7 +4,9 @@
 # Used for the before/after figures in docs/performance.md. Example:
 #   scripts/ab.sh 5 cornell-lambert optimal 256x256 1 1 /tmp/bdpm-before target/release/bdpm
 # (N, scene, mode, resolution, passes, threads, then the binaries; build an older binary with
-# `git worktree add /tmp/old REV && (cd /tmp/old && cargo build --release)`).
+# `git worktree add /tmp/old REV && (cd /tmp/old && cargo build --release)`). A binary written
+# BINARY@MODE runs that mode instead, so modes of one binary compare side by side:
+#   scripts/ab.sh 5 cornell-glossy balance 256x256 1 1 target/release/bdpm target/release/bdpm@optimal-path
 set -euo pipefail
 cd "$(dirname "$0")/.."
 n=$1; scene=$2; mode=$3; res=$4; passes=$5; threads=$6; shift 6
@@ -12,8 +14,10 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 for i in $(seq "$n"); do
   for b in "$@"; do
-    key=$(echo "$b" | tr '/' '_')
-    "$b" render "scenes/$scene.toml" --mode "$mode" --resolution "$res" --passes "$passes" \
+    key=$(echo "$b" | tr '/@' '__')
+    bin=${b%@*}; m=$mode
+    [[ "$b" == *@* ]] && m=${b##*@}
+    "$bin" render "scenes/$scene.toml" --mode "$m" --resolution "$res" --passes "$passes" \
       --threads "$threads" -o "$tmp/run.exr" --quiet > /dev/null
     python3 - "$tmp/run.json" >> "$tmp/$key.txt" <<'PY'
 import json, sys
@@ -24,7 +28,7 @@ PY
   done
 done
 for b in "$@"; do
-  key=$(echo "$b" | tr '/' '_')
+  key=$(echo "$b" | tr '/@' '__')
   echo "$b"
   python3 - "$tmp/$key.txt" <<'PY'
 import statistics, sys

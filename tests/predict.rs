@@ -151,3 +151,67 @@ fn model_inputs_keep_the_image_bits() {
         assert_eq!(a, b, "{mode}");
     }
 }
+
+/// Image sum of a prediction's total over the pixels where both are finite.
+fn total_over(p: &bdpm_integrator::Prediction, q: &bdpm_integrator::Prediction) -> (f64, f64) {
+    p.total
+        .iter()
+        .zip(&q.total)
+        .filter(|(a, b)| a.is_finite() && b.is_finite())
+        .fold((0.0, 0.0), |(sa, sb), (a, b)| (sa + a, sb + b))
+}
+
+/// The floor of `bdpm predict --headroom`: the unclamped `optimal-split` minimises the §12
+/// functional over weights per (x₀, x₁) and path kind, so no mode evaluated in that family
+/// predicts less V (the floor's A and B come from other rays than the prediction's, so it is
+/// a minimiser only up to their sampling error: 1 % is allowed). The pure strategies sit far
+/// above it. And the headroom responds to what the model says creates it: the correlation of
+/// a pixel's samples. Through the pixel centre (ρ = 1) `balance` leaves a clear gap; with
+/// jittered samples (N_eff ≈ 1) the weights it leaves on the table are small.
+#[test]
+fn no_mode_predicts_less_than_the_floor() {
+    let (scene, settings) = load("cornell-lambert.toml", 24, 24);
+    let floor_h = bdpm_mis::Heuristic::OptimalSplit {
+        clamp_weights: false,
+    };
+    let mut gaps = Vec::new();
+    for jitter in [true, false] {
+        let mut base = with_mode(&settings, "optimal-split", 1, 8, 50_000);
+        base.pixel_jitter = jitter;
+        let floor_r = Renderer::new(&scene, &base)
+            .expect("valid settings")
+            .with_model_inputs();
+        let floor = floor_r.predict_variance_for(floor_h).expect("floor");
+        for mode in ["bdd0", "bdd1", "optimal", "balance", "optimal-path"] {
+            let mut s = with_mode(&settings, mode, 1, 8, 50_000);
+            s.pixel_jitter = jitter;
+            let r = Renderer::new(&scene, &s)
+                .expect("valid settings")
+                .with_model_inputs();
+            let p = r.predict_variance().expect("a BDPM mode");
+            let (v, f) = total_over(&p, &floor);
+            let ratio = v / f;
+            eprintln!("jitter {jitter} {mode}: predicted V / floor {ratio:.4}");
+            assert!(
+                ratio > 0.99,
+                "{mode} (jitter {jitter}) below the floor: {ratio}"
+            );
+            if mode.starts_with("bdd") {
+                assert!(
+                    ratio > 1.1,
+                    "{mode} (jitter {jitter}) near the floor: {ratio}"
+                );
+            }
+            if mode == "balance" {
+                gaps.push(ratio - 1.0);
+            }
+        }
+    }
+    // gaps = [jittered, centred].
+    assert!(
+        gaps[1] > 0.05 && gaps[1] > 4.0 * gaps[0].max(0.0),
+        "balance's headroom jittered {} against centred {}",
+        gaps[0],
+        gaps[1]
+    );
+}

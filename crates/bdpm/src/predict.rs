@@ -8,9 +8,16 @@
 //! 0.2126·R² + 0.7152·G² + 0.0722·B² of √V: exactly the variance of the luminance when the
 //! three channels' noise is fully correlated, as in grey scenes; for coloured scenes it is a
 //! luminance-weighted mean of the channel variances, an approximation.
+//!
+//! With `--headroom` it also evaluates the functional for the unclamped `optimal-split`, its
+//! minimiser over weights w₁(x₀, x₁) that may differ between one-bounce and merge paths (the
+//! family in which the model evaluates every mode, `balance` included): the floor below which
+//! no weight of that family can bring V, by the model. The ratio of the mode's predicted V to that floor, per pixel, is the most any such
+//! weight could gain there (OUT.exr layers `floor_V` and `headroom`, OUT-headroom.png).
 use std::path::{Path, PathBuf};
 
 use bdpm_integrator::{Mode, Prediction, RenderSettings, Renderer};
+use bdpm_mis::Heuristic;
 use clap::Args;
 use serde::Serialize;
 
@@ -24,6 +31,9 @@ const BLOCK: u32 = 8;
 /// The PNG's colour scale spans log₂(predicted/measured) from −LOG2_RANGE to +LOG2_RANGE
 /// (a factor of 8 either way).
 const LOG2_RANGE: f64 = 3.0;
+/// The headroom map's scale: log₂(predicted V / floor) within ±0.5 (a factor of √2 either way;
+/// the ratio is ≥ 1 up to the model's sampling noise).
+const HEADROOM_LOG2_RANGE: f64 = 0.5;
 /// Colour of pixels that are not compared (no surface, or no measured noise).
 const NOT_COMPARED: [u8; 3] = [0, 0, 0];
 
@@ -42,6 +52,11 @@ pub(crate) struct PredictArgs {
     /// go beside it.
     #[arg(short = 'o', long = "output")]
     output: Option<PathBuf>,
+    /// Also predict V for the unclamped `optimal-split` (the functional's minimiser over
+    /// weights w₁(x₀, x₁) per path kind) and report the mode's predicted V over it, per pixel: the most that any
+    /// such weight could gain, by the model.
+    #[arg(long)]
+    headroom: bool,
 }
 
 /// The measured render: √V per pixel (RGB) and its `bdpm.*` header attributes.
@@ -174,6 +189,27 @@ struct Report<'a> {
     term_shares: Shares,
     per_pixel: Agreement,
     block_size: u32,
+    blocks: Agreement,
+    /// With `--headroom`: the mode's predicted V against the model's floor.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    headroom: Option<Headroom>,
+}
+
+/// The mode's predicted V against the floor of the functional (the unclamped `optimal-split`
+/// evaluated with the same cache and directions and its own pixel table).
+#[derive(Serialize)]
+struct Headroom {
+    /// What the floor is.
+    floor: &'static str,
+    /// Image means over the compared pixels, W²·m⁻⁴·sr⁻².
+    image_mean_floor_v: f64,
+    /// Image mean of the mode's predicted V over the image mean of the floor.
+    image_mean_ratio: f64,
+    /// Share of the mode's predicted V that no weight changes (T_jitter).
+    weight_independent_share: f64,
+    /// Per pixel: "ratio" fields are the mode's predicted V over the floor.
+    per_pixel: Agreement,
+    /// The same over blocks of `block_size` pixels.
     blocks: Agreement,
 }
 
@@ -309,6 +345,25 @@ pub(crate) fn run(args: PredictArgs) -> CliResult<()> {
         .install(|| renderer.predict_variance())
         .map_err(|e| e.to_string())?;
 
+    let floor = if args.headroom {
+        // The unclamped `optimal-split` reads its own A and B, so its renderer must build the
+        // pixel table.
+        let floor = Heuristic::OptimalSplit {
+            clamp_weights: false,
+        };
+        let mut s = settings.clone();
+        s.mode = Mode::Bdpm(floor);
+        let r = pool
+            .install(|| Renderer::new(&scene, &s).map(Renderer::with_model_inputs))
+            .map_err(|e| format!("{}: {e}", args.scene.display()))?;
+        Some(
+            pool.install(|| r.predict_variance_for(floor))
+                .map_err(|e| e.to_string())?,
+        )
+    } else {
+        None
+    };
+
     let p = &prediction;
     let mv = &measured.variance;
     let ratio: Vec<f64> = p
@@ -346,6 +401,42 @@ pub(crate) fn run(args: PredictArgs) -> CliResult<()> {
         settings.width,
         settings.height,
     );
+    let headroom_ratio: Option<Vec<f64>> = floor.as_ref().map(|f| {
+        p.total
+            .iter()
+            .zip(&f.total)
+            .map(|(m, f)| if *f > 0.0 { m / f } else { f64::NAN })
+            .collect()
+    });
+    let headroom = floor.as_ref().map(|f| {
+        let compared_pairs: Vec<(f64, f64)> =
+            compared.iter().map(|&i| (p.total[i], f.total[i])).collect();
+        let on_surface = |v: &[f64]| -> Vec<f64> {
+            (0..v.len())
+                .map(|i| {
+                    if compared.binary_search(&i).is_ok() {
+                        v[i]
+                    } else {
+                        f64::NAN
+                    }
+                })
+                .collect()
+        };
+        let floor_sum = sum(&f.total);
+        Headroom {
+            floor: "optimal-split, unclamped",
+            image_mean_floor_v: floor_sum / n,
+            image_mean_ratio: total / floor_sum,
+            weight_independent_share: share(&p.t_jitter),
+            per_pixel: agreement(&compared_pairs),
+            blocks: agreement(&block_sums(
+                &on_surface(&p.total),
+                &on_surface(&f.total),
+                settings.width,
+                settings.height,
+            )),
+        }
+    });
     let report = Report {
         scene: args.scene.display().to_string(),
         measured: args.measured.display().to_string(),
@@ -373,6 +464,7 @@ pub(crate) fn run(args: PredictArgs) -> CliResult<()> {
         per_pixel: agreement(&pairs),
         block_size: BLOCK,
         blocks: agreement(&blocks),
+        headroom,
     };
 
     let attributes = vec![
@@ -387,35 +479,44 @@ pub(crate) fn run(args: PredictArgs) -> CliResult<()> {
         ("units".into(), "V and terms in W2 m-4 sr-2".into()),
     ];
     let measured_out: Vec<f64> = measured_on_surface;
+    let mut layers: Vec<(&str, &[f64])> = vec![
+        ("predicted_V", &p.total),
+        ("measured_V", &measured_out),
+        ("ratio", &ratio),
+        ("T0", &p.t0),
+        ("T1", &p.t1),
+        ("T2", &p.t2),
+        ("T_jitter", &p.t_jitter),
+    ];
+    if let (Some(f), Some(h)) = (&floor, &headroom_ratio) {
+        layers.push(("floor_V", &f.total));
+        layers.push(("headroom", h));
+    }
     output::write_exr_channels(
         &exr_path,
         (settings.width, settings.height),
-        &[
-            ("predicted_V", &p.total),
-            ("measured_V", &measured_out),
-            ("ratio", &ratio),
-            ("T0", &p.t0),
-            ("T1", &p.t1),
-            ("T2", &p.t2),
-            ("T_jitter", &p.t_jitter),
-        ],
+        &layers,
         &attributes,
     )
     .map_err(|e| format!("{}: {e}", exr_path.display()))?;
-    let canvas = ratio_png(p, &ratio);
+    let canvas = ratio_png(p, &ratio, LOG2_RANGE, "predicted / measured V");
     output::write_png_rgb8(&png_path, canvas.width, canvas.height, &canvas.rgb)
         .map_err(|e| format!("{}: {e}", png_path.display()))?;
+    let mut written = vec![exr_path.clone(), png_path, json_path.clone()];
+    if let Some(h) = &headroom_ratio {
+        let path = headroom_png_path(&exr_path);
+        let canvas = ratio_png(p, h, HEADROOM_LOG2_RANGE, "predicted V / floor");
+        output::write_png_rgb8(&path, canvas.width, canvas.height, &canvas.rgb)
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        written.push(path);
+    }
     let json = serde_json::to_string_pretty(&report).map_err(|e| format!("JSON: {e}"))?;
     output::write_atomic(&json_path, json.as_bytes())
         .map_err(|e| format!("{}: {e}", json_path.display()))?;
 
     print_summary(&report);
-    say!(
-        "wrote {}, {}, {}",
-        exr_path.display(),
-        png_path.display(),
-        json_path.display()
-    );
+    let names: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
+    say!("wrote {}", names.join(", "));
     Ok(())
 }
 
@@ -457,12 +558,35 @@ fn print_summary(r: &Report<'_>) {
             a.correlation
         );
     }
+    if let Some(h) = &r.headroom {
+        say!(
+            "headroom over the floor ({}): image mean V {:.4e}, mode/floor {:.4}; per pixel median {:.4} [10% {:.4}, 90% {:.4}]; {}x{} blocks median {:.4} [10% {:.4}, 90% {:.4}]; weight-independent share {:.1}%",
+            h.floor,
+            h.image_mean_floor_v,
+            h.image_mean_ratio,
+            h.per_pixel.ratio_median,
+            h.per_pixel.ratio_q10,
+            h.per_pixel.ratio_q90,
+            r.block_size,
+            r.block_size,
+            h.blocks.ratio_median,
+            h.blocks.ratio_q10,
+            h.blocks.ratio_q90,
+            100.0 * h.weight_independent_share
+        );
+    }
 }
 
-/// The PNG: log₂(predicted/measured) from −3 (blue, model too low) through 0 (white) to +3
-/// (red, model too high), black where nothing is compared, with the colour bar.
-fn ratio_png(p: &Prediction, ratio: &[f64]) -> crate::colormap::Canvas {
-    let position = |r: f64| (r.log2() / LOG2_RANGE + 1.0) * 0.5;
+/// OUT-headroom.png beside OUT.exr.
+fn headroom_png_path(exr: &Path) -> PathBuf {
+    let stem = exr.file_stem().unwrap_or_default().to_string_lossy();
+    exr.with_file_name(format!("{stem}-headroom.png"))
+}
+
+/// A ratio map: log₂(ratio) from −`range` (blue) through 0 (white) to +`range` (red), black
+/// where nothing is compared, with the colour bar titled `title`.
+fn ratio_png(p: &Prediction, ratio: &[f64], range: f64, title: &str) -> crate::colormap::Canvas {
+    let position = |r: f64| (r.log2() / range + 1.0) * 0.5;
     let colours: Vec<[u8; 3]> = ratio
         .iter()
         .map(|&r| {
@@ -473,13 +597,16 @@ fn ratio_png(p: &Prediction, ratio: &[f64]) -> crate::colormap::Canvas {
             }
         })
         .collect();
-    let ticks = [0.125, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0]
+    let ticks = [-1.0, -2.0 / 3.0, -1.0 / 3.0, 0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0]
         .iter()
-        .map(|&r| (position(r), crate::colormap::format_value(r)))
+        .map(|&k| {
+            let r = (k * range).exp2();
+            (position(r), crate::colormap::format_value(r))
+        })
         .collect();
     let legend = Legend {
         title: vec![
-            "predicted / measured V".into(),
+            title.into(),
             "log2 scale".into(),
             "black: not compared".into(),
         ],

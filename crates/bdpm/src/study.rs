@@ -210,6 +210,22 @@ impl ModeRun {
     }
 }
 
+/// A mode while the study runs it.
+struct ModeState<'a> {
+    name: String,
+    /// Passes to take (without a time budget).
+    passes: u32,
+    /// The mode's wall time so far, preparation included, s.
+    wall: f64,
+    /// The mode's process CPU time so far, preparation included, s (NaN if unknown).
+    cpu: f64,
+    renderer: Renderer<'a>,
+    stages: Vec<(String, f64)>,
+    film: Film,
+    lum: LumFilm,
+    points: Vec<PassPoint>,
+}
+
 /// The common time at which modes are compared: the smallest final time over the modes
 /// (every mode ran at least that long).
 pub(crate) fn equal_time(runs: &[ModeRun]) -> f64 {
@@ -503,63 +519,67 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
         }),
     };
 
-    // The modes.
+    // The modes: every renderer is prepared first, then the passes are taken round-robin, one
+    // pass of each mode in turn, so that a change in what else the machine runs (which moves
+    // every timing here by ±10 %) falls on all modes alike and their time ratios stay fair.
     let load_before = load_average();
-    let mut runs = Vec::new();
-    let mut files = Vec::new();
+    let use_cpu = args.clock == "cpu";
+    if use_cpu && process_cpu_seconds().is_none() {
+        return Err("--clock cpu: the process CPU time is not available here".into());
+    }
+    let cpu_now = || process_cpu_seconds().unwrap_or(f64::NAN);
+    let mut states = Vec::new();
     for (name, mode) in names.iter().zip(&modes) {
         let mut s = settings.clone();
         s.mode = *mode;
-        let use_cpu = args.clock == "cpu";
-        let cpu0 = process_cpu_seconds();
-        if use_cpu && cpu0.is_none() {
-            return Err("--clock cpu: the process CPU time is not available here".into());
-        }
-        let t0 = Instant::now();
+        let (t0, c0) = (Instant::now(), cpu_now());
         let renderer = pool
             .install(|| Renderer::new(&scene, &s))
             .map_err(|e| format!("{}: mode {name}: {e}", args.scene.display()))?;
-        let mut wall = t0.elapsed().as_secs_f64();
-        let cpu_since = || match (cpu0, process_cpu_seconds()) {
-            (Some(a), Some(b)) => b - a,
-            _ => f64::NAN,
-        };
-        // The mode's CPU time: preparation plus the passes, not the metrics computed between.
-        let mut cpu = cpu_since();
-        let stages: Vec<(String, f64)> = renderer
+        let stages = renderer
             .stages()
             .iter()
             .map(|st| (st.name.to_string(), st.seconds))
             .collect();
-        let bar = bar_for(
-            name,
-            args.time_budget
-                .is_none()
-                .then(|| s.passes as u64 * renderer.work_per_pass()),
-            args.quiet,
-        );
-        let mut film = Film::new(w, h);
-        let mut lum = LumFilm::new(w as usize * h as usize);
-        let mut points = Vec::new();
-        let mut pass = 0u32;
-        loop {
-            let done = match args.time_budget {
-                Some(budget) => (if use_cpu { cpu } else { wall }) >= budget,
-                None => pass >= s.passes,
-            };
-            if done {
-                break;
-            }
-            bar.set_message(format!("pass {}", pass + 1));
-            let t = Instant::now();
-            let c = cpu_since();
-            let out = pool.install(|| renderer.render_pass(pass, &|n| bar.inc(n)));
-            wall += t.elapsed().as_secs_f64();
-            cpu += cpu_since() - c;
-            film.add_pass(&out.estimates, out.dropped);
-            lum.add(&out.estimates);
-            let e = rmse(&lum.mean(), &ref_lum);
-            let var = lum.variance();
+        states.push(ModeState {
+            name: name.clone(),
+            passes: s.passes,
+            // The mode's clock: preparation plus its passes, not the metrics computed between.
+            wall: t0.elapsed().as_secs_f64(),
+            cpu: cpu_now() - c0,
+            renderer,
+            stages,
+            film: Film::new(w, h),
+            lum: LumFilm::new(w as usize * h as usize),
+            points: Vec::new(),
+        });
+    }
+    let bar = bar_for(
+        "study",
+        args.time_budget.is_none().then(|| {
+            states
+                .iter()
+                .map(|m| m.passes as u64 * m.renderer.work_per_pass())
+                .sum()
+        }),
+        args.quiet,
+    );
+    let done = |m: &ModeState<'_>| match args.time_budget {
+        Some(budget) => (if use_cpu { m.cpu } else { m.wall }) >= budget,
+        None => m.points.len() as u32 >= m.passes,
+    };
+    while states.iter().any(|m| !done(m)) {
+        for m in states.iter_mut().filter(|m| !done(m)) {
+            let pass = m.points.len() as u32;
+            bar.set_message(format!("{} pass {}", m.name, pass + 1));
+            let (t, c) = (Instant::now(), cpu_now());
+            let out = pool.install(|| m.renderer.render_pass(pass, &|n| bar.inc(n)));
+            m.wall += t.elapsed().as_secs_f64();
+            m.cpu += cpu_now() - c;
+            m.film.add_pass(&out.estimates, out.dropped);
+            m.lum.add(&out.estimates);
+            let e = rmse(&m.lum.mean(), &ref_lum);
+            let var = m.lum.variance();
             let sqrt_v = var.as_ref().map_or(f64::NAN, |v| {
                 mean(&v.iter().map(|x| x.sqrt()).collect::<Vec<_>>())
             });
@@ -572,34 +592,38 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
                     .collect();
                 mean(&rel)
             });
-            pass += 1;
-            points.push(PassPoint {
-                pass,
-                time: if use_cpu { cpu } else { wall },
-                wall_s: wall,
-                cpu_s: cpu,
+            m.points.push(PassPoint {
+                pass: pass + 1,
+                time: if use_cpu { m.cpu } else { m.wall },
+                wall_s: m.wall,
+                cpu_s: m.cpu,
                 rmse: e,
                 rel_rmse: e / ref_mean,
                 mean_sqrt_v: sqrt_v,
                 mean_rel_sqrt_v: rel_sqrt_v,
             });
         }
-        bar.finish_and_clear();
-        let mean_v = lum.variance().map_or(f64::NAN, |v| mean(&v));
-        let preview = dir.join(format!("{name}.png"));
-        write_png(&preview, &film).map_err(|e| format!("{}: {e}", preview.display()))?;
+    }
+    bar.finish_and_clear();
+    let mut runs = Vec::new();
+    let mut files = Vec::new();
+    for m in states {
+        let mean_v = m.lum.variance().map_or(f64::NAN, |v| mean(&v));
+        let preview = dir.join(format!("{}.png", m.name));
+        write_png(&preview, &m.film).map_err(|e| format!("{}: {e}", preview.display()))?;
         files.push(preview.display().to_string());
         let run = ModeRun {
-            name: name.clone(),
-            stages,
-            points,
+            name: m.name,
+            stages: m.stages,
+            points: m.points,
             mean_v,
-            dropped: film.dropped(),
+            dropped: m.film.dropped(),
         };
         if !args.quiet {
             let last = run.final_point().map(|p| p.rel_rmse).unwrap_or(f64::NAN);
             eprintln!(
-                "{name:>16}: {} passes in {:.1} s, rel. RMSE {:.3}%",
+                "{:>16}: {} passes in {:.1} s, rel. RMSE {:.3}%",
+                run.name,
                 run.points.len(),
                 run.total_seconds(),
                 100.0 * last

@@ -619,11 +619,14 @@ fn predict_compares_the_noise_model_with_a_render() {
         .args(settings)
         .arg("--measured")
         .arg(&rendered)
+        .arg("--headroom")
         .arg("-o")
         .arg(dir.path("p.exr")));
     assert_success(&out);
     assert!(text(&out.stdout).contains("8x8 blocks"));
+    assert!(text(&out.stdout).contains("headroom over the floor"));
     assert!(dir.path("p.png").is_file());
+    assert!(dir.path("p-headroom.png").is_file());
     let exr = Exr::read(&dir.path("p.exr"));
     assert_eq!((exr.width, exr.height), (32, 32));
     for c in [
@@ -634,6 +637,8 @@ fn predict_compares_the_noise_model_with_a_render() {
         "T1",
         "T2",
         "T_jitter",
+        "floor_V",
+        "headroom",
     ] {
         assert_eq!(exr.channel(c).len(), 32 * 32);
     }
@@ -671,6 +676,13 @@ fn predict_compares_the_noise_model_with_a_render() {
     assert!(number("/term_shares/t0") > 0.0);
     let median = number("/blocks/ratio_median");
     assert!((0.5..=2.0).contains(&median), "block median ratio {median}");
+    // Pure BDD=0 sits well above the floor that the mixed weights reach.
+    let headroom = number("/headroom/blocks/ratio_median");
+    assert!(
+        headroom > 1.1,
+        "bdd0's predicted V over the floor {headroom}"
+    );
+    assert!(number("/headroom/image_mean_floor_v") > 0.0);
 
     let mut other = settings.to_vec();
     other[7] = "4";

@@ -116,6 +116,23 @@ impl Renderer<'_> {
                 self.settings().mode
             )));
         };
+        self.predict_variance_for(h)
+    }
+
+    /// [`Self::predict_variance`] for the weights `h` in place of the mode's own, with this
+    /// renderer's settings, cache and pixel table: e.g. the unclamped `optimal-split`, the
+    /// minimiser of the functional over weights per (x₀, x₁) and path kind, as the floor that no
+    /// such weight can go below (`bdpm predict
+    /// --headroom`). If `h` reads the pixel table's A and B, the renderer's mode must have
+    /// built it (an `optimal*` mode); otherwise the error says so.
+    pub fn predict_variance_for(&self, h: Heuristic) -> Result<Prediction, RenderError> {
+        if h.needs().pixel_table && !self.pixel_table().is_some_and(|t| t.has_terms()) {
+            return Err(RenderError::Settings(format!(
+                "the weights '{}' need the pixel table's A and B, which mode '{}' does not build",
+                h.name(),
+                self.settings().mode
+            )));
+        }
         let mut mix = self.mix(h);
         if mix.cache.is_none() {
             return Err(RenderError::Settings(
