@@ -39,3 +39,34 @@ fn images_do_not_depend_on_the_thread_count() {
         assert!(bits(&other) != bits(&one), "{mode}: the seed has no effect");
     }
 }
+
+/// The weight inputs of a photon's previous vertex, computed once per photon for Lambert
+/// vertices (`Mix::prev_inputs`), give the same image bits as computing them at every visit,
+/// in every mode that reads them, on a Lambert-only scene (isotropic cache) and on the glossy
+/// one (where only `algebraic-direct` has no directional cache and so uses them).
+#[test]
+fn precomputed_photon_inputs_keep_the_bits() {
+    for scene_file in ["cornell-lambert.toml", "cornell-glossy.toml"] {
+        let (scene, settings) = load(scene_file, 24, 24);
+        for mode in [
+            "algebraic-direct",
+            "algebraic",
+            "optimal",
+            "optimal-path",
+            "threshold",
+        ] {
+            let s = with_mode(&settings, mode, 1, 4, 40_000);
+            let once = Renderer::new(&scene, &s).unwrap();
+            let per_visit = Renderer::new(&scene, &s)
+                .unwrap()
+                .with_per_visit_inputs(true);
+            let a = once.render_pass(0, &|_| {}).estimates;
+            let b = per_visit.render_pass(0, &|_| {}).estimates;
+            assert!(a.iter().any(|v| v.x > 0.0), "{scene_file} {mode}: black");
+            assert!(
+                a == b,
+                "{scene_file} {mode}: precomputed inputs changed the image"
+            );
+        }
+    }
+}

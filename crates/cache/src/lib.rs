@@ -398,6 +398,21 @@ impl RadianceCache {
         Some(CacheSlot(cell_side * self.side_bins + bin))
     }
 
+    /// Whether [`Self::slot`] of triangle `prim` reads the same side of its cells for the
+    /// directions `a` and `b` (true for an unknown triangle, where it reads nothing). With
+    /// [`Self::is_isotropic`], the side is all a direction changes about the slot.
+    pub fn same_side(&self, prim: u32, a: Vec3, b: Vec3) -> bool {
+        self.tri
+            .get(prim as usize)
+            .is_none_or(|t| (t.ng.dot(a) < 0.0) == (t.ng.dot(b) < 0.0))
+    }
+
+    /// True if every cell side has one bin (a Lambert-only scene): a lookup depends on the
+    /// direction only through the side it faces.
+    pub fn is_isotropic(&self) -> bool {
+        self.grid == 1
+    }
+
     /// Hints the CPU to fetch the bin at `slot` (no effect on results).
     #[inline]
     pub fn prefetch(&self, slot: CacheSlot) {

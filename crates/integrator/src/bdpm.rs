@@ -12,6 +12,7 @@ use bdpm_scene::{Scene, Shading};
 
 use crate::table::PixelWeights;
 use glam::{DVec3, Vec3};
+use rayon::prelude::*;
 
 /// The contributions of one camera sample, split by technique (for the debug layers).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -137,6 +138,9 @@ pub(crate) struct Mix<'a> {
     /// Test-only variant: weight the x₀ photon sum with w₁(x₀, x₁ᶜ) of the camera's x₁, as
     /// the preprint's eq. 2–3 read literally. It is biased; a test shows it.
     pub(crate) camera_x1_weighting: bool,
+    /// Test-only: compute a photon's y_p inputs at every visit, not once per photon
+    /// ([`Mix::prev_inputs`]); the image bits must not change.
+    pub(crate) per_visit_inputs: bool,
 }
 
 /// Visibility bits of the (first 32) lights from a shaded point.
@@ -297,17 +301,36 @@ impl<'a> Mix<'a> {
         f0: Vec3,
         slot: Option<CacheSlot>,
     ) -> Pair {
+        let direct = if self.needs.direct_at_x1 {
+            luminance(direct_masked(self.scene, x1, -v))
+        } else {
+            0.0
+        };
+        let cached = self
+            .cache
+            .filter(|_| self.needs.radiance_cache)
+            .map(|cache| slot.map_or((0.0, 0.0), |s| cache.at(s)));
+        self.pair_with(x0, x1, f0, direct, cached)
+    }
+
+    /// [`Self::pair_at`] from L₀(x₁→x₀) (luminance, `direct`) and the cache's (L_d, b) at
+    /// x₁ towards x₀ (`cached`, None without a cache) found beforehand.
+    fn pair_with(
+        &self,
+        x0: &FirstVertex<'_>,
+        x1: &WeightVertex,
+        f0: Vec3,
+        direct: f32,
+        cached: Option<(f32, f32)>,
+    ) -> Pair {
         let mut pair = Pair {
             f_tilde: self.f_tilde(x0, f0),
             acceptance_area: x0.acceptance_area,
             primary_density: x0.primary_density,
+            direct: direct as f64,
             ..Pair::default()
         };
-        if self.needs.direct_at_x1 {
-            pair.direct = luminance(direct_masked(self.scene, x1, -v)) as f64;
-        }
-        if let Some(cache) = self.cache.filter(|_| self.needs.radiance_cache) {
-            let (ld, b) = slot.map_or((0.0, 0.0), |s| cache.at(s));
+        if let (Some(cache), Some((ld, b))) = (self.cache, cached) {
             pair.indirect = ld as f64;
             pair.b = if cache.stats().stores_b {
                 b as f64
@@ -353,8 +376,19 @@ impl<'a> Mix<'a> {
     /// the geometric-normal frame: the same evaluation for the camera's x₁ and a photon's
     /// previous vertex, so both techniques see the same weight (method.md §2).
     fn x1_scattering(&self, x1: &WeightVertex, incoming: Vec3, v: Vec3) -> f64 {
-        let frame = Frame::from_normal(x1.n);
         let bdf = self.scene.bdf(x1.material);
+        if bdf.is_lambert() {
+            // The BDF's own test without the frame: the local z of a direction is its dot
+            // with the normal, and finite directions stay finite in any orthonormal frame.
+            let inside = x1.n.dot(-v) > 0.0 && x1.n.dot(incoming) > 0.0;
+            let finite = v.is_finite() && incoming.is_finite();
+            return if inside && finite {
+                luminance(bdf.kd() * std::f32::consts::FRAC_1_PI) as f64
+            } else {
+                0.0
+            };
+        }
+        let frame = Frame::from_normal(x1.n);
         luminance(bdf.eval(frame.to_local(-v), frame.to_local(incoming))) as f64
     }
 
@@ -444,6 +478,59 @@ impl<'a> Mix<'a> {
         (self.scene.light_probability(light) / (4.0 * PI) * cos / d2) as f64
     }
 
+    /// The radiance cache, when the mode's weights read it.
+    fn cache_needed(&self) -> Option<&'a RadianceCache> {
+        self.cache.filter(|_| self.needs.radiance_cache)
+    }
+
+    /// Whether a cache lookup at `y` towards `wo` reads the side that [`Self::prev_inputs`]
+    /// read (towards y's normal); true without a cache.
+    fn same_cache_side(&self, y: &WeightVertex, wo: Vec3) -> bool {
+        self.cache_needed()
+            .is_none_or(|c| c.same_side(y.prim, wo, y.n))
+    }
+
+    /// The weight inputs of every photon's previous vertex y_p that do not depend on where
+    /// the photon landed, one [L₀, L_d] (luminances, W·m⁻²·sr⁻¹) per photon of `map`, in its
+    /// order: for a Lambert y_p, L₀(y_p) and the cache's L_d on the side of y_p's normal
+    /// (isotropic there; `merge_at_x0` checks the side), NaN for the others. Empty when the
+    /// mode's weights at x₀ read neither, or the cache has directional bins or stores b.
+    ///
+    /// A merge at x₀ visits a photon once per camera sample whose disk holds it, several
+    /// times per pass at high resolution; computing these once per photon gives the same
+    /// numbers, bit for bit, as [`Self::pair`] would for each visit.
+    pub(crate) fn prev_inputs(&self, map: &PhotonMap) -> Vec<[f32; 2]> {
+        let reads_inputs = self.needs.direct_at_x1 || self.needs.radiance_cache;
+        let per_visit = matches!(self.heuristic, Heuristic::Bdd0)
+            || self.camera_x1_weighting
+            || self.per_visit_inputs;
+        let isotropic = self
+            .cache_needed()
+            .is_none_or(|c| c.is_isotropic() && !c.stats().stores_b);
+        if !(self.needs.photons_at_x0 && reads_inputs && isotropic) || per_visit {
+            return Vec::new();
+        }
+        map.photons
+            .par_iter()
+            .map(|ph| {
+                let prev = map.vertex(ph.prev);
+                if !self.scene.bdf(prev.material).is_lambert() {
+                    return [f32::NAN; 2];
+                }
+                let y = WeightVertex::from_photon_vertex(prev);
+                let l0 = if self.needs.direct_at_x1 {
+                    luminance(direct_masked(self.scene, &y, y.n))
+                } else {
+                    0.0
+                };
+                let ld = self.cache_needed().map_or(0.0, |c| {
+                    self.cache_slot(y.prim, y.p, y.n).map_or(0.0, |s| c.at(s).0)
+                });
+                [l0, ld]
+            })
+            .collect()
+    }
+
     fn w1(&self, pair: &Pair, pixel: Option<&PixelWeights>, stats: &mut WeightStats) -> f64 {
         // The pixel's N_eff stands in for N_B (method.md §12); it is N_B itself under the
         // pinhole model and without jitter, so those weights keep their bits.
@@ -474,6 +561,7 @@ impl<'a> Mix<'a> {
     pub(crate) fn sample_batch<'s>(
         &'s self,
         map: &PhotonMap,
+        prev_inputs: &[[f32; 2]],
         jobs: &mut [Job],
         slots: &mut Slots<'s>,
         pixel: Option<&PixelWeights>,
@@ -505,7 +593,16 @@ impl<'a> Mix<'a> {
                 self.merge_at_x1(x0, map, second, &slot.query1, pixel, stats, &mut job.out);
             }
             if self.needs.photons_at_x0 {
-                self.merge_at_x0(x0, map, &slot.query0, pixel, camera_w1, stats, &mut job.out);
+                let photons = (map, prev_inputs);
+                self.merge_at_x0(
+                    x0,
+                    photons,
+                    &slot.query0,
+                    pixel,
+                    camera_w1,
+                    stats,
+                    &mut job.out,
+                );
             }
         }
     }
@@ -710,7 +807,7 @@ impl<'a> Mix<'a> {
     fn merge_at_x0(
         &self,
         x0: &FirstVertex<'_>,
-        map: &PhotonMap,
+        (map, prev_inputs): (&PhotonMap, &[[f32; 2]]),
         query: &PhotonQuery,
         pixel: Option<&PixelWeights>,
         camera_w1: Option<f64>,
@@ -721,7 +818,7 @@ impl<'a> Mix<'a> {
         let mut raw = Vec3::ZERO;
         let mut weighted = Vec3::ZERO;
         let pure = matches!(self.heuristic, Heuristic::Bdd0);
-        map.finish_query(query, |ph| {
+        map.finish_query_indexed(query, |i, ph| {
             let prev = map.vertex(ph.prev);
             let to_prev = prev.position - x0.sh.p;
             let wp = (prev.position - ph.position).normalize_or_zero();
@@ -743,7 +840,16 @@ impl<'a> Mix<'a> {
                 let v = to_prev / dist2.sqrt();
                 let y = WeightVertex::from_photon_vertex(prev);
                 let f0 = scene.eval(&x0.sh, x0.u, v);
-                let mut pair = self.pair(x0, &y, v, f0);
+                let mut pair = match prev_inputs.get(i) {
+                    Some(&[l0, ld]) if !l0.is_nan() && self.same_cache_side(&y, -v) => {
+                        // direct_masked's own test of the side; the rest of L₀ is the same
+                        // number for any direction on it (method-notes.md, "Precomputed inputs").
+                        let direct = if y.n.dot(-v) <= 0.0 { 0.0 } else { l0 };
+                        let cached = self.cache_needed().map(|_| (ld, 0.0));
+                        self.pair_with(x0, &y, f0, direct, cached)
+                    }
+                    _ => self.pair(x0, &y, v, f0),
+                };
                 // A photon whose previous vertex was reached straight from the light closes a
                 // one-bounce path light→y→x₀ (weights that tell path kinds apart read this).
                 if prev.depth == 0 {

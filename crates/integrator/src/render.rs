@@ -58,6 +58,7 @@ pub struct Renderer<'a> {
     radius: f32,
     techniques: bool,
     camera_x1_weighting: bool,
+    per_visit_inputs: bool,
     cache: Option<RadianceCache>,
     table: Option<PixelTable>,
 }
@@ -108,6 +109,7 @@ impl<'a> Renderer<'a> {
             radius,
             techniques: false,
             camera_x1_weighting: false,
+            per_visit_inputs: false,
             cache: None,
             table: None,
         };
@@ -240,6 +242,7 @@ impl<'a> Renderer<'a> {
             inv_area: 1.0 / (std::f32::consts::PI * self.radius * self.radius),
             cache: self.cache.as_ref(),
             camera_x1_weighting: self.camera_x1_weighting,
+            per_visit_inputs: self.per_visit_inputs,
         }
     }
 
@@ -255,6 +258,14 @@ impl<'a> Renderer<'a> {
     #[doc(hidden)]
     pub fn with_camera_x1_weighting(mut self, on: bool) -> Self {
         self.camera_x1_weighting = on;
+        self
+    }
+
+    /// Test-only: compute the weight inputs of a photon's previous vertex at each visit of a
+    /// merge at x₀ instead of once per photon per pass; the image bits must not change.
+    #[doc(hidden)]
+    pub fn with_per_visit_inputs(mut self, on: bool) -> Self {
+        self.per_visit_inputs = on;
         self
     }
 
@@ -324,8 +335,9 @@ impl Renderer<'_> {
             max_depth: 1024,
         };
         let map = PhotonMap::trace(self.scene, &options, self.radius);
-        let photon_seconds = t_photons.elapsed().as_secs_f64();
         let mix = self.mix(heuristic);
+        let prev_inputs = mix.prev_inputs(&map);
+        let photon_seconds = t_photons.elapsed().as_secs_f64();
         let table = self.table.as_ref();
         let t_camera = std::time::Instant::now();
         let (w, h) = (s.width as usize, s.height as usize);
@@ -360,7 +372,7 @@ impl Renderer<'_> {
                         }
                     });
                     let jobs = &mut jobs[..count as usize];
-                    mix.sample_batch(&map, jobs, &mut slots, terms, &mut row_stats);
+                    mix.sample_batch(&map, &prev_inputs, jobs, &mut slots, terms, &mut row_stats);
                     // Summed in sample order, so the pixel does not depend on the batching.
                     for t in jobs.iter().map(|j| &j.out) {
                         let value = t.total();

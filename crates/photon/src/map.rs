@@ -302,13 +302,22 @@ impl PhotonMap {
     /// [`Self::for_each_near`] would.
     #[inline]
     pub fn finish_query(&self, q: &PhotonQuery, mut f: impl FnMut(&Photon)) {
+        self.finish_query_indexed(q, |_, ph| f(ph));
+    }
+
+    /// [`Self::finish_query`] that also passes each photon's index into
+    /// [`PhotonMap::photons`], so that a caller can keep per-photon data of its own in a
+    /// parallel array (photons of one grid cell are stored together, so such reads stay
+    /// mostly sequential).
+    #[inline]
+    pub fn finish_query_indexed(&self, q: &PhotonQuery, mut f: impl FnMut(usize, &Photon)) {
         match q.scan {
             Scan::Listed | Scan::Fetched => {
                 for &i in &q.found[..q.n_found as usize] {
-                    f(&self.photons[i as usize]);
+                    f(i as usize, &self.photons[i as usize]);
                 }
             }
-            Scan::No | Scan::Overflow => self.scan(q, |i| f(&self.photons[i])),
+            Scan::No | Scan::Overflow => self.scan(q, |i| f(i, &self.photons[i])),
         }
     }
 
