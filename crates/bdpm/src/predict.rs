@@ -448,7 +448,9 @@ pub(crate) fn run(args: PredictArgs) -> CliResult<()> {
         pixel_jitter: settings.pixel_jitter,
         noise_model: settings.noise_model.name(),
         radius_m: renderer.radius(),
-        pixel_table_rays: settings.pixel_table_rays,
+        pixel_table_rays: settings
+            .pixel_table_rays
+            .unwrap_or(bdpm_integrator::PINHOLE_TABLE_RAYS),
         passes,
         measured_relative_se_per_pixel: (2.0 / (passes as f64 - 1.0)).sqrt(),
         pixels_without_surface: mv.len() - surface.len(),

@@ -156,7 +156,7 @@ fn settings_out(s: &RenderSettings, radius: f32, clamp_weights: bool) -> Setting
         threshold_radius_m: s.threshold_radius,
         cache_bins: s.cache_bins,
         cache_photons: s.cache_photons.unwrap_or(s.photons),
-        pixel_table_rays: s.pixel_table_rays,
+        pixel_table_rays: s.table_rays(),
         clamp_weights,
         pixel_jitter: s.pixel_jitter,
         noise_model: s.noise_model.name(),

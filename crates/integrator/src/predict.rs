@@ -3,7 +3,7 @@
 //! variance a render measures (`bdpm predict`).
 //!
 //! For the pixel's centre x₀ (u towards the camera) and directions v drawn from the BDF's
-//! sampling pdf p(v) at x₀ (N = `pixel_table_rays`, their own random stream), with x₁ the
+//! sampling pdf p(v) at x₀ (N = `pixel_table_rays`, 64 if not given; their own random stream), with x₁ the
 //! point v hits, L = L₀(x₁→x₀) + L_d(x₁→x₀) (shadow rays and the radiance cache), b from the
 //! cache, f = f(v, u; x₀) and cos = cos θ_v at x₀ (luminances), α = Φ/(N_F·S):
 //!
@@ -46,7 +46,7 @@ use rayon::prelude::*;
 
 use crate::bdpm::{FirstVertex, Mix, WeightVertex};
 use crate::render::{RenderError, Renderer};
-use crate::settings::Mode;
+use crate::settings::{Mode, PINHOLE_TABLE_RAYS};
 use crate::table::footprint_overlap;
 
 /// Jittered primary rays per pixel for T_jitter (method.md §12 leaves this term out; 16 gives
@@ -196,7 +196,9 @@ impl Renderer<'_> {
         });
         let pixel_terms = table.map(|p| &p.terms);
 
-        let rays = s.pixel_table_rays.max(2);
+        // The model's own directions: as many as the preprint's A/B rays unless given, so that
+        // a prediction does not get noisier where the table takes fewer.
+        let rays = s.pixel_table_rays.unwrap_or(PINHOLE_TABLE_RAYS).max(2);
         let (mut sum, mut sum_sq, mut photons_x0, mut photons_x1) = (0.0, 0.0, 0.0, 0.0);
         for j in 0..rays {
             // Key slot 1: the A/B rays of table.rs use slot 0 with the same pixel and ray.

@@ -130,7 +130,7 @@ impl<'a> Renderer<'a> {
         if needs.pixel_table || footprint {
             let start = std::time::Instant::now();
             let spec = TableSpec {
-                rays: needs.pixel_table.then_some(s.pixel_table_rays),
+                rays: needs.pixel_table.then_some(s.table_rays()),
                 footprint,
                 radius: self.radius,
                 seed: s.seed,
@@ -162,7 +162,10 @@ impl<'a> Renderer<'a> {
             let detail = if needs.pixel_table {
                 format!(
                     "A, B for {}x{} pixels, {} rays each; {} pixels with c*B clamped; {overlap}",
-                    s.width, s.height, s.pixel_table_rays, clamped
+                    s.width,
+                    s.height,
+                    s.table_rays(),
+                    clamped
                 )
             } else {
                 format!("rho, N_eff for {}x{} pixels; {overlap}", s.width, s.height)

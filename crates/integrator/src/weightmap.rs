@@ -85,7 +85,7 @@ impl Renderer<'_> {
         let footprint = self.footprint_model() && needs.effective_samples;
         let pixel = if needs.pixel_table || footprint {
             let spec = TableSpec {
-                rays: needs.pixel_table.then_some(s.pixel_table_rays),
+                rays: needs.pixel_table.then_some(s.table_rays()),
                 footprint,
                 radius: self.radius(),
                 seed: s.seed,

@@ -549,12 +549,10 @@ fn render_settings(
             None => None,
             Some(n) => Some(ctx.count("render.cache_photons", n, 1, limits::MAX_PHOTONS)?),
         },
-        pixel_table_rays: ctx.count(
-            "render.pixel_table_rays",
-            r.pixel_table_rays.unwrap_or(d.pixel_table_rays),
-            1,
-            u32::MAX,
-        )?,
+        pixel_table_rays: match r.pixel_table_rays {
+            None => d.pixel_table_rays,
+            Some(n) => Some(ctx.count("render.pixel_table_rays", n, 1, u32::MAX)?),
+        },
         clamp_weights: r.clamp_weights.unwrap_or(d.clamp_weights),
         pixel_jitter: r.pixel_jitter.unwrap_or(d.pixel_jitter),
         noise_model,

@@ -143,13 +143,18 @@ pub fn overlap_factor(edge_x: [f64; 3], edge_y: [f64; 3], radius: f64) -> f64 {
         // basis of the plane: edge_x = (a, 0), edge_y = (b, c).
         let a = xx.sqrt();
         let (b, c) = (xy / a, area / a);
+        // The ring's directions are the same for every radius of the rule (this function runs
+        // once per pixel: the trigonometry was most of its time).
+        let directions: [(f64, f64); ANGLES] = std::array::from_fn(|k| {
+            let theta = (k as f64 + 0.5) * (std::f64::consts::TAU / ANGLES as f64);
+            (theta.cos(), theta.sin())
+        });
         let mut sum = 0.0;
         for &(q, wq) in &GAUSS8 {
             let d = 2.0 * radius * q;
             let mut ring = 0.0;
-            for k in 0..ANGLES {
-                let theta = (k as f64 + 0.5) * (std::f64::consts::TAU / ANGLES as f64);
-                let (dx, dy) = (d * theta.cos(), d * theta.sin());
+            for &(cos, sin) in &directions {
+                let (dx, dy) = (d * cos, d * sin);
                 // δ = s·(a, 0) + t·(b, c).
                 let t = dy / c;
                 let s = (dx - t * b) / a;
