@@ -1,9 +1,9 @@
 //! `bdpm render`: passes with a progress bar, then the EXR, PNG preview, noise map and JSON
 //! report. An interrupt (SIGINT/SIGTERM) stops the render after the pass in flight and writes
 //! what was accumulated (see [`crate::signal`]).
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::time::Instant;
+use std::time::{Instant, SystemTime};
 
 use bdpm_integrator::{Film, Mode, Renderer, Techniques, WeightStats};
 use clap::Args;
@@ -110,6 +110,7 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
     // Installed first, so that an interrupt during loading and preparation also stops the
     // render cleanly (before its first pass) rather than killing it.
     signal::install()?;
+    let started = SystemTime::now();
     let t_start = Instant::now();
     let loaded = prepare(&args.scene, &args.overrides)?;
     let load_seconds = t_start.elapsed().as_secs_f64();
@@ -120,10 +121,15 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
             settings.mode
         ));
     }
-    let exr_path = args
+    let requested = args
         .output
         .or(loaded.output)
         .unwrap_or_else(|| default_output(&args.scene));
+    // Before any work: a directory that cannot be written, an output name that is a
+    // directory or a device, or a second render to the same output is refused now, not after
+    // the render. The lock is held until the files are in place.
+    let outputs = output::Outputs::beside(&requested);
+    let _lock = output::claim(&requested, &outputs, started)?;
     let pool = thread_pool(args.overrides.threads)?;
     let threads = pool.current_num_threads();
 
@@ -193,25 +199,31 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
         return Ok(ExitCode::from(signal::EXIT_INTERRUPTED));
     }
 
-    let outputs = output::Outputs::beside(&exr_path);
+    // The files are written as a set: each to a temporary file beside its target, and only
+    // when all four are complete are they renamed into place, the EXR last. A full disk or a
+    // kill before that leaves the previous set whole (docs/robustness.md, "Outputs as a set").
+    let run_id = output::run_id();
     let mut header = report::header_attributes(&settings, &renderer);
     header.push(("passes_done".into(), film.passes().to_string()));
     header.push(("interrupted".into(), interrupted.to_string()));
+    header.push(("run_id".into(), run_id.clone()));
     let layers = techniques
         .as_ref()
         .map(|t| t.layers(film.passes()))
         .unwrap_or_default();
-    output::write_exr_with_layers(&outputs.exr, &film, &header, &layers)
-        .map_err(|e| format!("{}: {e}", outputs.exr.display()))?;
-    output::write_png(&outputs.png, &film)
-        .map_err(|e| format!("{}: {e}", outputs.png.display()))?;
-    output::write_noise_png(
-        &outputs.noise_png,
+    let exr = output::stage_exr_with_layers(&outputs.exr, &film, &header, &layers)
+        .map_err(named(&outputs.exr))?;
+    drop(layers);
+    let png = output::encode_png(&film)
+        .and_then(|bytes| output::stage_bytes(&outputs.png, &bytes))
+        .map_err(named(&outputs.png))?;
+    let noise_png = output::encode_noise_png(
         (settings.width, settings.height),
         &luma.noise(),
         film.passes(),
     )
-    .map_err(|e| format!("{}: {e}", outputs.noise_png.display()))?;
+    .and_then(|bytes| output::stage_bytes(&outputs.noise_png, &bytes))
+    .map_err(named(&outputs.noise_png))?;
     let run = report::RunReport::new(report::RunFacts {
         scene_path: &args.scene,
         settings: &settings,
@@ -230,9 +242,11 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
         weights: &weights,
         photon_map_bytes,
         photons_stored,
+        run_id: &run_id,
     });
-    output::write_atomic(&outputs.json, run.to_json().as_bytes())
-        .map_err(|e| format!("{}: {e}", outputs.json.display()))?;
+    let json = output::stage_bytes(&outputs.json, run.to_json().as_bytes())
+        .map_err(named(&outputs.json))?;
+    output::commit_all(vec![png, noise_png, json, exr])?;
     if interrupted {
         say!(
             "interrupted after {} of {} passes; the outputs hold those passes",
@@ -268,4 +282,9 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
     } else {
         ExitCode::SUCCESS
     })
+}
+
+/// An error message prefixed with the file it concerns.
+fn named(path: &Path) -> impl Fn(String) -> String + '_ {
+    move |e| format!("{}: {e}", path.display())
 }

@@ -27,6 +27,8 @@ pub(crate) struct RunFacts<'a> {
     pub(crate) weights: &'a WeightStats,
     pub(crate) photon_map_bytes: u64,
     pub(crate) photons_stored: u64,
+    /// This run's identifier, also in the EXR header as `bdpm.run_id`.
+    pub(crate) run_id: &'a str,
 }
 
 /// Weight evaluations of the BDPM mix and how many were anomalous (method.md §4).
@@ -99,6 +101,8 @@ struct Timing {
 #[derive(Serialize)]
 pub(crate) struct RunReport {
     version: &'static str,
+    /// Equal to the EXR's `bdpm.run_id` when the two files come from the same run.
+    run_id: String,
     scene: SceneOut,
     settings: SettingsOut,
     threads: usize,
@@ -173,6 +177,7 @@ impl RunReport {
             .collect();
         RunReport {
             version: env!("CARGO_PKG_VERSION"),
+            run_id: f.run_id.to_string(),
             scene: SceneOut {
                 path: f.scene_path.display().to_string(),
                 triangles: f.load.triangles,

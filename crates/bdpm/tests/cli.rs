@@ -695,3 +695,154 @@ fn predict_compares_the_noise_model_with_a_render() {
         .arg(dir.path("q.exr")));
     assert_one_line_error(&out, &["r.exr", "32x32", "16x16"]);
 }
+
+/// A render of the Cornell box that runs until interrupted (one thread, 100000 passes).
+fn endless_render(out: &Path) -> std::process::Child {
+    bdpm()
+        .arg("render")
+        .arg(scene("cornell-lambert.toml"))
+        .args(["--resolution", "16x16", "--passes", "100000", "--spp", "1"])
+        .args(["--mode", "path", "--threads", "1", "--quiet", "-o"])
+        .arg(out)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start bdpm")
+}
+
+/// Sends SIGINT and waits (at most 60 s) for the exit code.
+fn interrupt(child: &mut std::process::Child) -> Option<i32> {
+    let status = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("run kill");
+    assert!(status.success());
+    let start = Instant::now();
+    loop {
+        if let Some(s) = child.try_wait().expect("wait") {
+            return s.code();
+        }
+        if start.elapsed() > Duration::from_secs(60) {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("bdpm did not stop within 60 s of SIGINT");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+#[test]
+fn output_location_is_checked_before_any_work() {
+    let dir = TempDir::new("preflight");
+    std::fs::create_dir_all(dir.path("adir")).expect("mkdir");
+    std::fs::write(dir.path("afile"), b"x").expect("write");
+    std::fs::create_dir_all(dir.path("clash.json")).expect("mkdir");
+    let cases: Vec<(PathBuf, &str)> = vec![
+        (dir.path("adir"), "is a directory"),
+        (PathBuf::from("/dev/null"), "not a regular file"),
+        (dir.path("afile").join("x.exr"), "not a directory"),
+        (dir.path("clash.exr"), "is a directory"),
+    ];
+    for (out_path, needle) in cases {
+        let start = Instant::now();
+        // 10⁵ passes would take minutes: the error must come before the render.
+        let out = run(bdpm()
+            .arg("render")
+            .arg(scene("cornell-lambert.toml"))
+            .args([
+                "--resolution",
+                "64x64",
+                "--passes",
+                "100000",
+                "--quiet",
+                "-o",
+            ])
+            .arg(&out_path));
+        assert_one_line_error(&out, &[needle]);
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "{}: refused only after {:?}",
+            out_path.display(),
+            start.elapsed()
+        );
+    }
+    assert!(!Path::new("/dev/null.exr").exists());
+    assert!(dir.hidden_files().is_empty(), "{:?}", dir.hidden_files());
+}
+
+#[test]
+fn a_second_render_to_the_same_output_is_refused_and_temps_cannot_be_planted() {
+    let dir = TempDir::new("lock");
+    let out = dir.path("L.exr");
+    std::fs::write(dir.path("victim"), b"precious").expect("write victim");
+    let mut first = endless_render(&out);
+    // The lock exists once the output has been claimed, before the first pass.
+    let start = Instant::now();
+    while !dir.path(".L.exr.lock").exists() {
+        assert!(start.elapsed() < Duration::from_secs(30), "no lock file");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    // Symlinks at the temporary names an older bdpm used (`.NAME.PID.tmp`): a writer that
+    // followed them would overwrite the victim with its output.
+    for name in ["L.exr", "L.png", "L-noise.png", "L.json"] {
+        let link = dir.path(&format!(".{name}.{}.tmp", first.id()));
+        std::os::unix::fs::symlink(dir.path("victim"), link).expect("plant symlink");
+    }
+    let second = run(bdpm()
+        .arg("render")
+        .arg(scene("cornell-lambert.toml"))
+        .args(["--resolution", "8x8", "--passes", "1", "--quiet", "-o"])
+        .arg(&out));
+    assert_one_line_error(&second, &["L.exr", "another bdpm render"]);
+    std::thread::sleep(Duration::from_millis(300));
+    let code = interrupt(&mut first);
+    let stderr = text(&first.wait_with_output().expect("output").stderr);
+    assert_eq!(code, Some(130), "{stderr}");
+    assert_eq!(
+        std::fs::read(dir.path("victim")).expect("victim"),
+        b"precious"
+    );
+    if !stderr.contains("nothing was written") {
+        // The files are one run's: the report's run_id is the EXR's.
+        let json = read_json(&dir.path("L.json"));
+        let exr = Exr::read(&out);
+        let id = json["run_id"].as_str().expect("run_id");
+        assert_eq!(
+            exr.attributes.get("bdpm.run_id").map(String::as_str),
+            Some(id)
+        );
+    }
+    let mut hidden = dir.hidden_files();
+    hidden.retain(|n| !n.ends_with(".tmp"));
+    assert!(hidden.is_empty(), "{hidden:?}");
+}
+
+#[test]
+fn stale_temporary_files_of_the_output_are_removed() {
+    let dir = TempDir::new("stale");
+    let an_hour_ago = std::time::SystemTime::now() - Duration::from_secs(3600);
+    for name in [
+        ".S.exr.Ab3dE9xQ1z.bdpm-tmp",
+        ".S.json.0123456789.bdpm-tmp",
+        ".keep",
+    ] {
+        let f = std::fs::File::create(dir.path(name)).expect("create");
+        f.set_modified(an_hour_ago).expect("set mtime");
+    }
+    let out = run(bdpm()
+        .arg("render")
+        .arg(scene("cornell-lambert.toml"))
+        .args([
+            "--mode",
+            "path",
+            "--resolution",
+            "8x8",
+            "--passes",
+            "1",
+            "--quiet",
+            "-o",
+        ])
+        .arg(dir.path("S.exr")));
+    assert_success(&out);
+    assert_eq!(dir.hidden_files(), vec![".keep".to_string()]);
+}
