@@ -139,6 +139,11 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
         .map_err(|e| format!("{}: {e}", args.scene.display()))?
         .with_technique_layers(args.techniques);
     let prepare_seconds = t_prepare.elapsed().as_secs_f64();
+    let radius_given = loaded.report.radius_given || args.overrides.radius.is_some();
+    let mut warnings = before_render_warnings(&scene, &settings, &renderer);
+    for w in &warnings {
+        say!("warning: {w}");
+    }
 
     let bar = if args.quiet {
         ProgressBar::hidden()
@@ -203,7 +208,21 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
     // when all four are complete are they renamed into place, the EXR last. A full disk or a
     // kill before that leaves the previous set whole (docs/robustness.md, "Outputs as a set").
     let run_id = output::run_id();
-    let mut header = report::header_attributes(&settings, &renderer);
+    let known_before = warnings.len();
+    if film.mean().iter().all(|c| *c == DVec3::ZERO) {
+        warnings.push(format!(
+            "the image is black: no light reached the camera in {} passes (is the light sealed \
+             inside a closed object, or the camera inside one?)",
+            film.passes()
+        ));
+    }
+    if film.dropped() > 0 {
+        warnings.push(format!(
+            "{} non-finite samples were dropped",
+            film.dropped()
+        ));
+    }
+    let mut header = report::header_attributes(&settings, &renderer, radius_given);
     header.push(("passes_done".into(), film.passes().to_string()));
     header.push(("interrupted".into(), interrupted.to_string()));
     header.push(("run_id".into(), run_id.clone()));
@@ -243,6 +262,8 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
         photon_map_bytes,
         photons_stored,
         run_id: &run_id,
+        radius_given,
+        warnings: &warnings,
     });
     let json = output::stage_bytes(&outputs.json, run.to_json().as_bytes())
         .map_err(named(&outputs.json))?;
@@ -265,11 +286,8 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
         samples as f64 / render_seconds.max(1e-9) / 1e6,
         threads
     );
-    if film.dropped() > 0 {
-        say!(
-            "warning: {} non-finite samples were dropped",
-            film.dropped()
-        );
+    for w in &warnings[known_before..] {
+        say!("warning: {w}");
     }
     let written: Vec<String> = outputs
         .all()
@@ -287,4 +305,28 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
 /// An error message prefixed with the file it concerns.
 fn named(path: &Path) -> impl Fn(String) -> String + '_ {
     move |e| format!("{}: {e}", path.display())
+}
+
+/// A merge radius above this fraction of the scene's largest extent draws a warning: the
+/// density estimate then averages photons over a large part of the scene.
+const LARGE_RADIUS_FRACTION: f32 = 0.1;
+
+/// Warnings known before the first pass: a merge radius that is a large part of the scene.
+fn before_render_warnings(
+    scene: &bdpm_scene::Scene,
+    settings: &bdpm_integrator::RenderSettings,
+    renderer: &Renderer<'_>,
+) -> Vec<String> {
+    let mut warnings = Vec::new();
+    let (lo, hi) = scene.geometry.bounds();
+    let extent = (hi - lo).max_element();
+    let r = renderer.radius();
+    if matches!(settings.mode, Mode::Bdpm(_)) && r > LARGE_RADIUS_FRACTION * extent {
+        warnings.push(format!(
+            "the merge radius {r} m is {:.0}% of the scene's largest extent ({extent} m): photons \
+             are merged across large parts of the scene, so the image is strongly blurred and biased",
+            100.0 * r / extent
+        ));
+    }
+    warnings
 }

@@ -29,6 +29,10 @@ pub(crate) struct RunFacts<'a> {
     pub(crate) photons_stored: u64,
     /// This run's identifier, also in the EXR header as `bdpm.run_id`.
     pub(crate) run_id: &'a str,
+    /// Whether the merge radius was given (scene file or `--radius`).
+    pub(crate) radius_given: bool,
+    /// The warnings printed on stdout, one line each.
+    pub(crate) warnings: &'a [String],
 }
 
 /// Weight evaluations of the BDPM mix and how many were anomalous (method.md §4).
@@ -122,6 +126,9 @@ pub(crate) struct RunReport {
     pass_image_means: Vec<[f64; 3]>,
     /// EXR, PNG preview, noise map PNG, JSON report.
     outputs: [String; 4],
+    /// Warnings printed on stdout (skipped glTF content, a merge radius near the scene's
+    /// size, a black image, dropped samples), one line each.
+    warnings: Vec<String>,
 }
 
 fn mean_of(v: &[glam::DVec3]) -> [f64; 3] {
@@ -146,7 +153,12 @@ fn standard_error_of_mean(samples: &[[f64; 3]]) -> [f64; 3] {
 
 /// The settings as asked for, with the merge radius and the weight clamp in force (the
 /// footprint noise model always clamps).
-fn settings_out(s: &RenderSettings, radius: f32, clamp_weights: bool) -> SettingsOut {
+fn settings_out(
+    s: &RenderSettings,
+    radius: f32,
+    radius_given: bool,
+    clamp_weights: bool,
+) -> SettingsOut {
     SettingsOut {
         mode: s.mode.name().to_string(),
         width: s.width,
@@ -155,7 +167,7 @@ fn settings_out(s: &RenderSettings, radius: f32, clamp_weights: bool) -> Setting
         photons_per_pass: s.photons,
         spp: s.spp,
         radius_m: radius,
-        radius_given: s.radius.is_some(),
+        radius_given,
         seed: s.seed,
         threshold_radius_m: s.threshold_radius,
         cache_bins: s.cache_bins,
@@ -188,6 +200,7 @@ impl RunReport {
             settings: settings_out(
                 f.settings,
                 f.renderer.radius(),
+                f.radius_given,
                 f.renderer.settings().clamp_weights,
             ),
             threads: f.threads,
@@ -238,6 +251,7 @@ impl RunReport {
             pass_image_means: f.pass_means.to_vec(),
             mean_noise_sqrt_v: mean_of(&noise),
             outputs: f.outputs.all().map(|p| p.display().to_string()),
+            warnings: f.warnings.to_vec(),
         }
     }
 
@@ -247,7 +261,11 @@ impl RunReport {
 }
 
 /// The settings as EXR header attributes (`bdpm.mode`, `bdpm.seed`, …).
-pub(crate) fn header_attributes(s: &RenderSettings, r: &Renderer<'_>) -> Vec<(String, String)> {
+pub(crate) fn header_attributes(
+    s: &RenderSettings,
+    r: &Renderer<'_>,
+    radius_given: bool,
+) -> Vec<(String, String)> {
     let mut v = vec![
         ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
         ("mode".into(), s.mode.name().into()),
@@ -261,12 +279,7 @@ pub(crate) fn header_attributes(s: &RenderSettings, r: &Renderer<'_>) -> Vec<(St
         ("radius_m".into(), r.radius().to_string()),
         (
             "radius_source".into(),
-            if s.radius.is_some() {
-                "given"
-            } else {
-                "default"
-            }
-            .into(),
+            if radius_given { "given" } else { "default" }.into(),
         ),
     ];
     for st in r.stages() {

@@ -846,3 +846,98 @@ fn stale_temporary_files_of_the_output_are_removed() {
     assert_success(&out);
     assert_eq!(dir.hidden_files(), vec![".keep".to_string()]);
 }
+
+#[test]
+fn command_line_numbers_are_checked_with_clear_messages() {
+    let dir = TempDir::new("flags");
+    let path = dir.path("s.toml");
+    std::fs::write(&path, BASE_SCENE).expect("write scene");
+    // (arguments, what the one error line must contain)
+    let cases: Vec<(Vec<&str>, Vec<&str>)> = vec![
+        (vec!["--radius", "-1"], vec!["--radius", "positive", "-1"]),
+        (
+            vec!["--passes", "-1"],
+            vec!["--passes", "'-1' is not a whole number"],
+        ),
+        (
+            vec!["--spp", "2.5"],
+            vec!["--spp", "'2.5' is not a whole number"],
+        ),
+        (
+            vec!["--radius", "1e-39"],
+            vec!["--radius", "smallest usable"],
+        ),
+        (vec!["--radius", "1e300"], vec!["--radius", "1e300"]),
+        (
+            vec!["--threads", "10000"],
+            vec!["--threads 10000", "at most"],
+        ),
+        (vec!["--no-such-flag"], vec!["--no-such-flag"]),
+    ];
+    for (args, needles) in cases {
+        let out = run(bdpm()
+            .arg("render")
+            .arg(&path)
+            .args(&args)
+            .args(["--quiet", "-o"])
+            .arg(dir.path("x.exr")));
+        assert_one_line_error(&out, &needles);
+    }
+    assert!(!dir.path("x.exr").exists());
+    let help = run(bdpm().args(["study", "--help"]));
+    assert_success(&help);
+    let help = text(&help.stdout);
+    assert!(help.contains("--modes"), "{help}");
+    assert!(
+        !help.contains("--mode "),
+        "study --help lists --mode:\n{help}"
+    );
+}
+
+#[test]
+fn warnings_reach_stdout_and_the_report() {
+    let dir = TempDir::new("warnings");
+    let render = |name: &str, scene_text: String, extra: &[&str]| {
+        let path = dir.path(&format!("{name}.toml"));
+        std::fs::write(&path, scene_text).expect("write scene");
+        let out = run(bdpm()
+            .arg("render")
+            .arg(&path)
+            .args(extra)
+            .args(["--quiet", "-o"])
+            .arg(dir.path(&format!("{name}.exr"))));
+        assert_success(&out);
+        let json = read_json(&dir.path(&format!("{name}.json")));
+        (text(&out.stdout), json)
+    };
+    // The plain scene: no warning, radius left to the default.
+    let (stdout, json) = render("plain", BASE_SCENE.into(), &[]);
+    assert!(!stdout.contains("warning:"), "{stdout}");
+    assert_eq!(json["warnings"].as_array().map(Vec::len), Some(0));
+    assert_eq!(json["settings"]["radius_given"], false);
+    // A merge radius of a quarter of the scene.
+    let (stdout, json) = render(
+        "wide",
+        BASE_SCENE.into(),
+        &["--mode", "balance", "--radius", "0.5"],
+    );
+    assert!(
+        stdout.contains("warning: the merge radius 0.5 m is 25%"),
+        "{stdout}"
+    );
+    assert_eq!(json["settings"]["radius_given"], true);
+    let w = json["warnings"][0].as_str().expect("warning");
+    assert!(w.contains("merge radius"), "{w}");
+    // The light sealed in a small closed sphere: a black image.
+    let sealed = format!(
+        "{BASE_SCENE}\n[[shape]]\ntype = \"sphere\"\ncenter = [0.3, -0.2, 0.1]\nradius = 0.01\nmaterial = \"inside\"\n"
+    );
+    let (stdout, json) = render("sealed", sealed, &[]);
+    assert!(stdout.contains("warning: the image is black"), "{stdout}");
+    assert!(
+        json["warnings"][0]
+            .as_str()
+            .is_some_and(|w| w.contains("black")),
+        "{json}"
+    );
+}

@@ -24,6 +24,6 @@ pub use bdpm_mis::NoiseModel;
 pub use film::Film;
 pub use predict::{JITTER_RAYS, Prediction};
 pub use render::{PassOutput, RenderError, Renderer, StageReport, render_path_pass};
-pub use settings::{Mode, RenderSettings, default_radius};
+pub use settings::{MIN_RADIUS, Mode, RenderSettings, check_radius, default_radius};
 pub use table::{PixelTable, PixelWeights};
 pub use weightmap::{WeightMap, WeightTarget};

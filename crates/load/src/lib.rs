@@ -74,6 +74,9 @@ pub mod limits {
     pub const DELTA_MIN_DEGREES: f32 = 0.05;
     /// Widest lobe width Δ, degrees.
     pub const DELTA_MAX_DEGREES: f32 = 90.0;
+    /// Most backward rays per pixel of the A/B pre-pass (256 times the default of 64). The
+    /// pre-pass shows no progress, and 4·10⁹ rays per pixel would run for days.
+    pub const MAX_PIXEL_TABLE_RAYS: u32 = 16384;
 }
 
 /// Lambert albedo of glTF primitives that have no material.
@@ -118,6 +121,8 @@ pub struct LoadReport {
     pub skipped_primitives: usize,
     /// glTF spot and directional lights skipped (bdpm has isotropic point lights only).
     pub skipped_lights: usize,
+    /// Whether `[render].radius` was given; otherwise the settings hold the scene default.
+    pub radius_given: bool,
 }
 
 /// Loads the scene file at `path`; glTF files it names are found relative to its directory.
@@ -141,14 +146,36 @@ pub fn load_scene_str(
         let (line, column) = e
             .span()
             .map_or((1, 1), |span| line_column(toml_text, span.start));
+        let mut message = e.message().trim().replace('\n', " ");
+        // The parser says only "duplicate key"; the key is the text its span points at.
+        if message == "duplicate key"
+            && let Some(key) = e.span().and_then(|span| spanned_key(toml_text, span))
+        {
+            message = format!("duplicate key `{key}`");
+        }
         LoadError::Syntax {
             path: display_path.to_path_buf(),
             line,
             column,
-            message: e.message().trim().replace('\n', " "),
+            message,
         }
     })?;
     build::build(file, base_dir, display_path)
+}
+
+/// The key that `span` of `text` points at (the start of a `key = value` line or a
+/// `[table]` header), if it looks like one.
+fn spanned_key(text: &str, span: std::ops::Range<usize>) -> Option<String> {
+    let rest = text.get(span.start..)?;
+    let line = rest.lines().next()?;
+    let key = line
+        .split('=')
+        .next()?
+        .trim()
+        .trim_start_matches('[')
+        .trim_end_matches(']')
+        .trim();
+    (!key.is_empty() && key.len() <= 100).then(|| key.to_string())
 }
 
 /// 1-based line and character column of byte `offset` in `text`.
