@@ -140,7 +140,8 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
         .with_technique_layers(args.techniques);
     let prepare_seconds = t_prepare.elapsed().as_secs_f64();
     let radius_given = loaded.report.radius_given || args.overrides.radius.is_some();
-    let mut warnings = before_render_warnings(&scene, &settings, &renderer);
+    let mut warnings = loaded.report.warnings();
+    warnings.extend(before_render_warnings(&scene, &settings, &renderer));
     for w in &warnings {
         say!("warning: {w}");
     }

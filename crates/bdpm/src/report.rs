@@ -90,6 +90,23 @@ struct SceneOut {
     degenerate_triangles: usize,
     materials: usize,
     lights: usize,
+    gltf: GltfOut,
+}
+
+/// What the glTF files held that bdpm converted, skipped or simplified (counts).
+#[derive(Serialize)]
+struct GltfOut {
+    files: usize,
+    /// Triangle strips and fans, converted to triangle lists.
+    strips_and_fans: usize,
+    /// Point and line primitives, skipped.
+    skipped_points_and_lines: usize,
+    /// Spot and directional lights, skipped.
+    skipped_lights: usize,
+    /// Cameras, ignored.
+    skipped_cameras: usize,
+    /// Materials whose base-colour texture was ignored.
+    textured_materials: usize,
 }
 
 #[derive(Serialize)]
@@ -196,6 +213,14 @@ impl RunReport {
                 degenerate_triangles: f.load.degenerate_triangles,
                 materials: f.load.materials,
                 lights: f.load.lights,
+                gltf: GltfOut {
+                    files: f.load.gltf_files.len(),
+                    strips_and_fans: f.load.strips_and_fans,
+                    skipped_points_and_lines: f.load.skipped_primitives,
+                    skipped_lights: f.load.skipped_lights,
+                    skipped_cameras: f.load.skipped_cameras,
+                    textured_materials: f.load.textured_materials,
+                },
             },
             settings: settings_out(
                 f.settings,

@@ -928,6 +928,36 @@ fn warnings_reach_stdout_and_the_report() {
     assert_eq!(json["settings"]["radius_given"], true);
     let w = json["warnings"][0].as_str().expect("warning");
     assert!(w.contains("merge radius"), "{w}");
+    // A glTF file with a triangle, a point primitive and a camera: the skips are reported.
+    let mut tri = Vec::new();
+    for c in [0.9f32, -0.1, -0.1, 0.9, 0.1, -0.1, 0.9, 0.0, 0.1] {
+        tri.extend_from_slice(&c.to_le_bytes());
+    }
+    std::fs::write(dir.path("tri.bin"), tri).expect("write bin");
+    let gltf = r#"{ "asset": { "version": "2.0" },
+      "buffers": [ { "byteLength": 36, "uri": "tri.bin" } ],
+      "bufferViews": [ { "buffer": 0, "byteLength": 36 } ],
+      "accessors": [ { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                       "min": [0.9, -0.1, -0.1], "max": [0.9, 0.1, 0.1] } ],
+      "cameras": [ { "type": "perspective", "perspective": { "yfov": 0.8, "znear": 0.1 } } ],
+      "meshes": [ { "primitives": [ { "attributes": { "POSITION": 0 } },
+                                    { "attributes": { "POSITION": 0 }, "mode": 0 } ] } ],
+      "nodes": [ { "mesh": 0 }, { "camera": 0 } ],
+      "scenes": [ { "nodes": [0, 1] } ] }"#;
+    std::fs::write(dir.path("tri.gltf"), gltf).expect("write gltf");
+    let with_gltf = format!("{BASE_SCENE}\n[[shape]]\ntype = \"mesh\"\nfile = \"tri.gltf\"\n");
+    let (stdout, json) = render("gltf", with_gltf, &[]);
+    assert!(
+        stdout.contains("warning: glTF: 1 point or line primitive(s) skipped"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("warning: glTF: 1 camera(s) ignored"),
+        "{stdout}"
+    );
+    assert_eq!(json["scene"]["gltf"]["skipped_points_and_lines"], 1);
+    assert_eq!(json["scene"]["gltf"]["skipped_cameras"], 1);
+    assert_eq!(json["warnings"].as_array().map(Vec::len), Some(2));
     // The light sealed in a small closed sphere: a black image.
     let sealed = format!(
         "{BASE_SCENE}\n[[shape]]\ntype = \"sphere\"\ncenter = [0.3, -0.2, 0.1]\nradius = 0.01\nmaterial = \"inside\"\n"

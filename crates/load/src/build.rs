@@ -390,7 +390,10 @@ pub(crate) fn build(
                 let part = load_gltf(&origin, post, override_material, &mut materials)?;
                 report.gltf_files.push(path.clone());
                 report.skipped_primitives += part.skipped_primitives;
+                report.strips_and_fans += part.strips_and_fans;
                 report.skipped_lights += part.skipped_lights;
+                report.skipped_cameras += part.skipped_cameras;
+                report.textured_materials += part.textured_materials;
                 report.flat_primitives += part.flat_primitives;
                 lights.extend(part.lights);
                 mesh = part.mesh;
@@ -423,6 +426,13 @@ pub(crate) fn build(
 
     let mesh = merge(&ctx, parts)?;
     let geometry = Geometry::new(mesh).map_err(|e| match e {
+        GeometryError::Empty if report.skipped_primitives > 0 => ctx.bad(
+            "shape",
+            format!(
+                "the scene has no triangle with positive area ({} glTF point or line primitive(s) were skipped)",
+                report.skipped_primitives
+            ),
+        ),
         GeometryError::Empty => ctx.bad("shape", "the scene has no triangle with positive area"),
         other => ctx.bad("shape", other.to_string()),
     })?;
