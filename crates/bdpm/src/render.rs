@@ -5,7 +5,9 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::{Instant, SystemTime};
 
-use bdpm_integrator::{Film, Mode, Renderer, Techniques, WeightStats};
+use bdpm_integrator::{
+    Film, Mode, Renderer, Techniques, WeightStats, estimate_memory, human_bytes,
+};
 use clap::Args;
 use glam::DVec3;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -31,6 +33,50 @@ pub(crate) struct RenderArgs {
     /// x1_raw, x1_weighted (BDPM modes only; direct + x0_weighted + x1_weighted = the image).
     #[arg(long)]
     techniques: bool,
+    /// Refuse to start a render whose estimated peak memory exceeds this, e.g. 8G, 512M,
+    /// 100000K or a number of bytes (K, M, G, T are powers of 1024). Default: the memory
+    /// available on this machine (MemAvailable of /proc/meminfo), no limit where unknown.
+    #[arg(long, value_parser = parse_bytes)]
+    max_memory: Option<u64>,
+}
+
+/// A byte count with an optional binary suffix (K, M, G, T; `B` or `iB` may follow).
+fn parse_bytes(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let t = t
+        .strip_suffix("iB")
+        .or_else(|| t.strip_suffix('B'))
+        .unwrap_or(t);
+    let (digits, shift) = match t.chars().last().map(|c| c.to_ascii_uppercase()) {
+        Some('K') => (&t[..t.len() - 1], 10),
+        Some('M') => (&t[..t.len() - 1], 20),
+        Some('G') => (&t[..t.len() - 1], 30),
+        Some('T') => (&t[..t.len() - 1], 40),
+        _ => (t, 0),
+    };
+    let bad = || format!("'{s}' is not a size such as 8G, 512M or 1000000");
+    let value: f64 = digits.trim().parse().map_err(|_| bad())?;
+    let bytes = value * (1u64 << shift) as f64;
+    if !(bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64) {
+        return Err(bad());
+    }
+    Ok(bytes as u64)
+}
+
+/// MemAvailable of /proc/meminfo, bytes (`None` where there is no such file).
+fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// The process's peak resident memory so far (VmHWM of /proc/self/status), bytes.
+fn peak_resident_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = text.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
 }
 
 /// Per-pixel sums of the pass luminance and its square: the noise map shows √V of the
@@ -132,6 +178,33 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
     let _lock = output::claim(&requested, &outputs, started)?;
     let pool = thread_pool(args.overrides.threads)?;
     let threads = pool.current_num_threads();
+
+    // Before the cache, the pixel table, the film or any photon map is allocated: a render
+    // that would run out of memory after minutes of work is refused now, naming what to lower.
+    let estimate = pool.install(|| estimate_memory(&scene, &settings, args.techniques));
+    let (limit, limit_source) = match args.max_memory {
+        Some(b) => (Some(b), "--max-memory"),
+        None => (available_memory(), "available memory"),
+    };
+    if let Some(limit) = limit
+        && estimate.total() > limit
+    {
+        let parts: Vec<String> = estimate
+            .items
+            .iter()
+            .filter(|i| i.bytes * 100 >= estimate.total())
+            .map(|i| format!("{} {}", i.name, human_bytes(i.bytes)))
+            .collect();
+        return Err(format!(
+            "{}: the render needs about {} ({}), more than the {} of {}; lower {} (or raise --max-memory)",
+            args.scene.display(),
+            human_bytes(estimate.total()),
+            parts.join(", "),
+            limit_source,
+            human_bytes(limit),
+            estimate.scalable_largest().lower
+        ));
+    }
 
     let t_prepare = Instant::now();
     let renderer = pool
@@ -265,6 +338,12 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
         run_id: &run_id,
         radius_given,
         warnings: &warnings,
+        memory: report::MemoryFacts {
+            estimate: &estimate,
+            limit,
+            limit_source,
+            peak_resident: peak_resident_memory(),
+        },
     });
     let json = output::stage_bytes(&outputs.json, run.to_json().as_bytes())
         .map_err(named(&outputs.json))?;

@@ -2,7 +2,7 @@
 //! each stage cost.
 use std::path::Path;
 
-use bdpm_integrator::{Film, RenderSettings, Renderer, WeightStats};
+use bdpm_integrator::{Film, MemoryEstimate, RenderSettings, Renderer, WeightStats};
 use bdpm_load::LoadReport;
 use serde::Serialize;
 
@@ -33,6 +33,38 @@ pub(crate) struct RunFacts<'a> {
     pub(crate) radius_given: bool,
     /// The warnings printed on stdout, one line each.
     pub(crate) warnings: &'a [String],
+    /// The memory estimate made before the render, and what it was compared with.
+    pub(crate) memory: MemoryFacts<'a>,
+}
+
+/// The memory estimate and its limit.
+pub(crate) struct MemoryFacts<'a> {
+    pub(crate) estimate: &'a MemoryEstimate,
+    /// The limit compared with, bytes (`None`: unknown, not checked).
+    pub(crate) limit: Option<u64>,
+    /// `--max-memory` or `available memory`.
+    pub(crate) limit_source: &'static str,
+    /// Peak resident memory of the process when the report was made, bytes.
+    pub(crate) peak_resident: Option<u64>,
+}
+
+/// The memory estimate in the report: estimated and measured peak, bytes.
+#[derive(Serialize)]
+struct MemoryOut {
+    estimate_bytes: u64,
+    items: Vec<MemoryItemOut>,
+    /// Photons stored per photon emitted, from the estimate's pilot trace (0 for `path`).
+    stored_per_emitted: f64,
+    limit_bytes: Option<u64>,
+    limit_source: &'static str,
+    /// VmHWM when the report was written (Linux), to compare with the estimate.
+    measured_peak_bytes: Option<u64>,
+}
+
+#[derive(Serialize)]
+struct MemoryItemOut {
+    name: &'static str,
+    bytes: u64,
 }
 
 /// Weight evaluations of the BDPM mix and how many were anomalous (method.md §4).
@@ -146,6 +178,8 @@ pub(crate) struct RunReport {
     /// Warnings printed on stdout (skipped glTF content, a merge radius near the scene's
     /// size, a black image, dropped samples), one line each.
     warnings: Vec<String>,
+    /// The memory estimate made before rendering, its limit and the measured peak.
+    memory: MemoryOut,
 }
 
 fn mean_of(v: &[glam::DVec3]) -> [f64; 3] {
@@ -277,6 +311,23 @@ impl RunReport {
             mean_noise_sqrt_v: mean_of(&noise),
             outputs: f.outputs.all().map(|p| p.display().to_string()),
             warnings: f.warnings.to_vec(),
+            memory: MemoryOut {
+                estimate_bytes: f.memory.estimate.total(),
+                items: f
+                    .memory
+                    .estimate
+                    .items
+                    .iter()
+                    .map(|i| MemoryItemOut {
+                        name: i.name,
+                        bytes: i.bytes,
+                    })
+                    .collect(),
+                stored_per_emitted: f.memory.estimate.stored_per_emitted,
+                limit_bytes: f.memory.limit,
+                limit_source: f.memory.limit_source,
+                measured_peak_bytes: f.memory.peak_resident,
+            },
         }
     }
 

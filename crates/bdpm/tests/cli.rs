@@ -971,3 +971,77 @@ fn warnings_reach_stdout_and_the_report() {
         "{json}"
     );
 }
+
+#[test]
+fn memory_is_estimated_before_the_render_and_refused_above_the_limit() {
+    let dir = TempDir::new("memory");
+    // (arguments, what the error must name). 10⁹ photons need some 250 GB: refused at
+    // once, as is a film beyond a tiny limit; either would otherwise abort mid-render.
+    let cases: [(&[&str], &str); 2] = [
+        (
+            &[
+                "--mode",
+                "bdd0",
+                "--photons",
+                "1000000000",
+                "--max-memory",
+                "4G",
+            ],
+            "--photons",
+        ),
+        (
+            &[
+                "--mode",
+                "path",
+                "--resolution",
+                "512x512",
+                "--max-memory",
+                "20M",
+            ],
+            "--resolution",
+        ),
+    ];
+    for (args, knob) in cases {
+        let start = Instant::now();
+        let out = run(bdpm()
+            .arg("render")
+            .arg(scene("cornell-lambert.toml"))
+            .args(args)
+            .args(["--quiet", "-o"])
+            .arg(dir.path("m.exr")));
+        assert_one_line_error(&out, &["needs about", "--max-memory", knob]);
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "{:?}",
+            start.elapsed()
+        );
+        assert!(!dir.path("m.exr").exists());
+    }
+    // Within the limit, the estimate and the measured peak are in the report.
+    let out = run(bdpm()
+        .arg("render")
+        .arg(scene("cornell-lambert.toml"))
+        .args(["--mode", "bdd0", "--resolution", "16x16", "--passes", "1"])
+        .args(["--photons", "100000", "--max-memory", "4G", "--quiet", "-o"])
+        .arg(dir.path("m.exr")));
+    assert_success(&out);
+    let json = read_json(&dir.path("m.json"));
+    let memory = &json["memory"];
+    assert_eq!(memory["limit_source"], "--max-memory");
+    assert_eq!(memory["limit_bytes"].as_u64(), Some(4 << 30));
+    let estimate = memory["estimate_bytes"].as_u64().expect("estimate");
+    let names: Vec<&str> = memory["items"]
+        .as_array()
+        .expect("items")
+        .iter()
+        .filter_map(|i| i["name"].as_str())
+        .collect();
+    assert!(names.contains(&"photon map per pass"), "{names:?}");
+    if let Some(peak) = memory["measured_peak_bytes"].as_u64() {
+        eprintln!("estimate {estimate} B, measured peak {peak} B");
+        assert!(
+            estimate >= peak / 2,
+            "estimate {estimate} far below the peak {peak}"
+        );
+    }
+}

@@ -12,6 +12,7 @@
 pub mod bdpm;
 mod film;
 mod light;
+mod memory;
 pub mod path;
 mod predict;
 mod render;
@@ -22,6 +23,7 @@ mod weightmap;
 pub use bdpm::{Techniques, WeightStats, scene_default_radius};
 pub use bdpm_mis::NoiseModel;
 pub use film::Film;
+pub use memory::{MemoryEstimate, MemoryItem, PILOT_PHOTONS, estimate_memory, human_bytes};
 pub use predict::{JITTER_RAYS, Prediction};
 pub use render::{PassOutput, RenderError, Renderer, StageReport, render_path_pass};
 pub use settings::{MIN_RADIUS, Mode, RenderSettings, check_radius, default_radius};
