@@ -892,6 +892,8 @@ fn command_line_numbers_are_checked_with_clear_messages() {
         !help.contains("--mode "),
         "study --help lists --mode:\n{help}"
     );
+    let out = run(bdpm().arg("study").arg(&path).args(["--mode", "path"]));
+    assert_one_line_error(&out, &["--modes"]);
 }
 
 #[test]
