@@ -28,22 +28,22 @@ pub(crate) struct Overrides {
     #[arg(long)]
     pub(crate) mode: Option<String>,
     /// Number of passes.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u32>)]
     pub(crate) passes: Option<u32>,
     /// Image size as WxH, e.g. 256x256.
     #[arg(long, value_parser = parse_resolution)]
     pub(crate) resolution: Option<(u32, u32)>,
     /// Photons emitted per pass (N_F).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u64>)]
     pub(crate) photons: Option<u64>,
     /// Camera samples per pixel per pass (N_B).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u32>)]
     pub(crate) spp: Option<u32>,
     /// Merge radius, metres.
-    #[arg(long)]
-    pub(crate) radius: Option<f32>,
+    #[arg(long, allow_negative_numbers = true, value_parser = number)]
+    pub(crate) radius: Option<f64>,
     /// Master seed of all random streams.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u64>)]
     pub(crate) seed: Option<u64>,
     /// Send all camera samples of a pixel through its centre (the layout the preprint's noise
     /// model assumes) instead of jittering them over the pixel.
@@ -55,9 +55,31 @@ pub(crate) struct Overrides {
     /// N_B; its weights assume every sample of a pixel shares x0).
     #[arg(long)]
     pub(crate) noise_model: Option<String>,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
+    /// Worker threads (default: all cores; at most 8 per core, and at least 64 allowed).
+    #[arg(long, allow_negative_numbers = true, value_parser = whole::<usize>)]
     pub(crate) threads: Option<usize>,
+}
+
+/// A whole number for a flag, with a message that says so: the parser's own ("invalid digit
+/// found in string") does not tell a user that `-1` or `2.5` is the problem.
+pub(crate) fn whole<T: std::str::FromStr>(s: &str) -> Result<T, String> {
+    s.trim().parse().map_err(|_| {
+        format!(
+            "'{s}' is not a whole number in range (0 to {})",
+            if size_of::<T>() == 4 {
+                u32::MAX as u64
+            } else {
+                u64::MAX
+            }
+        )
+    })
+}
+
+/// A real number for a flag, kept in f64 so that messages quote it as typed.
+pub(crate) fn number(s: &str) -> Result<f64, String> {
+    s.trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number"))
 }
 
 pub(crate) fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
@@ -113,11 +135,17 @@ pub(crate) fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> C
         settings.spp = n;
     }
     if let Some(r) = o.radius {
-        if !(r.is_finite() && r > 0.0) {
+        if !(r.is_finite() && r > 0.0 && r <= f32::MAX as f64) {
+            let r = if (1e-4..1e7).contains(&r.abs()) {
+                format!("{r}")
+            } else {
+                format!("{r:e}")
+            };
             return Err(format!(
-                "--radius must be a positive number of metres, not {r}"
+                "--radius must be a positive number of metres below 3.4e38, not {r}"
             ));
         }
+        let r = bdpm_integrator::check_radius(r as f32).map_err(|e| format!("--radius: {e}"))?;
         settings.radius = Some(r);
     }
     if o.no_jitter {
@@ -142,6 +170,15 @@ pub(crate) fn thread_pool(threads: Option<usize>) -> CliResult<rayon::ThreadPool
     if let Some(t) = threads {
         if t == 0 {
             return Err("--threads must be at least 1".into());
+        }
+        // Thousands of threads on a few cores only queue for them (10000 spent minutes
+        // starting up); the cap leaves room to oversubscribe for tests of determinism.
+        let cores = std::thread::available_parallelism().map_or(1, usize::from);
+        let max = (8 * cores).max(64);
+        if t > max {
+            return Err(format!(
+                "--threads {t} is more than this machine can use: at most {max} (8 per core, {cores} cores)"
+            ));
         }
         b = b.num_threads(t);
     }

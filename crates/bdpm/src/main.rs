@@ -17,6 +17,7 @@ mod weights;
 
 use std::process::ExitCode;
 
+use clap::error::ErrorKind;
 use clap::{Parser, Subcommand};
 
 /// Bidirectional photon mapping with optimal MIS weights.
@@ -52,7 +53,10 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return usage_error(e),
+    };
     let success = |()| ExitCode::SUCCESS;
     let result = match cli.command {
         Command::Render(args) => render::run(args),
@@ -69,4 +73,26 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// A command-line error as one line on stderr with exit code 1, like every other user error
+/// (clap's own has a usage block and exits with 2); help and version print as usual.
+fn usage_error(e: clap::Error) -> ExitCode {
+    if matches!(
+        e.kind(),
+        ErrorKind::DisplayHelp
+            | ErrorKind::DisplayVersion
+            | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+    ) {
+        e.exit();
+    }
+    let text = e.render().to_string();
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("error:"))
+        .unwrap_or("error: bad arguments")
+        .trim_start_matches("error:")
+        .trim();
+    eprintln!("bdpm: error: {line} (see bdpm --help)");
+    ExitCode::FAILURE
 }

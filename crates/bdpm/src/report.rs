@@ -2,7 +2,7 @@
 //! each stage cost.
 use std::path::Path;
 
-use bdpm_integrator::{Film, RenderSettings, Renderer, WeightStats};
+use bdpm_integrator::{Film, MemoryEstimate, RenderSettings, Renderer, WeightStats};
 use bdpm_load::LoadReport;
 use serde::Serialize;
 
@@ -27,6 +27,44 @@ pub(crate) struct RunFacts<'a> {
     pub(crate) weights: &'a WeightStats,
     pub(crate) photon_map_bytes: u64,
     pub(crate) photons_stored: u64,
+    /// This run's identifier, also in the EXR header as `bdpm.run_id`.
+    pub(crate) run_id: &'a str,
+    /// Whether the merge radius was given (scene file or `--radius`).
+    pub(crate) radius_given: bool,
+    /// The warnings printed on stdout, one line each.
+    pub(crate) warnings: &'a [String],
+    /// The memory estimate made before the render, and what it was compared with.
+    pub(crate) memory: MemoryFacts<'a>,
+}
+
+/// The memory estimate and its limit.
+pub(crate) struct MemoryFacts<'a> {
+    pub(crate) estimate: &'a MemoryEstimate,
+    /// The limit compared with, bytes (`None`: unknown, not checked).
+    pub(crate) limit: Option<u64>,
+    /// `--max-memory` or `available memory`.
+    pub(crate) limit_source: &'static str,
+    /// Peak resident memory of the process when the report was made, bytes.
+    pub(crate) peak_resident: Option<u64>,
+}
+
+/// The memory estimate in the report: estimated and measured peak, bytes.
+#[derive(Serialize)]
+struct MemoryOut {
+    estimate_bytes: u64,
+    items: Vec<MemoryItemOut>,
+    /// Photons stored per photon emitted, from the estimate's pilot trace (0 for `path`).
+    stored_per_emitted: f64,
+    limit_bytes: Option<u64>,
+    limit_source: &'static str,
+    /// VmHWM when the report was written (Linux), to compare with the estimate.
+    measured_peak_bytes: Option<u64>,
+}
+
+#[derive(Serialize)]
+struct MemoryItemOut {
+    name: &'static str,
+    bytes: u64,
 }
 
 /// Weight evaluations of the BDPM mix and how many were anomalous (method.md §4).
@@ -84,6 +122,23 @@ struct SceneOut {
     degenerate_triangles: usize,
     materials: usize,
     lights: usize,
+    gltf: GltfOut,
+}
+
+/// What the glTF files held that bdpm converted, skipped or simplified (counts).
+#[derive(Serialize)]
+struct GltfOut {
+    files: usize,
+    /// Triangle strips and fans, converted to triangle lists.
+    strips_and_fans: usize,
+    /// Point and line primitives, skipped.
+    skipped_points_and_lines: usize,
+    /// Spot and directional lights, skipped.
+    skipped_lights: usize,
+    /// Cameras, ignored.
+    skipped_cameras: usize,
+    /// Materials whose base-colour texture was ignored.
+    textured_materials: usize,
 }
 
 #[derive(Serialize)]
@@ -99,6 +154,8 @@ struct Timing {
 #[derive(Serialize)]
 pub(crate) struct RunReport {
     version: &'static str,
+    /// Equal to the EXR's `bdpm.run_id` when the two files come from the same run.
+    run_id: String,
     scene: SceneOut,
     settings: SettingsOut,
     threads: usize,
@@ -118,6 +175,11 @@ pub(crate) struct RunReport {
     pass_image_means: Vec<[f64; 3]>,
     /// EXR, PNG preview, noise map PNG, JSON report.
     outputs: [String; 4],
+    /// Warnings printed on stdout (skipped glTF content, a merge radius near the scene's
+    /// size, a black image, dropped samples), one line each.
+    warnings: Vec<String>,
+    /// The memory estimate made before rendering, its limit and the measured peak.
+    memory: MemoryOut,
 }
 
 fn mean_of(v: &[glam::DVec3]) -> [f64; 3] {
@@ -142,7 +204,12 @@ fn standard_error_of_mean(samples: &[[f64; 3]]) -> [f64; 3] {
 
 /// The settings as asked for, with the merge radius and the weight clamp in force (the
 /// footprint noise model always clamps).
-fn settings_out(s: &RenderSettings, radius: f32, clamp_weights: bool) -> SettingsOut {
+fn settings_out(
+    s: &RenderSettings,
+    radius: f32,
+    radius_given: bool,
+    clamp_weights: bool,
+) -> SettingsOut {
     SettingsOut {
         mode: s.mode.name().to_string(),
         width: s.width,
@@ -151,7 +218,7 @@ fn settings_out(s: &RenderSettings, radius: f32, clamp_weights: bool) -> Setting
         photons_per_pass: s.photons,
         spp: s.spp,
         radius_m: radius,
-        radius_given: s.radius.is_some(),
+        radius_given,
         seed: s.seed,
         threshold_radius_m: s.threshold_radius,
         cache_bins: s.cache_bins,
@@ -173,16 +240,26 @@ impl RunReport {
             .collect();
         RunReport {
             version: env!("CARGO_PKG_VERSION"),
+            run_id: f.run_id.to_string(),
             scene: SceneOut {
                 path: f.scene_path.display().to_string(),
                 triangles: f.load.triangles,
                 degenerate_triangles: f.load.degenerate_triangles,
                 materials: f.load.materials,
                 lights: f.load.lights,
+                gltf: GltfOut {
+                    files: f.load.gltf_files.len(),
+                    strips_and_fans: f.load.strips_and_fans,
+                    skipped_points_and_lines: f.load.skipped_primitives,
+                    skipped_lights: f.load.skipped_lights,
+                    skipped_cameras: f.load.skipped_cameras,
+                    textured_materials: f.load.textured_materials,
+                },
             },
             settings: settings_out(
                 f.settings,
                 f.renderer.radius(),
+                f.radius_given,
                 f.renderer.settings().clamp_weights,
             ),
             threads: f.threads,
@@ -233,6 +310,24 @@ impl RunReport {
             pass_image_means: f.pass_means.to_vec(),
             mean_noise_sqrt_v: mean_of(&noise),
             outputs: f.outputs.all().map(|p| p.display().to_string()),
+            warnings: f.warnings.to_vec(),
+            memory: MemoryOut {
+                estimate_bytes: f.memory.estimate.total(),
+                items: f
+                    .memory
+                    .estimate
+                    .items
+                    .iter()
+                    .map(|i| MemoryItemOut {
+                        name: i.name,
+                        bytes: i.bytes,
+                    })
+                    .collect(),
+                stored_per_emitted: f.memory.estimate.stored_per_emitted,
+                limit_bytes: f.memory.limit,
+                limit_source: f.memory.limit_source,
+                measured_peak_bytes: f.memory.peak_resident,
+            },
         }
     }
 
@@ -242,7 +337,11 @@ impl RunReport {
 }
 
 /// The settings as EXR header attributes (`bdpm.mode`, `bdpm.seed`, …).
-pub(crate) fn header_attributes(s: &RenderSettings, r: &Renderer<'_>) -> Vec<(String, String)> {
+pub(crate) fn header_attributes(
+    s: &RenderSettings,
+    r: &Renderer<'_>,
+    radius_given: bool,
+) -> Vec<(String, String)> {
     let mut v = vec![
         ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
         ("mode".into(), s.mode.name().into()),
@@ -256,12 +355,7 @@ pub(crate) fn header_attributes(s: &RenderSettings, r: &Renderer<'_>) -> Vec<(St
         ("radius_m".into(), r.radius().to_string()),
         (
             "radius_source".into(),
-            if s.radius.is_some() {
-                "given"
-            } else {
-                "default"
-            }
-            .into(),
+            if radius_given { "given" } else { "default" }.into(),
         ),
     ];
     for st in r.stages() {

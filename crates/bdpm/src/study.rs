@@ -26,8 +26,10 @@ pub(crate) mod reference;
 /// The modes a study compares by default: every BDPM weight mode.
 const DEFAULT_MODES: &[&str] = bdpm_mis::Heuristic::ALL_NAMES;
 
-/// Arguments of this subcommand.
+/// Arguments of this subcommand. The shared `--mode` is hidden: a study takes `--modes`
+/// (and still refuses `--mode` with a message saying so).
 #[derive(Args, Debug)]
+#[command(mut_arg("mode", |a| a.hide(true)))]
 pub(crate) struct StudyArgs {
     /// Scene file (TOML).
     scene: PathBuf,

@@ -707,3 +707,355 @@ fn predict_compares_the_noise_model_with_a_render() {
         .arg(dir.path("q.exr")));
     assert_one_line_error(&out, &["r.exr", "32x32", "16x16"]);
 }
+
+/// A render of the Cornell box that runs until interrupted (one thread, 100000 passes).
+fn endless_render(out: &Path) -> std::process::Child {
+    bdpm()
+        .arg("render")
+        .arg(scene("cornell-lambert.toml"))
+        .args(["--resolution", "16x16", "--passes", "100000", "--spp", "1"])
+        .args(["--mode", "path", "--threads", "1", "--quiet", "-o"])
+        .arg(out)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start bdpm")
+}
+
+/// Sends SIGINT and waits (at most 60 s) for the exit code.
+fn interrupt(child: &mut std::process::Child) -> Option<i32> {
+    let status = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("run kill");
+    assert!(status.success());
+    let start = Instant::now();
+    loop {
+        if let Some(s) = child.try_wait().expect("wait") {
+            return s.code();
+        }
+        if start.elapsed() > Duration::from_secs(60) {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("bdpm did not stop within 60 s of SIGINT");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+#[test]
+fn output_location_is_checked_before_any_work() {
+    let dir = TempDir::new("preflight");
+    std::fs::create_dir_all(dir.path("adir")).expect("mkdir");
+    std::fs::write(dir.path("afile"), b"x").expect("write");
+    std::fs::create_dir_all(dir.path("clash.json")).expect("mkdir");
+    let cases: Vec<(PathBuf, &str)> = vec![
+        (dir.path("adir"), "is a directory"),
+        (PathBuf::from("/dev/null"), "not a regular file"),
+        (dir.path("afile").join("x.exr"), "not a directory"),
+        (dir.path("clash.exr"), "is a directory"),
+    ];
+    for (out_path, needle) in cases {
+        let start = Instant::now();
+        // 10⁵ passes would take minutes: the error must come before the render.
+        let out = run(bdpm()
+            .arg("render")
+            .arg(scene("cornell-lambert.toml"))
+            .args([
+                "--resolution",
+                "64x64",
+                "--passes",
+                "100000",
+                "--quiet",
+                "-o",
+            ])
+            .arg(&out_path));
+        assert_one_line_error(&out, &[needle]);
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "{}: refused only after {:?}",
+            out_path.display(),
+            start.elapsed()
+        );
+    }
+    assert!(!Path::new("/dev/null.exr").exists());
+    assert!(dir.hidden_files().is_empty(), "{:?}", dir.hidden_files());
+}
+
+#[test]
+fn a_second_render_to_the_same_output_is_refused_and_temps_cannot_be_planted() {
+    let dir = TempDir::new("lock");
+    let out = dir.path("L.exr");
+    std::fs::write(dir.path("victim"), b"precious").expect("write victim");
+    let mut first = endless_render(&out);
+    // The lock exists once the output has been claimed, before the first pass.
+    let start = Instant::now();
+    while !dir.path(".L.exr.lock").exists() {
+        assert!(start.elapsed() < Duration::from_secs(30), "no lock file");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    // Symlinks at the temporary names an older bdpm used (`.NAME.PID.tmp`): a writer that
+    // followed them would overwrite the victim with its output.
+    for name in ["L.exr", "L.png", "L-noise.png", "L.json"] {
+        let link = dir.path(&format!(".{name}.{}.tmp", first.id()));
+        std::os::unix::fs::symlink(dir.path("victim"), link).expect("plant symlink");
+    }
+    let second = run(bdpm()
+        .arg("render")
+        .arg(scene("cornell-lambert.toml"))
+        .args(["--resolution", "8x8", "--passes", "1", "--quiet", "-o"])
+        .arg(&out));
+    assert_one_line_error(&second, &["L.exr", "another bdpm render"]);
+    std::thread::sleep(Duration::from_millis(300));
+    let code = interrupt(&mut first);
+    let stderr = text(&first.wait_with_output().expect("output").stderr);
+    assert_eq!(code, Some(130), "{stderr}");
+    assert_eq!(
+        std::fs::read(dir.path("victim")).expect("victim"),
+        b"precious"
+    );
+    if !stderr.contains("nothing was written") {
+        // The files are one run's: the report's run_id is the EXR's.
+        let json = read_json(&dir.path("L.json"));
+        let exr = Exr::read(&out);
+        let id = json["run_id"].as_str().expect("run_id");
+        assert_eq!(
+            exr.attributes.get("bdpm.run_id").map(String::as_str),
+            Some(id)
+        );
+    }
+    let mut hidden = dir.hidden_files();
+    hidden.retain(|n| !n.ends_with(".tmp"));
+    assert!(hidden.is_empty(), "{hidden:?}");
+}
+
+#[test]
+fn stale_temporary_files_of_the_output_are_removed() {
+    let dir = TempDir::new("stale");
+    let an_hour_ago = std::time::SystemTime::now() - Duration::from_secs(3600);
+    for name in [
+        ".S.exr.Ab3dE9xQ1z.bdpm-tmp",
+        ".S.json.0123456789.bdpm-tmp",
+        ".keep",
+    ] {
+        let f = std::fs::File::create(dir.path(name)).expect("create");
+        f.set_modified(an_hour_ago).expect("set mtime");
+    }
+    let out = run(bdpm()
+        .arg("render")
+        .arg(scene("cornell-lambert.toml"))
+        .args([
+            "--mode",
+            "path",
+            "--resolution",
+            "8x8",
+            "--passes",
+            "1",
+            "--quiet",
+            "-o",
+        ])
+        .arg(dir.path("S.exr")));
+    assert_success(&out);
+    assert_eq!(dir.hidden_files(), vec![".keep".to_string()]);
+}
+
+#[test]
+fn command_line_numbers_are_checked_with_clear_messages() {
+    let dir = TempDir::new("flags");
+    let path = dir.path("s.toml");
+    std::fs::write(&path, BASE_SCENE).expect("write scene");
+    // (arguments, what the one error line must contain)
+    let cases: Vec<(Vec<&str>, Vec<&str>)> = vec![
+        (vec!["--radius", "-1"], vec!["--radius", "positive", "-1"]),
+        (
+            vec!["--passes", "-1"],
+            vec!["--passes", "'-1' is not a whole number"],
+        ),
+        (
+            vec!["--spp", "2.5"],
+            vec!["--spp", "'2.5' is not a whole number"],
+        ),
+        (
+            vec!["--radius", "1e-39"],
+            vec!["--radius", "smallest usable"],
+        ),
+        (vec!["--radius", "1e300"], vec!["--radius", "1e300"]),
+        (
+            vec!["--threads", "10000"],
+            vec!["--threads 10000", "at most"],
+        ),
+        (vec!["--no-such-flag"], vec!["--no-such-flag"]),
+    ];
+    for (args, needles) in cases {
+        let out = run(bdpm()
+            .arg("render")
+            .arg(&path)
+            .args(&args)
+            .args(["--quiet", "-o"])
+            .arg(dir.path("x.exr")));
+        assert_one_line_error(&out, &needles);
+    }
+    assert!(!dir.path("x.exr").exists());
+    let help = run(bdpm().args(["study", "--help"]));
+    assert_success(&help);
+    let help = text(&help.stdout);
+    assert!(help.contains("--modes"), "{help}");
+    assert!(
+        !help.contains("--mode "),
+        "study --help lists --mode:\n{help}"
+    );
+    let out = run(bdpm().arg("study").arg(&path).args(["--mode", "path"]));
+    assert_one_line_error(&out, &["--modes"]);
+}
+
+#[test]
+fn warnings_reach_stdout_and_the_report() {
+    let dir = TempDir::new("warnings");
+    let render = |name: &str, scene_text: String, extra: &[&str]| {
+        let path = dir.path(&format!("{name}.toml"));
+        std::fs::write(&path, scene_text).expect("write scene");
+        let out = run(bdpm()
+            .arg("render")
+            .arg(&path)
+            .args(extra)
+            .args(["--quiet", "-o"])
+            .arg(dir.path(&format!("{name}.exr"))));
+        assert_success(&out);
+        let json = read_json(&dir.path(&format!("{name}.json")));
+        (text(&out.stdout), json)
+    };
+    // The plain scene: no warning, radius left to the default.
+    let (stdout, json) = render("plain", BASE_SCENE.into(), &[]);
+    assert!(!stdout.contains("warning:"), "{stdout}");
+    assert_eq!(json["warnings"].as_array().map(Vec::len), Some(0));
+    assert_eq!(json["settings"]["radius_given"], false);
+    // A merge radius of a quarter of the scene.
+    let (stdout, json) = render(
+        "wide",
+        BASE_SCENE.into(),
+        &["--mode", "balance", "--radius", "0.5"],
+    );
+    assert!(
+        stdout.contains("warning: the merge radius 0.5 m is 25%"),
+        "{stdout}"
+    );
+    assert_eq!(json["settings"]["radius_given"], true);
+    let w = json["warnings"][0].as_str().expect("warning");
+    assert!(w.contains("merge radius"), "{w}");
+    // A glTF file with a triangle, a point primitive and a camera: the skips are reported.
+    let mut tri = Vec::new();
+    for c in [0.9f32, -0.1, -0.1, 0.9, 0.1, -0.1, 0.9, 0.0, 0.1] {
+        tri.extend_from_slice(&c.to_le_bytes());
+    }
+    std::fs::write(dir.path("tri.bin"), tri).expect("write bin");
+    let gltf = r#"{ "asset": { "version": "2.0" },
+      "buffers": [ { "byteLength": 36, "uri": "tri.bin" } ],
+      "bufferViews": [ { "buffer": 0, "byteLength": 36 } ],
+      "accessors": [ { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                       "min": [0.9, -0.1, -0.1], "max": [0.9, 0.1, 0.1] } ],
+      "cameras": [ { "type": "perspective", "perspective": { "yfov": 0.8, "znear": 0.1 } } ],
+      "meshes": [ { "primitives": [ { "attributes": { "POSITION": 0 } },
+                                    { "attributes": { "POSITION": 0 }, "mode": 0 } ] } ],
+      "nodes": [ { "mesh": 0 }, { "camera": 0 } ],
+      "scenes": [ { "nodes": [0, 1] } ] }"#;
+    std::fs::write(dir.path("tri.gltf"), gltf).expect("write gltf");
+    let with_gltf = format!("{BASE_SCENE}\n[[shape]]\ntype = \"mesh\"\nfile = \"tri.gltf\"\n");
+    let (stdout, json) = render("gltf", with_gltf, &[]);
+    assert!(
+        stdout.contains("warning: glTF: 1 point or line primitive(s) skipped"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("warning: glTF: 1 camera(s) ignored"),
+        "{stdout}"
+    );
+    assert_eq!(json["scene"]["gltf"]["skipped_points_and_lines"], 1);
+    assert_eq!(json["scene"]["gltf"]["skipped_cameras"], 1);
+    assert_eq!(json["warnings"].as_array().map(Vec::len), Some(2));
+    // The light sealed in a small closed sphere: a black image.
+    let sealed = format!(
+        "{BASE_SCENE}\n[[shape]]\ntype = \"sphere\"\ncenter = [0.3, -0.2, 0.1]\nradius = 0.01\nmaterial = \"inside\"\n"
+    );
+    let (stdout, json) = render("sealed", sealed, &[]);
+    assert!(stdout.contains("warning: the image is black"), "{stdout}");
+    assert!(
+        json["warnings"][0]
+            .as_str()
+            .is_some_and(|w| w.contains("black")),
+        "{json}"
+    );
+}
+
+#[test]
+fn memory_is_estimated_before_the_render_and_refused_above_the_limit() {
+    let dir = TempDir::new("memory");
+    // (arguments, what the error must name). 10⁹ photons need some 250 GB: refused at
+    // once, as is a film beyond a tiny limit; either would otherwise abort mid-render.
+    let cases: [(&[&str], &str); 2] = [
+        (
+            &[
+                "--mode",
+                "bdd0",
+                "--photons",
+                "1000000000",
+                "--max-memory",
+                "4G",
+            ],
+            "--photons",
+        ),
+        (
+            &[
+                "--mode",
+                "path",
+                "--resolution",
+                "512x512",
+                "--max-memory",
+                "20M",
+            ],
+            "--resolution",
+        ),
+    ];
+    for (args, knob) in cases {
+        let start = Instant::now();
+        let out = run(bdpm()
+            .arg("render")
+            .arg(scene("cornell-lambert.toml"))
+            .args(args)
+            .args(["--quiet", "-o"])
+            .arg(dir.path("m.exr")));
+        assert_one_line_error(&out, &["needs about", "--max-memory", knob]);
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "{:?}",
+            start.elapsed()
+        );
+        assert!(!dir.path("m.exr").exists());
+    }
+    // Within the limit, the estimate and the measured peak are in the report.
+    let out = run(bdpm()
+        .arg("render")
+        .arg(scene("cornell-lambert.toml"))
+        .args(["--mode", "bdd0", "--resolution", "16x16", "--passes", "1"])
+        .args(["--photons", "100000", "--max-memory", "4G", "--quiet", "-o"])
+        .arg(dir.path("m.exr")));
+    assert_success(&out);
+    let json = read_json(&dir.path("m.json"));
+    let memory = &json["memory"];
+    assert_eq!(memory["limit_source"], "--max-memory");
+    assert_eq!(memory["limit_bytes"].as_u64(), Some(4 << 30));
+    let estimate = memory["estimate_bytes"].as_u64().expect("estimate");
+    let names: Vec<&str> = memory["items"]
+        .as_array()
+        .expect("items")
+        .iter()
+        .filter_map(|i| i["name"].as_str())
+        .collect();
+    assert!(names.contains(&"photon map per pass"), "{names:?}");
+    if let Some(peak) = memory["measured_peak_bytes"].as_u64() {
+        eprintln!("estimate {estimate} B, measured peak {peak} B");
+        assert!(
+            estimate >= peak / 2,
+            "estimate {estimate} far below the peak {peak}"
+        );
+    }
+}

@@ -12,6 +12,7 @@
 pub mod bdpm;
 mod film;
 mod light;
+mod memory;
 pub mod path;
 mod predict;
 mod render;
@@ -22,10 +23,12 @@ mod weightmap;
 pub use bdpm::{Techniques, WeightStats, scene_default_radius};
 pub use bdpm_mis::NoiseModel;
 pub use film::Film;
+pub use memory::{MemoryEstimate, MemoryItem, PILOT_PHOTONS, estimate_memory, human_bytes};
 pub use predict::{JITTER_RAYS, Prediction};
 pub use render::{PassOutput, RenderError, Renderer, StageReport, render_path_pass};
 pub use settings::{
-    FOOTPRINT_TABLE_RAYS, Mode, PINHOLE_TABLE_RAYS, RenderSettings, default_radius,
+    FOOTPRINT_TABLE_RAYS, MIN_RADIUS, Mode, PINHOLE_TABLE_RAYS, RenderSettings, check_radius,
+    default_radius,
 };
 pub use table::{PixelTable, PixelWeights};
 pub use weightmap::{WeightMap, WeightTarget};

@@ -78,14 +78,9 @@ impl<'a> Renderer<'a> {
                 scene.camera.width, scene.camera.height, s.width, s.height
             )));
         }
-        if let Some(r) = s.radius
-            && !(r.is_finite() && r > 0.0)
-        {
-            return Err(RenderError::Settings(format!(
-                "merge radius {r} must be positive"
-            )));
-        }
         let radius = s.radius.unwrap_or_else(|| scene_default_radius(scene));
+        crate::settings::check_radius(radius)
+            .map_err(|e| RenderError::Settings(format!("merge radius {e}")))?;
         let mut settings = s.clone();
         settings.radius = Some(radius);
         // Under the footprint model the weights are clamped to [0, 1] (method-notes.md,

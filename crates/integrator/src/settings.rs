@@ -148,6 +148,26 @@ pub(crate) fn pixel_offset(u: [f32; 2], jitter: bool) -> [f32; 2] {
     if jitter { u } else { [0.5, 0.5] }
 }
 
+/// Smallest merge radius accepted, metres. The renderer divides by the merge disk's area in
+/// f32 (1/(πr²)) and the photon grid by its cell edge 2r; below about 10⁻¹⁹ m r² is subnormal
+/// or zero in f32 and the quotient infinite. At 10⁻¹⁸ m, 1/(πr²) ≈ 3·10³⁵ stays finite.
+pub const MIN_RADIUS: f32 = 1e-18;
+
+/// Checks a merge radius r (metres) in the precision the renderer uses it in: finite and at
+/// least [`MIN_RADIUS`]. The error says what is wrong, without naming the field.
+pub fn check_radius(r: f32) -> Result<f32, String> {
+    if !(r.is_finite() && r > 0.0) {
+        return Err(format!("{r:e} m must be a finite number > 0"));
+    }
+    if r < MIN_RADIUS {
+        return Err(format!(
+            "{r:e} m is below the smallest usable merge radius {MIN_RADIUS:e} m (1/(pi r^2) \
+             would overflow single precision)"
+        ));
+    }
+    Ok(r)
+}
+
 /// Default merge radius for a scene whose bounding box has largest extent `extent` (metres):
 /// extent / 1600, as the preprint's Cornell box uses.
 pub fn default_radius(extent: f32) -> f32 {

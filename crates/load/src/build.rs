@@ -6,12 +6,12 @@ use std::path::{Path, PathBuf};
 
 use bdpm_bdf::Bdf;
 use bdpm_geometry::{Geometry, GeometryError, TriangleMesh};
-use bdpm_integrator::{Mode, NoiseModel, RenderSettings, default_radius};
+use bdpm_integrator::{Mode, NoiseModel, RenderSettings, check_radius, default_radius};
 use bdpm_scene::{Camera, Material, PointLight, Scene, SceneError};
 use glam::{Mat4, Vec3};
 
 use crate::gltf_mesh::{Origin, load_gltf};
-use crate::schema::{CameraDef, MaterialDef, RenderDef, SceneFile, ShapeDef, Triple};
+use crate::schema::{CameraDef, MaterialDef, Point, RenderDef, SceneFile, ShapeDef, Triple};
 use crate::shapes::{BOX_FACES, push_box, push_sphere, sphere_triangle_count};
 use crate::{LoadError, LoadReport, LoadedScene, limits};
 
@@ -33,19 +33,65 @@ impl Ctx<'_> {
         value.ok_or_else(|| self.bad(field, format!("missing (required: {what})")))
     }
 
-    fn finite(&self, field: &str, v: Vec3) -> Result<Vec3, LoadError> {
-        if v.is_finite() {
-            Ok(v)
-        } else {
-            Err(self.bad(field, format!("{v} is not finite (NaN or infinite)")))
+    /// A point as written, checked in the precision it was written in (so that 1e300 is
+    /// reported as 1e300, not as its f32 rounding `inf`) and converted to f32.
+    fn point(&self, field: &str, p: Point) -> Result<Vec3, LoadError> {
+        let text = point_text(p.0);
+        for c in p.0 {
+            if !c.is_finite() {
+                return Err(self.bad(field, format!("{text} is not finite (NaN or infinite)")));
+            }
+            if c.abs() > f32::MAX as f64 {
+                return Err(self.bad(
+                    field,
+                    format!(
+                        "{text}: {} is beyond the single-precision range (±3.4e38)",
+                        num(c)
+                    ),
+                ));
+            }
         }
+        Ok(Vec3::new(p.0[0] as f32, p.0[1] as f32, p.0[2] as f32))
     }
 
-    fn positive(&self, field: &str, v: f32, unit: &str) -> Result<f32, LoadError> {
-        if v.is_finite() && v > 0.0 {
-            Ok(v)
+    /// A positive number, converted to f32: it must be finite and > 0 as written, and stay
+    /// finite and normal in f32 (a subnormal length is zero for every computation that uses
+    /// it, and its reciprocal overflows).
+    fn positive(&self, field: &str, v: f64, unit: &str) -> Result<f32, LoadError> {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(self.bad(
+                field,
+                format!("{} must be a finite number > 0 ({unit})", num(v)),
+            ));
+        }
+        let f = v as f32;
+        if !f.is_finite() {
+            return Err(self.bad(
+                field,
+                format!(
+                    "{} is beyond the single-precision range (3.4e38 {unit})",
+                    num(v)
+                ),
+            ));
+        }
+        if !f.is_normal() {
+            return Err(self.bad(
+                field,
+                format!(
+                    "{} is below the smallest normal single-precision number (1.2e-38 {unit})",
+                    num(v)
+                ),
+            ));
+        }
+        Ok(f)
+    }
+
+    /// A number in [lo, hi] (f32 limits), converted to f32.
+    fn within(&self, field: &str, v: f64, lo: f32, hi: f32) -> Result<f32, LoadError> {
+        if v >= lo as f64 && v <= hi as f64 {
+            Ok(v as f32)
         } else {
-            Err(self.bad(field, format!("{v} must be a finite number > 0 ({unit})")))
+            Err(self.bad(field, format!("{} is outside [{lo}, {hi}]", num(v))))
         }
     }
 
@@ -63,55 +109,91 @@ impl Ctx<'_> {
         }
     }
 
-    /// Every channel of `t` finite and in [lo, hi].
+    /// Every channel of `t` finite and in [lo, hi] (checked as written, in f64).
     fn channels(
         &self,
         field: &str,
         t: Triple,
-        lo: f32,
-        hi: Option<f32>,
+        lo: f64,
+        hi: Option<f64>,
     ) -> Result<Vec3, LoadError> {
         let range = match hi {
             Some(hi) => format!("is outside [{lo}, {hi}]"),
             None => format!("must be >= {lo}"),
         };
-        let channels = t.value.to_array().into_iter().zip(["red", "green", "blue"]);
+        let channels = t.value.into_iter().zip(["red", "green", "blue"]);
         for (c, name) in channels {
-            if c.is_finite() && c >= lo && hi.is_none_or(|hi| c <= hi) {
+            if c.is_finite() && c >= lo && hi.is_none_or(|hi| c <= hi) && c <= f32::MAX as f64 {
                 continue;
             }
-            let message = if t.scalar {
-                format!("{c} {range}")
-            } else if !c.is_finite() {
-                format!("{name} channel {c} is not finite (in {})", t.value)
+            let range = if c.is_finite() && c > f32::MAX as f64 {
+                "is beyond the single-precision range (3.4e38)".to_string()
             } else {
-                format!("{name} channel {c} {range} (in {})", t.value)
+                range.clone()
+            };
+            let message = if t.scalar {
+                format!("{} {range}", num(c))
+            } else if !c.is_finite() {
+                format!(
+                    "{name} channel {} is not finite (in {})",
+                    num(c),
+                    point_text(t.value)
+                )
+            } else {
+                format!(
+                    "{name} channel {} {range} (in {})",
+                    num(c),
+                    point_text(t.value)
+                )
             };
             return Err(self.bad(field, message));
         }
-        Ok(t.value)
+        Ok(Vec3::new(
+            t.value[0] as f32,
+            t.value[1] as f32,
+            t.value[2] as f32,
+        ))
     }
 
-    /// `scale` (non-zero finite per axis) then `translate` as one matrix.
+    /// `scale` (non-zero finite per axis, also in f32) then `translate` as one matrix.
     fn placement(
         &self,
         prefix: &str,
         scale: Option<Triple>,
-        translate: Option<Vec3>,
+        translate: Option<Point>,
     ) -> Result<Mat4, LoadError> {
-        let s = scale.map_or(Vec3::ONE, |s| s.value);
+        let written = scale.map_or([1.0; 3], |s| s.value);
+        let s = Vec3::new(written[0] as f32, written[1] as f32, written[2] as f32);
         if !(s.is_finite() && s.cmpne(Vec3::ZERO).all()) {
             return Err(self.bad(
                 format!("{prefix}.scale"),
-                format!("{s} must be finite and non-zero on every axis"),
+                format!(
+                    "{} must be finite and non-zero on every axis (in single precision)",
+                    point_text(written)
+                ),
             ));
         }
-        let t = self.finite(
+        let t = self.point(
             &format!("{prefix}.translate"),
-            translate.unwrap_or(Vec3::ZERO),
+            translate.unwrap_or(Point([0.0; 3])),
         )?;
         Ok(Mat4::from_translation(t) * Mat4::from_scale(s))
     }
+}
+
+/// A number for messages: as written when of ordinary size, in scientific notation when huge
+/// or tiny (f64's `Display` would spell 1e300 with 301 digits).
+pub(crate) fn num(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-4..1e7).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+/// Three numbers for messages, `[x, y, z]`.
+fn point_text(p: [f64; 3]) -> String {
+    format!("[{}, {}, {}]", num(p[0]), num(p[1]), num(p[2]))
 }
 
 /// The scene's materials: TOML ones first (sorted by name), then those made from glTF files.
@@ -170,7 +252,7 @@ pub(crate) fn build(
             l.position,
             "[x, y, z] in metres",
         )?;
-        let position = ctx.finite(&format!("{field}.position"), position)?;
+        let position = ctx.point(&format!("{field}.position"), position)?;
         let flux = ctx.required(
             &format!("{field}.flux"),
             l.flux,
@@ -196,12 +278,14 @@ pub(crate) fn build(
                 )?;
                 let field = format!("{prefix}.vertices");
                 let v = ctx.required(&field, q.vertices.as_ref(), "4 points [x, y, z]")?;
-                let v: [Vec3; 4] = v.as_slice().try_into().map_err(|_| {
+                let v: [Point; 4] = v.as_slice().try_into().map_err(|_| {
                     ctx.bad(&field, format!("{} points given; a quad has 4", v.len()))
                 })?;
-                for (k, p) in v.iter().enumerate() {
-                    let _ = ctx.finite(&format!("{field}[{k}]"), *p)?;
+                let mut checked = [Vec3::ZERO; 4];
+                for (k, (p, out)) in v.iter().zip(&mut checked).enumerate() {
+                    *out = ctx.point(&format!("{field}[{k}]"), *p)?;
                 }
+                let v = checked;
                 let m = ctx.placement(&prefix, q.scale, q.translate)?;
                 mesh.push_quad(v.map(|p| m.transform_point3(p)), material);
             }
@@ -213,11 +297,11 @@ pub(crate) fn build(
                     &materials,
                     shape.type_name(),
                 )?;
-                let lo = ctx.finite(
+                let lo = ctx.point(
                     &format!("{prefix}.min"),
                     ctx.required(&format!("{prefix}.min"), b.min, "[x, y, z] in metres")?,
                 )?;
-                let hi = ctx.finite(
+                let hi = ctx.point(
                     &format!("{prefix}.max"),
                     ctx.required(&format!("{prefix}.max"), b.max, "[x, y, z] in metres")?,
                 )?;
@@ -253,8 +337,10 @@ pub(crate) fn build(
                     &materials,
                     shape.type_name(),
                 )?;
-                let center =
-                    ctx.finite(&format!("{prefix}.center"), s.center.unwrap_or(Vec3::ZERO))?;
+                let center = ctx.point(
+                    &format!("{prefix}.center"),
+                    s.center.unwrap_or(Point([0.0; 3])),
+                )?;
                 let radius = ctx.required(&format!("{prefix}.radius"), s.radius, "metres")?;
                 let radius = ctx.positive(&format!("{prefix}.radius"), radius, "metres")?;
                 let freq = ctx.count(
@@ -304,7 +390,10 @@ pub(crate) fn build(
                 let part = load_gltf(&origin, post, override_material, &mut materials)?;
                 report.gltf_files.push(path.clone());
                 report.skipped_primitives += part.skipped_primitives;
+                report.strips_and_fans += part.strips_and_fans;
                 report.skipped_lights += part.skipped_lights;
+                report.skipped_cameras += part.skipped_cameras;
+                report.textured_materials += part.textured_materials;
                 report.flat_primitives += part.flat_primitives;
                 lights.extend(part.lights);
                 mesh = part.mesh;
@@ -337,6 +426,13 @@ pub(crate) fn build(
 
     let mesh = merge(&ctx, parts)?;
     let geometry = Geometry::new(mesh).map_err(|e| match e {
+        GeometryError::Empty if report.skipped_primitives > 0 => ctx.bad(
+            "shape",
+            format!(
+                "the scene has no triangle with positive area ({} glTF point or line primitive(s) were skipped)",
+                report.skipped_primitives
+            ),
+        ),
         GeometryError::Empty => ctx.bad("shape", "the scene has no triangle with positive area"),
         other => ctx.bad("shape", other.to_string()),
     })?;
@@ -345,17 +441,16 @@ pub(crate) fn build(
     let extent = (hi - lo).max_element();
     let radius = match settings.radius {
         Some(r) => r,
-        None => {
-            let r = default_radius(extent);
-            if !(r.is_finite() && r > 0.0) {
-                return Err(ctx.bad(
-                    "render.radius",
-                    format!("cannot derive a default from the scene extent {extent} m; give one"),
-                ));
-            }
-            r
-        }
+        None => check_radius(default_radius(extent)).map_err(|e| {
+            ctx.bad(
+                "render.radius",
+                format!(
+                    "cannot derive a default from the scene extent {extent:e} m ({e}); give one"
+                ),
+            )
+        })?,
     };
+    report.radius_given = settings.radius.is_some();
     settings.radius = Some(radius);
 
     let camera = camera(&ctx, file.camera, settings.width, settings.height)?;
@@ -452,7 +547,7 @@ fn materials(
         let bdf = if gr == Vec3::ZERO {
             if let Some(d) = def.delta {
                 // A lobe width without a lobe is harmless but still must be a number.
-                let _ = ctx.count(
+                let _ = ctx.within(
                     &format!("{prefix}.delta"),
                     d,
                     limits::DELTA_MIN_DEGREES,
@@ -466,7 +561,7 @@ fn materials(
                 def.delta,
                 "lobe width in degrees, needed because gr > 0",
             )?;
-            let delta = ctx.count(
+            let delta = ctx.within(
                 &format!("{prefix}.delta"),
                 delta,
                 limits::DELTA_MIN_DEGREES,
@@ -489,7 +584,19 @@ fn render_settings(
     r: RenderDef,
 ) -> Result<(RenderSettings, Option<PathBuf>), LoadError> {
     let d = RenderSettings::default();
-    let [width, height] = r.resolution.unwrap_or([d.width, d.height]);
+    let [width, height] = match r.resolution.as_deref() {
+        None => [d.width, d.height],
+        Some(&[w, h]) => [w, h],
+        Some(other) => {
+            return Err(ctx.bad(
+                "render.resolution",
+                format!(
+                    "{} values given; expected [width, height] in pixels",
+                    other.len()
+                ),
+            ));
+        }
+    };
     let _ = ctx.count("render.resolution[0]", width, 1, limits::MAX_RESOLUTION)?;
     let _ = ctx.count("render.resolution[1]", height, 1, limits::MAX_RESOLUTION)?;
     let mode = match r.mode {
@@ -518,7 +625,10 @@ fn render_settings(
     };
     let radius = match r.radius {
         None => None,
-        Some(v) => Some(ctx.positive("render.radius", v, "metres")?),
+        Some(v) => {
+            let r = ctx.positive("render.radius", v, "metres")?;
+            Some(check_radius(r).map_err(|e| ctx.bad("render.radius", e))?)
+        }
     };
     let threshold_radius = match r.threshold_radius {
         None => d.threshold_radius,
@@ -551,7 +661,12 @@ fn render_settings(
         },
         pixel_table_rays: match r.pixel_table_rays {
             None => d.pixel_table_rays,
-            Some(n) => Some(ctx.count("render.pixel_table_rays", n, 1, u32::MAX)?),
+            Some(n) => Some(ctx.count(
+                "render.pixel_table_rays",
+                n,
+                1,
+                limits::MAX_PIXEL_TABLE_RAYS,
+            )?),
         },
         clamp_weights: r.clamp_weights.unwrap_or(d.clamp_weights),
         pixel_jitter: r.pixel_jitter.unwrap_or(d.pixel_jitter),
@@ -577,19 +692,23 @@ fn camera(
 ) -> Result<Camera, LoadError> {
     let def =
         def.ok_or_else(|| ctx.bad("camera", "missing [camera] table (position, look_at, vfov)"))?;
-    let position = ctx.finite(
+    let position = ctx.point(
         "camera.position",
         ctx.required("camera.position", def.position, "[x, y, z] in metres")?,
     )?;
-    let look_at = ctx.finite(
+    let look_at = ctx.point(
         "camera.look_at",
         ctx.required("camera.look_at", def.look_at, "[x, y, z] in metres")?,
     )?;
-    let up = ctx.finite("camera.up", def.up.unwrap_or(Vec3::Y))?;
+    let up = ctx.point("camera.up", def.up.unwrap_or(Point([0.0, 1.0, 0.0])))?;
     let vfov = ctx.required("camera.vfov", def.vfov, "vertical field of view in degrees")?;
     if !(vfov.is_finite() && vfov > 0.0 && vfov < 179.0) {
-        return Err(ctx.bad("camera.vfov", format!("{vfov} is outside (0, 179) degrees")));
+        return Err(ctx.bad(
+            "camera.vfov",
+            format!("{} is outside (0, 179) degrees", num(vfov)),
+        ));
     }
+    let vfov = vfov as f32;
     if position == look_at {
         return Err(ctx.bad(
             "camera.look_at",

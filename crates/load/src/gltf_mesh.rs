@@ -35,10 +35,16 @@ pub(crate) struct GltfPart {
     /// Triangles; `normals` is either one per vertex (zero = flat) or empty.
     pub(crate) mesh: TriangleMesh,
     pub(crate) lights: Vec<PointLight>,
-    /// Primitives that are not triangle lists (points, lines, strips, fans): skipped.
+    /// Point and line primitives: skipped.
     pub(crate) skipped_primitives: usize,
+    /// Triangle strips and fans, converted to triangle lists.
+    pub(crate) strips_and_fans: usize,
     /// Spot and directional lights: skipped (bdpm has isotropic point lights only).
     pub(crate) skipped_lights: usize,
+    /// Nodes with a camera: ignored.
+    pub(crate) skipped_cameras: usize,
+    /// Materials used by this file's primitives that have a base-colour texture (ignored).
+    pub(crate) textured_materials: usize,
     /// Triangle primitives without normals, shaded flat as glTF requires.
     pub(crate) flat_primitives: usize,
 }
@@ -72,7 +78,8 @@ pub(crate) fn load_gltf(
     material: Option<u32>,
     materials: &mut Materials,
 ) -> Result<GltfPart, LoadError> {
-    let bytes = std::fs::read(origin.path).map_err(|e| origin.err(format!("cannot read: {e}")))?;
+    let bytes = crate::files::read_regular(origin.path, crate::limits::MAX_GLTF_BYTES, "glTF file")
+        .map_err(|e| origin.err(e))?;
     let invalid = |e: gltf::Error| origin.err(format!("not a valid glTF 2.0 file: {e}"));
     let raw = gltf::Gltf::from_slice_without_validation(&bytes).map_err(invalid)?;
     // gltf-json 1.4's validator indexes the accessor list with a primitive's POSITION index
@@ -134,16 +141,34 @@ pub(crate) fn load_gltf(
         if let Some(mesh) = node.mesh() {
             for prim in mesh.primitives() {
                 let what = format!("mesh {} primitive {}", mesh.index(), prim.index());
-                if prim.mode() != Mode::Triangles {
-                    part.skipped_primitives += 1;
-                    continue;
+                match prim.mode() {
+                    Mode::Triangles => {}
+                    Mode::TriangleStrip | Mode::TriangleFan => part.strips_and_fans += 1,
+                    Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip => {
+                        part.skipped_primitives += 1;
+                        continue;
+                    }
                 }
                 let m = match material {
                     Some(m) => m,
-                    None => primitive_material(origin, &prim, &mut material_map, materials)?,
+                    None => primitive_material(
+                        origin,
+                        &prim,
+                        &mut material_map,
+                        materials,
+                        &mut part.textured_materials,
+                    )?,
                 };
                 add_primitive(origin, &what, &prim, &buffers, world, m, &mut part)?;
             }
+        }
+        if doc
+            .as_json()
+            .nodes
+            .get(node.index())
+            .is_some_and(|n| n.camera.is_some())
+        {
+            part.skipped_cameras += 1;
         }
         if let Some(light) = node_light(doc, &node) {
             match light.type_ {
@@ -202,12 +227,14 @@ fn node_light<'a>(
 
 /// The scene material of a primitive: the TOML material of the same name if there is one,
 /// otherwise a Lambert material from the base colour, or the shared default (kd = 0.8) when
-/// the primitive has none.
+/// the primitive has none. A material with a base-colour texture is counted in `textured`
+/// (once, when first met): the texture is ignored.
 fn primitive_material(
     origin: &Origin<'_>,
     prim: &gltf::Primitive<'_>,
     map: &mut HashMap<usize, u32>,
     materials: &mut Materials,
+    textured: &mut usize,
 ) -> Result<u32, LoadError> {
     let mat = prim.material();
     let Some(index) = mat.index() else {
@@ -219,6 +246,9 @@ fn primitive_material(
     let m = if let Some(m) = mat.name().and_then(|name| materials.lookup(name)) {
         m
     } else {
+        if mat.pbr_metallic_roughness().base_color_texture().is_some() {
+            *textured += 1;
+        }
         let name = match mat.name() {
             Some(name) => name.to_string(),
             None => format!("gltf:{}#{index}", origin.written.display()),
@@ -326,6 +356,22 @@ fn add_primitive(
             }
         }
         None => (0..positions.len() as u32).collect(),
+    };
+    // Strips and fans become lists (glTF 2.0 §3.7.2.1): strip triangle i is
+    // (v[i], v[i+1+i%2], v[i+2-i%2]), which keeps every triangle's winding; fan triangle i is
+    // (v[i+1], v[i+2], v[0]). Degenerate triangles that stitch strips have zero area and are
+    // left out of the BVH like any other.
+    let indices: Vec<u32> = match prim.mode() {
+        Mode::TriangleStrip => (0..indices.len().saturating_sub(2))
+            .flat_map(|i| {
+                let odd = i % 2;
+                [indices[i], indices[i + 1 + odd], indices[i + 2 - odd]]
+            })
+            .collect(),
+        Mode::TriangleFan => (1..indices.len().saturating_sub(1))
+            .flat_map(|i| [indices[i], indices[i + 1], indices[0]])
+            .collect(),
+        _ => indices,
     };
     if !indices.len().is_multiple_of(3) {
         return Err(err(format!(
@@ -467,12 +513,20 @@ fn load_buffers(origin: &Origin<'_>, gltf: &gltf::Gltf) -> Result<Vec<Vec<u8>>, 
             }
             gltf::buffer::Source::Uri(uri) => {
                 let dir = origin.path.parent().unwrap_or(Path::new(""));
-                let file: PathBuf = dir.join(uri);
-                std::fs::read(&file).map_err(|e| LoadError::Gltf {
-                    path: file.clone(),
-                    field: format!("{}, buffer {i} of {}", origin.field, origin.path.display()),
-                    message: format!("cannot read: {e}"),
-                })?
+                let file: PathBuf = crate::files::confined_uri(dir, uri)
+                    .map_err(|e| origin.err(format!("buffer {i}: {e}")))?;
+                // Only the declared bytes are needed; a longer file is read no further.
+                let limit = (buffer.length() as u64).min(crate::limits::MAX_GLTF_BYTES);
+                crate::files::read_regular(&file, crate::limits::MAX_GLTF_BYTES, "glTF buffer")
+                    .map(|mut bytes| {
+                        bytes.truncate(limit as usize);
+                        bytes
+                    })
+                    .map_err(|message| LoadError::Gltf {
+                        path: file.clone(),
+                        field: format!("{}, buffer {i} of {}", origin.field, origin.path.display()),
+                        message,
+                    })?
             }
         };
         if data.len() < buffer.length() {

@@ -46,6 +46,7 @@
 
 mod build;
 mod error;
+mod files;
 mod gltf_mesh;
 mod schema;
 mod shapes;
@@ -74,6 +75,14 @@ pub mod limits {
     pub const DELTA_MIN_DEGREES: f32 = 0.05;
     /// Widest lobe width Δ, degrees.
     pub const DELTA_MAX_DEGREES: f32 = 90.0;
+    /// Most backward rays per pixel of the A/B pre-pass (256 times the default of 64). The
+    /// pre-pass shows no progress, and 4·10⁹ rays per pixel would run for days.
+    pub const MAX_PIXEL_TABLE_RAYS: u32 = 16384;
+    /// Largest scene (TOML) file, bytes. Real scenes are kilobytes; the cap stops a device
+    /// such as `/dev/zero` given as the scene from being read until memory runs out.
+    pub const MAX_SCENE_FILE_BYTES: u64 = 256 << 20;
+    /// Largest glTF or GLB file, and largest external glTF buffer, bytes (2 GiB).
+    pub const MAX_GLTF_BYTES: u64 = 2 << 30;
 }
 
 /// Lambert albedo of glTF primitives that have no material.
@@ -113,19 +122,66 @@ pub struct LoadReport {
     pub computed_normals: usize,
     /// glTF triangle primitives without normals, shaded flat.
     pub flat_primitives: usize,
-    /// glTF primitives skipped because they are not triangle lists (points, lines, strips,
-    /// fans).
+    /// glTF primitives skipped because they are points or lines (modes 0–3), which have no
+    /// area to render.
     pub skipped_primitives: usize,
+    /// glTF triangle strips and fans, converted to triangle lists.
+    pub strips_and_fans: usize,
     /// glTF spot and directional lights skipped (bdpm has isotropic point lights only).
     pub skipped_lights: usize,
+    /// glTF cameras ignored (the scene file's `[camera]` is used).
+    pub skipped_cameras: usize,
+    /// glTF materials with a base-colour texture, which is ignored: such a material uses its
+    /// `baseColorFactor` alone (white when the file gives none).
+    pub textured_materials: usize,
+    /// Whether `[render].radius` was given; otherwise the settings hold the scene default.
+    pub radius_given: bool,
+}
+
+impl LoadReport {
+    /// One line for each kind of glTF content that was skipped or simplified, for the
+    /// driver to print as warnings; empty when nothing was.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        if self.skipped_primitives > 0 {
+            out.push(format!(
+                "glTF: {} point or line primitive(s) skipped (only triangles are rendered)",
+                self.skipped_primitives
+            ));
+        }
+        if self.skipped_lights > 0 {
+            out.push(format!(
+                "glTF: {} spot or directional light(s) skipped (bdpm has isotropic point lights only)",
+                self.skipped_lights
+            ));
+        }
+        if self.skipped_cameras > 0 {
+            out.push(format!(
+                "glTF: {} camera(s) ignored (the scene file's [camera] is used)",
+                self.skipped_cameras
+            ));
+        }
+        if self.textured_materials > 0 {
+            out.push(format!(
+                "glTF: {} material(s) have a base-colour texture, which is ignored: they use \
+                 baseColorFactor alone (white when not given)",
+                self.textured_materials
+            ));
+        }
+        out
+    }
 }
 
 /// Loads the scene file at `path`; glTF files it names are found relative to its directory.
+/// The file must be a regular file of at most [`limits::MAX_SCENE_FILE_BYTES`].
 pub fn load_scene(path: &Path) -> Result<LoadedScene, LoadError> {
-    let text = std::fs::read_to_string(path).map_err(|source| LoadError::Read {
+    let read_error = |message: String| LoadError::Read {
         path: path.to_path_buf(),
-        source,
-    })?;
+        source: std::io::Error::other(message.trim_start_matches("cannot read: ").to_string()),
+    };
+    let bytes = files::read_regular(path, limits::MAX_SCENE_FILE_BYTES, "scene file")
+        .map_err(read_error)?;
+    let text = String::from_utf8(bytes).map_err(|e| read_error(format!("not UTF-8 text: {e}")))?;
     let base_dir = path.parent().unwrap_or(Path::new(""));
     load_scene_str(&text, base_dir, path)
 }
@@ -141,14 +197,36 @@ pub fn load_scene_str(
         let (line, column) = e
             .span()
             .map_or((1, 1), |span| line_column(toml_text, span.start));
+        let mut message = e.message().trim().replace('\n', " ");
+        // The parser says only "duplicate key"; the key is the text its span points at.
+        if message == "duplicate key"
+            && let Some(key) = e.span().and_then(|span| spanned_key(toml_text, span))
+        {
+            message = format!("duplicate key `{key}`");
+        }
         LoadError::Syntax {
             path: display_path.to_path_buf(),
             line,
             column,
-            message: e.message().trim().replace('\n', " "),
+            message,
         }
     })?;
     build::build(file, base_dir, display_path)
+}
+
+/// The key that `span` of `text` points at (the start of a `key = value` line or a
+/// `[table]` header), if it looks like one.
+fn spanned_key(text: &str, span: std::ops::Range<usize>) -> Option<String> {
+    let rest = text.get(span.start..)?;
+    let line = rest.lines().next()?;
+    let key = line
+        .split('=')
+        .next()?
+        .trim()
+        .trim_start_matches('[')
+        .trim_end_matches(']')
+        .trim();
+    (!key.is_empty() && key.len() <= 100).then(|| key.to_string())
 }
 
 /// 1-based line and character column of byte `offset` in `text`.

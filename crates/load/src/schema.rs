@@ -8,7 +8,6 @@ use std::collections::BTreeMap;
 use std::fmt;
 use std::path::PathBuf;
 
-use glam::Vec3;
 use serde::Deserialize;
 use serde::de::{self, Deserializer, SeqAccess, Visitor};
 
@@ -31,15 +30,16 @@ pub(crate) struct SceneFile {
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RenderDef {
-    pub(crate) resolution: Option<[u32; 2]>,
+    /// `[width, height]`; a `Vec` so that a wrong count is reported rather than truncated.
+    pub(crate) resolution: Option<Vec<u32>>,
     pub(crate) passes: Option<u32>,
     pub(crate) photons: Option<u64>,
     pub(crate) spp: Option<u32>,
-    pub(crate) radius: Option<f32>,
+    pub(crate) radius: Option<f64>,
     pub(crate) seed: Option<u64>,
     pub(crate) mode: Option<String>,
     pub(crate) output: Option<PathBuf>,
-    pub(crate) threshold_radius: Option<f32>,
+    pub(crate) threshold_radius: Option<f64>,
     pub(crate) cache_bins: Option<u32>,
     pub(crate) cache_photons: Option<u64>,
     pub(crate) pixel_table_rays: Option<u32>,
@@ -53,17 +53,17 @@ pub(crate) struct RenderDef {
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct CameraDef {
-    pub(crate) position: Option<Vec3>,
-    pub(crate) look_at: Option<Vec3>,
-    pub(crate) up: Option<Vec3>,
-    pub(crate) vfov: Option<f32>,
+    pub(crate) position: Option<Point>,
+    pub(crate) look_at: Option<Point>,
+    pub(crate) up: Option<Point>,
+    pub(crate) vfov: Option<f64>,
 }
 
 /// One `[[light]]`.
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct LightDef {
-    pub(crate) position: Option<Vec3>,
+    pub(crate) position: Option<Point>,
     pub(crate) flux: Option<Triple>,
 }
 
@@ -73,7 +73,7 @@ pub(crate) struct LightDef {
 pub(crate) struct MaterialDef {
     pub(crate) kd: Option<Triple>,
     pub(crate) gr: Option<Triple>,
-    pub(crate) delta: Option<f32>,
+    pub(crate) delta: Option<f64>,
 }
 
 /// One `[[shape]]`, told apart by its `type` key.
@@ -102,32 +102,32 @@ impl ShapeDef {
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct QuadDef {
-    pub(crate) vertices: Option<Vec<Vec3>>,
+    pub(crate) vertices: Option<Vec<Point>>,
     pub(crate) material: Option<String>,
     pub(crate) scale: Option<Triple>,
-    pub(crate) translate: Option<Vec3>,
+    pub(crate) translate: Option<Point>,
 }
 
 /// `type = "box"`.
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct BoxDef {
-    pub(crate) min: Option<Vec3>,
-    pub(crate) max: Option<Vec3>,
+    pub(crate) min: Option<Point>,
+    pub(crate) max: Option<Point>,
     pub(crate) material: Option<String>,
     #[serde(default)]
     pub(crate) open: Vec<String>,
     pub(crate) facing: Option<String>,
     pub(crate) scale: Option<Triple>,
-    pub(crate) translate: Option<Vec3>,
+    pub(crate) translate: Option<Point>,
 }
 
 /// `type = "sphere"`.
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct SphereDef {
-    pub(crate) center: Option<Vec3>,
-    pub(crate) radius: Option<f32>,
+    pub(crate) center: Option<Point>,
+    pub(crate) radius: Option<f64>,
     pub(crate) subdivisions: Option<u32>,
     pub(crate) material: Option<String>,
     pub(crate) facing: Option<String>,
@@ -140,14 +140,60 @@ pub(crate) struct MeshDef {
     pub(crate) file: Option<PathBuf>,
     pub(crate) material: Option<String>,
     pub(crate) scale: Option<Triple>,
-    pub(crate) translate: Option<Vec3>,
+    pub(crate) translate: Option<Point>,
+}
+
+/// A point or vector written as exactly three numbers `[x, y, z]`. Kept in f64 as written,
+/// so that validation sees the value the user typed (1e300, not its f32 rounding `inf`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Point(pub(crate) [f64; 3]);
+
+impl<'de> Deserialize<'de> for Point {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct PointVisitor;
+
+        impl<'de> Visitor<'de> for PointVisitor {
+            type Value = Point;
+
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("an array of exactly 3 numbers [x, y, z]")
+            }
+
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Point, A::Error> {
+                exactly_three(seq, &self).map(Point)
+            }
+        }
+
+        d.deserialize_seq(PointVisitor)
+    }
+}
+
+/// Reads exactly three numbers from `seq`: fewer or more is an error naming the count.
+fn exactly_three<'de, A: SeqAccess<'de>>(
+    mut seq: A,
+    expected: &dyn de::Expected,
+) -> Result<[f64; 3], A::Error> {
+    let mut c = [0.0f64; 3];
+    for (k, slot) in c.iter_mut().enumerate() {
+        *slot = seq
+            .next_element::<f64>()?
+            .ok_or_else(|| de::Error::invalid_length(k, expected))?;
+    }
+    let mut n = 3;
+    while seq.next_element::<de::IgnoredAny>()?.is_some() {
+        n += 1;
+    }
+    if n > 3 {
+        return Err(de::Error::invalid_length(n, expected));
+    }
+    Ok(c)
 }
 
 /// Three numbers written either as `[a, b, c]` or as one number `a` meaning `[a, a, a]`
-/// (colours, fluxes, scale factors).
+/// (colours, fluxes, scale factors), kept in f64 as written.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Triple {
-    pub(crate) value: Vec3,
+    pub(crate) value: [f64; 3],
     /// True when written as one number, so that messages can quote it as written.
     pub(crate) scalar: bool,
 }
@@ -165,7 +211,7 @@ impl<'de> Deserialize<'de> for Triple {
 
             fn visit_f64<E: de::Error>(self, v: f64) -> Result<Triple, E> {
                 Ok(Triple {
-                    value: Vec3::splat(v as f32),
+                    value: [v; 3],
                     scalar: true,
                 })
             }
@@ -178,18 +224,9 @@ impl<'de> Deserialize<'de> for Triple {
                 self.visit_f64(v as f64)
             }
 
-            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Triple, A::Error> {
-                let mut c = [0.0f32; 3];
-                for (k, slot) in c.iter_mut().enumerate() {
-                    *slot = seq
-                        .next_element::<f32>()?
-                        .ok_or_else(|| de::Error::invalid_length(k, &self))?;
-                }
-                if seq.next_element::<de::IgnoredAny>()?.is_some() {
-                    return Err(de::Error::invalid_length(4, &self));
-                }
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Triple, A::Error> {
                 Ok(Triple {
-                    value: Vec3::from_array(c),
+                    value: exactly_three(seq, &self)?,
                     scalar: false,
                 })
             }

@@ -321,3 +321,86 @@ fn garbage_never_panics() {
         }
     }
 }
+
+// ---- Issue 15: validation in the precision the renderer uses; nothing dropped in silence.
+
+#[test]
+fn extra_values_in_fixed_size_arrays_are_refused() {
+    let m = error_of(&with("resolution = [32, 32]", "resolution = [32, 32, 3]"));
+    assert!(
+        m.contains("render.resolution") && m.contains("3 values"),
+        "{m}"
+    );
+    let m = error_of(&with(
+        "position = [0.0, 0.5, 0.0]",
+        "position = [0.0, 0.5, 0.0, 7.0]",
+    ));
+    assert!(
+        m.contains("exactly 3 numbers") && m.contains("invalid length 4"),
+        "{m}"
+    );
+    let m = error_of(&with("kd = [0.6, 0.1, 0.1]", "kd = [0.6, 0.1, 0.1, 0.1]"));
+    assert!(m.contains("invalid length 4"), "{m}");
+}
+
+#[test]
+fn numbers_are_reported_as_written_not_after_f32_rounding() {
+    let m = error_of(&with(
+        "position = [0.0, 0.5, 0.0]",
+        "position = [1e300, 0.5, 0.0]",
+    ));
+    assert!(
+        m.contains("light[0].position") && m.contains("1e300"),
+        "{m}"
+    );
+    assert!(!m.contains("inf"), "{m}");
+    let m = error_of(&with("vfov = 40.0", "vfov = 1e300"));
+    assert!(m.contains("camera.vfov: 1e300 is outside"), "{m}");
+    let m = error_of(&with("passes = 1", "passes = 1\nradius = 1e300"));
+    assert!(m.contains("render.radius: 1e300"), "{m}");
+}
+
+#[test]
+fn subnormal_and_unusably_small_radii_are_refused() {
+    // Subnormal in f32: 1/(2r) is infinite, which crashed the photon grid.
+    let m = error_of(&with("passes = 1", "passes = 1\nradius = 1e-39"));
+    assert!(
+        m.contains("render.radius: 1e-39") && m.contains("normal"),
+        "{m}"
+    );
+    // Normal in f32, but r² underflows and 1/(πr²) is infinite.
+    let m = error_of(&with("passes = 1", "passes = 1\nradius = 1e-30"));
+    assert!(
+        m.contains("render.radius") && m.contains("smallest usable"),
+        "{m}"
+    );
+    // The smallest accepted radius loads.
+    let ok = with("passes = 1", "passes = 1\nradius = 1e-18");
+    assert!(load_scene_str(&ok, Path::new("scenes"), Path::new("scenes/bad.toml")).is_ok());
+}
+
+#[test]
+fn a_duplicate_key_is_named() {
+    let m = error_of(&with("passes = 1", "passes = 1\npasses = 2"));
+    assert!(m.contains("duplicate key `passes`"), "{m}");
+}
+
+#[test]
+fn pixel_table_rays_are_capped() {
+    let m = error_of(&with(
+        "passes = 1",
+        "passes = 1\npixel_table_rays = 4000000000",
+    ));
+    assert!(
+        m.contains("render.pixel_table_rays") && m.contains("16384"),
+        "{m}"
+    );
+}
+
+#[test]
+fn the_report_says_whether_the_radius_was_given() {
+    let load = |t: &str| load_scene_str(t, Path::new("scenes"), Path::new("scenes/x.toml"));
+    assert!(!load(GOOD).expect("valid").report.radius_given);
+    let given = with("passes = 1", "passes = 1\nradius = 0.01");
+    assert!(load(&given).expect("valid").report.radius_given);
+}

@@ -366,3 +366,258 @@ fn truncated_and_corrupted_files_never_panic() {
         }
     }
 }
+
+// ---- Issue 15: strips and fans, reported skips, confined buffer URIs, real files.
+
+/// glTF using the unit quad's positions (accessor 0) as a strip, a fan and points, with a
+/// textured material on the strip and a camera node.
+fn modes_json(buffer_uri: &str) -> String {
+    format!(
+        r#"{{
+  "asset": {{ "version": "2.0" }},
+  "buffers": [ {{ "byteLength": 108, "uri": "{buffer_uri}" }} ],
+  "bufferViews": [ {{ "buffer": 0, "byteOffset": 0, "byteLength": 48 }} ],
+  "accessors": [
+    {{ "bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0] }}
+  ],
+  "images": [ {{ "uri": "wood.png" }} ],
+  "textures": [ {{ "source": 0 }} ],
+  "materials": [
+    {{ "name": "wood", "pbrMetallicRoughness": {{ "baseColorTexture": {{ "index": 0 }} }} }}
+  ],
+  "cameras": [ {{ "type": "perspective", "perspective": {{ "yfov": 0.8, "znear": 0.1 }} }} ],
+  "meshes": [
+    {{ "primitives": [ {{ "attributes": {{ "POSITION": 0 }}, "mode": 5, "material": 0 }} ] }},
+    {{ "primitives": [ {{ "attributes": {{ "POSITION": 0 }}, "mode": 6 }} ] }},
+    {{ "primitives": [ {{ "attributes": {{ "POSITION": 0 }}, "mode": 0 }} ] }}
+  ],
+  "nodes": [
+    {{ "mesh": 0 }},
+    {{ "mesh": 1, "translation": [0, 0, 1] }},
+    {{ "mesh": 2 }},
+    {{ "camera": 0, "translation": [0, 0, 5] }}
+  ],
+  "scenes": [ {{ "nodes": [0, 1, 2, 3] }} ]
+}}"#
+    )
+}
+
+/// A scene file with a light that places `file` as it is.
+fn plain_scene(file: &str) -> String {
+    format!(
+        r#"
+[camera]
+position = [0.5, 0.5, -3.0]
+look_at = [0.5, 0.5, 0.0]
+vfov = 40
+
+[[light]]
+position = [0.5, 0.5, -1.0]
+flux = 1.0
+
+[[shape]]
+type = "gltf"
+file = "{file}"
+"#
+    )
+}
+
+fn load_in(dir: &Path, gltf_name: &str, gltf: &str) -> Result<LoadedScene, LoadError> {
+    std::fs::write(dir.join(gltf_name), gltf).expect("write gltf");
+    let toml = dir.join("scene.toml");
+    std::fs::write(&toml, plain_scene(gltf_name)).expect("write toml");
+    load_scene(&toml)
+}
+
+#[test]
+fn strips_and_fans_become_triangle_lists_and_skips_are_counted() {
+    let dir = temp_dir("modes");
+    std::fs::write(dir.join("quad.bin"), buffer_bytes()).expect("write bin");
+    let s = load_in(&dir, "m.gltf", &modes_json("quad.bin")).expect("loads");
+    // Strip (0,1,2), (1,3,2) and fan (1,2,0), (2,3,0): four triangles; the points skipped.
+    assert_eq!(s.report.triangles, 4);
+    assert_eq!(s.report.strips_and_fans, 2);
+    assert_eq!(s.report.skipped_primitives, 1);
+    assert_eq!(s.report.skipped_cameras, 1);
+    assert_eq!(s.report.textured_materials, 1);
+    let warnings = s.report.warnings();
+    assert_eq!(warnings.len(), 3, "{warnings:?}");
+    assert!(warnings.iter().any(|w| w.contains("base-colour texture")));
+    // The strip's triangles are the specification's (v0, v1, v2), (v1, v3, v2); the fan's
+    // (v1, v2, v0), (v2, v3, v0), both facing +z like the quad.
+    let g = &s.scene.geometry;
+    let q = [
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+    ];
+    let up = Vec3::Z;
+    let mut expected = vec![[q[0], q[1], q[2]], [q[1], q[3], q[2]]];
+    expected.extend([[q[1], q[2], q[0]], [q[2], q[3], q[0]]].map(|t| t.map(|v| v + up)));
+    let mut found: Vec<[Vec3; 3]> = (0..4).map(|k| g.vertices(k)).collect();
+    found.sort_by(|a, b| format!("{a:?}").cmp(&format!("{b:?}")));
+    expected.sort_by(|a, b| format!("{a:?}").cmp(&format!("{b:?}")));
+    assert_eq!(found, expected);
+    for k in 0..4 {
+        let [a, b, c] = g.vertices(k);
+        if a.z == 1.0 {
+            assert!((b - a).cross(c - a).z > 0.0, "fan triangle {k} flipped");
+        }
+    }
+    // The fan (at z = 1) covers the whole quad: both diagonals' halves are hit.
+    for (x, y) in [(0.8, 0.2), (0.2, 0.8)] {
+        let hit = g
+            .intersect(Vec3::new(x, y, 0.5), Vec3::Z, f32::INFINITY)
+            .expect("fan hit");
+        assert!((hit.p.z - 1.0).abs() < 1e-6);
+    }
+}
+
+#[test]
+fn buffer_uris_are_confined_to_the_gltf_directory() {
+    let dir = temp_dir("confine");
+    let sub = dir.join("models");
+    std::fs::create_dir_all(&sub).expect("mkdir");
+    std::fs::write(dir.join("outside.bin"), buffer_bytes()).expect("write");
+    std::fs::write(sub.join("quad.bin"), buffer_bytes()).expect("write");
+    let load = |uri: &str| {
+        std::fs::write(sub.join("m.gltf"), modes_json(uri)).expect("write gltf");
+        let toml = dir.join("scene.toml");
+        std::fs::write(&toml, plain_scene("models/m.gltf")).expect("write toml");
+        load_scene(&toml).map(|_| ()).map_err(|e| e.to_string())
+    };
+    assert_eq!(load("quad.bin"), Ok(()));
+    assert_eq!(load("./quad%2Ebin"), Ok(()));
+    let outside = dir.join("outside.bin");
+    for (uri, needle) in [
+        ("../outside.bin", "'..'"),
+        ("%2E%2E/outside.bin", "'..'"),
+        (outside.to_str().expect("utf-8"), "absolute"),
+        ("file:///etc/hostname", "scheme"),
+    ] {
+        let e = load(uri).expect_err(uri);
+        assert!(e.contains("buffer 0") && e.contains(needle), "{uri}: {e}");
+        assert!(e.contains("models/m.gltf") && !e.contains('\n'), "{e}");
+    }
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::symlink(&outside, sub.join("link.bin")).expect("symlink");
+        let e = load("link.bin").expect_err("symlink out");
+        assert!(e.contains("outside the glTF file's directory"), "{e}");
+        // A FIFO as the buffer or as the glTF file must not hang the loader, and an endless
+        // device must not be read.
+        let fifo = sub.join("fifo.bin");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        if made.is_ok_and(|s| s.success()) {
+            let e = load("fifo.bin").expect_err("fifo buffer");
+            assert!(e.contains("not a regular file"), "{e}");
+            let toml = dir.join("fifo.toml");
+            std::fs::write(&toml, plain_scene("models/fifo.bin")).expect("write toml");
+            let e = load_scene(&toml).expect_err("fifo gltf").to_string();
+            assert!(e.contains("not a regular file"), "{e}");
+        }
+        let toml = dir.join("zero.toml");
+        std::fs::write(&toml, plain_scene("/dev/zero")).expect("write toml");
+        let e = load_scene(&toml).expect_err("/dev/zero").to_string();
+        assert!(e.contains("not a regular file"), "{e}");
+        let e = load_scene(Path::new("/dev/zero"))
+            .expect_err("scene")
+            .to_string();
+        assert!(
+            e.contains("/dev/zero") && e.contains("not a regular file"),
+            "{e}"
+        );
+    }
+}
+
+/// The glTF 2.0 files of Debian's `assimp-testmodels` package (real exporters' output and
+/// deliberately broken files), when installed: each must load or fail with one line naming
+/// the file, never panic. Prints which load and which fail, with the message.
+#[test]
+fn real_gltf_collection_loads_or_fails_cleanly() {
+    let root = Path::new("/usr/share/assimp/models/glTF2");
+    if !root.is_dir() {
+        eprintln!(
+            "skipped: {} is absent (apt-get install assimp-testmodels to run this test)",
+            root.display()
+        );
+        return;
+    }
+    let mut files = Vec::new();
+    let mut dirs = vec![root.to_path_buf()];
+    while let Some(d) = dirs.pop() {
+        for entry in std::fs::read_dir(&d).expect("read dir").flatten() {
+            let p = entry.path();
+            if p.is_dir() {
+                dirs.push(p);
+            } else if p
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
+            {
+                files.push(p);
+            }
+        }
+    }
+    files.sort();
+    let dir = temp_dir("assimp");
+    let (mut loaded, mut failed) = (0, 0);
+    for file in &files {
+        let toml = dir.join("scene.toml");
+        let text = plain_scene(&file.display().to_string());
+        std::fs::write(&toml, text).expect("write toml");
+        let name = file
+            .strip_prefix(root)
+            .unwrap_or(file)
+            .display()
+            .to_string();
+        match std::panic::catch_unwind(|| load_scene(&toml)) {
+            Err(_) => panic!("{name}: the loader panicked"),
+            Ok(Ok(s)) => {
+                loaded += 1;
+                let r = &s.report;
+                eprintln!(
+                    "loads  {name}: {} triangles, {} strips/fans, skipped {} points/lines, {} lights, {} cameras, {} textured materials",
+                    r.triangles,
+                    r.strips_and_fans,
+                    r.skipped_primitives,
+                    r.skipped_lights,
+                    r.skipped_cameras,
+                    r.textured_materials
+                );
+            }
+            Ok(Err(e)) => {
+                failed += 1;
+                let m = e.to_string();
+                assert!(!m.contains('\n'), "{name}: {m}");
+                // The glTF file, or the scene file when nothing renderable was left.
+                assert!(
+                    m.contains(&file.display().to_string()) || m.contains("scene.toml"),
+                    "{name}: {m}"
+                );
+                eprintln!("fails  {name}: {m}");
+            }
+        }
+    }
+    eprintln!("{loaded} of {} files load, {failed} fail", files.len());
+    assert!(loaded > 0, "none of {} files loaded", files.len());
+    // The asset generator's primitive-mode files: modes 4–6 (triangles, strips, fans) load
+    // with triangles; 0–3 (points, lines) are skipped.
+    let modes = root.join("glTF-Asset-Generator/Mesh_PrimitiveMode");
+    if modes.is_dir() {
+        let mut strips_or_fans = 0;
+        for k in 0..16 {
+            let file = modes.join(format!("Mesh_PrimitiveMode_{k:02}.gltf"));
+            let toml = dir.join("mode.toml");
+            std::fs::write(&toml, plain_scene(&file.display().to_string())).expect("write");
+            if let Ok(s) = load_scene(&toml) {
+                strips_or_fans += s.report.strips_and_fans;
+            }
+        }
+        assert!(
+            strips_or_fans > 0,
+            "no strip or fan found in {}",
+            modes.display()
+        );
+    }
+}

@@ -116,7 +116,10 @@ impl HashGrid {
             points.len() < u32::MAX as usize,
             "photon map holds at most 2³² − 2 photons"
         );
-        let inv_cell = 1.0 / (2.0 * radius);
+        // A subnormal radius (below ~1e-38 m) would make 1/(2r) infinite; then the touched
+        // cells span the whole i64 range and the ≤ 8-cell query overflows its arrays. The
+        // loader rejects such radii; this keeps the grid sound for any positive radius.
+        let inv_cell = (0.5 / radius).min(f32::MAX);
         let buckets = points.len().max(1).next_power_of_two();
         let mask = buckets as u64 - 1;
         // Hashing is the only per-point arithmetic worth spreading over threads; the counting
@@ -168,9 +171,9 @@ impl HashGrid {
         let mut buckets = [u32::MAX; 27];
         let mut live = [false; 27];
         let mut n = 0;
-        for cx in lo[0]..=hi[0].min(lo[0] + 2) {
-            for cy in lo[1]..=hi[1].min(lo[1] + 2) {
-                for cz in lo[2]..=hi[2].min(lo[2] + 2) {
+        for cx in lo[0]..=hi[0].min(lo[0].saturating_add(2)) {
+            for cy in lo[1]..=hi[1].min(lo[1].saturating_add(2)) {
+                for cz in lo[2]..=hi[2].min(lo[2].saturating_add(2)) {
                     let h = hash([cx, cy, cz]);
                     let b = (h & self.mask) as u32;
                     let occupied = self.filter_has(filter_bit(h, self.filter_mask));
@@ -214,7 +217,9 @@ impl HashGrid {
         }
         let lo = cell_of(x - Vec3::splat(radius), self.inv_cell);
         let hi = cell_of(x + Vec3::splat(radius), self.inv_cell);
-        if (0..3).any(|a| hi[a] - lo[a] > 1) {
+        // Saturating: cell coordinates saturate at ±2⁶³ for absurd positions or radii, and a
+        // wrapped difference would send such a query down the ≤ 8-cell path.
+        if (0..3).any(|a| hi[a].saturating_sub(lo[a]) > 1) {
             q.general = Some((x, radius));
             return;
         }
@@ -324,5 +329,29 @@ impl HashGrid {
     pub(crate) fn memory_bytes(&self) -> u64 {
         (self.starts.capacity() * size_of::<u32>() + self.filter.capacity() * size_of::<u64>())
             as u64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A subnormal radius used to make 1/(2r) infinite, and the query then indexed its
+    /// 8-cell arrays out of bounds (issue 15). It must answer, and find the point it sits on.
+    #[test]
+    fn subnormal_and_tiny_radii_do_not_break_queries() {
+        let points = [Vec3::ZERO, Vec3::new(1.0, -2.0, 3.0), Vec3::splat(-1e6)];
+        for radius in [1e-40f32, f32::MIN_POSITIVE, 1e-30, 1e-3] {
+            let (grid, order) = HashGrid::build(&points, radius);
+            for (k, &x) in points.iter().enumerate() {
+                let mut q = GridQuery::default();
+                grid.start(&mut q, x, radius);
+                let mut found = false;
+                grid.visit(&q, |range| {
+                    found |= order[range].contains(&(k as u32));
+                });
+                assert!(found, "radius {radius:e}: point {k} not found");
+            }
+        }
     }
 }

@@ -1,0 +1,190 @@
+//! The memory a render will need, estimated before anything large is allocated, so that the
+//! driver can refuse a render that would run out of memory after minutes of work.
+//!
+//! Per-pixel and per-photon costs were measured as peak resident memory of `bdpm render` on
+//! the Cornell box (docs/robustness.md, "Memory"): 171 B per pixel for the film, the pass
+//! estimate and the output files being encoded (1024² and 2048², path mode), and 2.2 times
+//! the finished photon map's bytes at the peak of its build (thread-local parts, the merged
+//! copy and the grid's sort arrays, 1 and 4 million photons). The photons stored per emitted
+//! photon and the bytes per stored photon depend on the scene, so a pilot of
+//! [`PILOT_PHOTONS`] photons is traced to measure them.
+
+use bdpm_geometry::Domain;
+use bdpm_mis::NoiseModel;
+use bdpm_photon::{PhotonMap, TraceOptions};
+use bdpm_scene::Scene;
+
+use crate::bdpm::{Techniques, scene_default_radius};
+use crate::settings::{Mode, RenderSettings};
+use crate::table::PixelWeights;
+
+/// Photons traced by the pilot that measures a scene's photons stored per emitted photon.
+pub const PILOT_PHOTONS: u64 = 4096;
+/// Peak bytes per pixel of the film, luminance film, pass estimate and output encoding
+/// (measured: 171 B at 1024² and 2048²), rounded up.
+const BYTES_PER_PIXEL: u64 = 180;
+/// Extra peak bytes per pixel with technique layers: five RGB f64 layers per pass and their
+/// sums (240 B), and their f32 EXR channels and means (180 B).
+const TECHNIQUE_BYTES_PER_PIXEL: u64 = 2 * size_of::<Techniques>() as u64 + 180;
+/// Peak of a photon map's build over its finished size (measured 2.2), rounded up.
+const PHOTON_MAP_PEAK_FACTOR: f64 = 2.3;
+/// Bytes per record while the radiance cache or a light pass collects arrivals: a 12–16 B
+/// record in thread-local parts and their merged copy.
+const ARRIVAL_RECORD_BYTES: f64 = 32.0;
+/// Name of the fixed part of the estimate.
+const BASE_NAME: &str = "program and scene";
+/// Program, scene-independent buffers and thread stacks (measured ~9 MB at 8×8 pixels).
+const BASE_BYTES: u64 = 16 << 20;
+
+/// One part of the estimate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MemoryItem {
+    /// What it is, e.g. `"photon map per pass"`.
+    pub name: &'static str,
+    /// Estimated peak bytes.
+    pub bytes: u64,
+    /// The setting that scales it, for a message that says what to lower, e.g.
+    /// `"--photons"`.
+    pub lower: &'static str,
+}
+
+/// The estimated peak memory of a render: the sum of its items (each at its own peak, which
+/// over-estimates a little because not all peaks coincide).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MemoryEstimate {
+    /// The parts, largest first.
+    pub items: Vec<MemoryItem>,
+    /// Photons stored per photon emitted, as measured by the pilot.
+    pub stored_per_emitted: f64,
+}
+
+impl MemoryEstimate {
+    /// The estimated peak, bytes.
+    pub fn total(&self) -> u64 {
+        self.items.iter().map(|i| i.bytes).sum()
+    }
+
+    /// The largest item that a render setting scales (not the fixed program and scene part):
+    /// the one to name when the estimate is too large.
+    pub fn scalable_largest(&self) -> &MemoryItem {
+        self.items
+            .iter()
+            .find(|i| i.name != BASE_NAME)
+            .unwrap_or(&self.items[0])
+    }
+}
+
+/// Estimates the peak memory of rendering `scene` with `settings` (with technique layers
+/// when `techniques`). Traces a pilot of [`PILOT_PHOTONS`] photons for BDPM and light modes;
+/// allocates nothing in proportion to the resolution or N_F.
+pub fn estimate_memory(
+    scene: &Scene,
+    settings: &RenderSettings,
+    techniques: bool,
+) -> MemoryEstimate {
+    let s = settings;
+    let pixels = s.width as u64 * s.height as u64;
+    let radius = s.radius.unwrap_or_else(|| scene_default_radius(scene));
+    let mut items = vec![
+        MemoryItem {
+            name: BASE_NAME,
+            bytes: BASE_BYTES,
+            lower: "the scene's triangle count",
+        },
+        MemoryItem {
+            name: "film and output images",
+            bytes: pixels * BYTES_PER_PIXEL,
+            lower: "--resolution",
+        },
+    ];
+    if techniques {
+        items.push(MemoryItem {
+            name: "technique layers",
+            bytes: pixels * TECHNIQUE_BYTES_PER_PIXEL,
+            lower: "--resolution (or leave out --techniques)",
+        });
+    }
+    let mut stored_per_emitted = 0.0;
+    let heuristic = match s.mode {
+        Mode::Path => None,
+        Mode::Light | Mode::Bdpm(_) => {
+            let pilot = PhotonMap::trace(
+                scene,
+                &TraceOptions {
+                    photons: PILOT_PHOTONS,
+                    seed: s.seed,
+                    domain: Domain::Photon,
+                    pass: 0,
+                    light_visibility: false,
+                    max_depth: 1024,
+                },
+                radius,
+            );
+            let stored = pilot.photons.len() as f64;
+            stored_per_emitted = stored / PILOT_PHOTONS as f64;
+            // Arrivals include the first hit from the light, which is not stored.
+            let arrivals_per_emitted = stored_per_emitted + 1.0;
+            let bytes_per_stored = pilot.memory_bytes() as f64 / stored.max(1.0);
+            match s.mode {
+                Mode::Light => items.push(MemoryItem {
+                    name: "light-path splats per pass",
+                    bytes: (s.photons as f64 * arrivals_per_emitted * ARRIVAL_RECORD_BYTES) as u64,
+                    lower: "--photons",
+                }),
+                _ => items.push(MemoryItem {
+                    name: "photon map per pass",
+                    bytes: (s.photons as f64
+                        * stored_per_emitted
+                        * bytes_per_stored
+                        * PHOTON_MAP_PEAK_FACTOR) as u64,
+                    lower: "--photons",
+                }),
+            }
+            if let Mode::Bdpm(h) = s.mode
+                && h.needs().radiance_cache
+            {
+                let photons = s.cache_photons.unwrap_or(s.photons) as f64;
+                items.push(MemoryItem {
+                    name: "radiance cache build",
+                    bytes: (photons * arrivals_per_emitted * ARRIVAL_RECORD_BYTES) as u64,
+                    lower: "render.cache_photons (or --photons)",
+                });
+            }
+            match s.mode {
+                Mode::Bdpm(h) => Some(h),
+                _ => None,
+            }
+        }
+    };
+    if let Some(h) = heuristic {
+        let footprint = s.noise_model == NoiseModel::Footprint && s.pixel_jitter;
+        let needs = h.needs();
+        if needs.pixel_table || (footprint && needs.effective_samples) {
+            items.push(MemoryItem {
+                name: "per-pixel weight table",
+                bytes: pixels * size_of::<PixelWeights>() as u64,
+                lower: "--resolution",
+            });
+        }
+    }
+    items.sort_by_key(|i| std::cmp::Reverse(i.bytes));
+    MemoryEstimate {
+        items,
+        stored_per_emitted,
+    }
+}
+
+/// `bytes` for people: `1.5 GiB`, `320 MiB`, `12 KiB`.
+pub fn human_bytes(bytes: u64) -> String {
+    let b = bytes as f64;
+    let (value, unit) = if b >= (1u64 << 40) as f64 {
+        (b / (1u64 << 40) as f64, "TiB")
+    } else if b >= (1u64 << 30) as f64 {
+        (b / (1u64 << 30) as f64, "GiB")
+    } else if b >= (1u64 << 20) as f64 {
+        (b / (1u64 << 20) as f64, "MiB")
+    } else {
+        (b / 1024.0, "KiB")
+    };
+    format!("{value:.1} {unit}")
+}
