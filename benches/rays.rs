@@ -2,7 +2,7 @@
 //!
 //! - `intersect`: closest hits of incoherent secondary-like rays, 65,536 per iteration:
 //!   origins are surface points drawn with `Geometry::sample_surface` and pushed off the surface
-//!   by `spawn_offset` along the normal, directions uniform on the normal's hemisphere.
+//!   by `Geometry::spawn_offset` along the normal, directions uniform on the normal's hemisphere.
 //! - `occluded`: shadow segments, 65,536 per iteration, from such points to other sampled
 //!   surface points (each also pushed off its surface).
 //! - `bvh_build`: `Geometry::new` (validation and CWBVH build) of the large mesh, in
@@ -23,7 +23,7 @@ use std::f32::consts::PI;
 use std::sync::LazyLock;
 
 use bdpm_geometry::sampling::uniform_sphere;
-use bdpm_geometry::{Domain, Geometry, Rng, TriangleMesh, spawn_offset};
+use bdpm_geometry::{Domain, Geometry, Rng, TriangleMesh};
 use bdpm_load::load_scene;
 use bdpm_suite::{scene_path, thread_pool};
 use divan::Bencher;
@@ -76,7 +76,7 @@ impl Workload {
                 Some(eye) if s.ng.dot(eye - s.p) < 0.0 => -s.ng,
                 _ => s.ng,
             };
-            (s.p + n * spawn_offset(s.p), n)
+            (s.p + n * geometry.spawn_offset(s.prim), n)
         };
         let rays = (0..RAYS)
             .map(|_| {

@@ -33,8 +33,6 @@ mod rng;
 pub mod sampling;
 
 pub use frame::Frame;
-pub use mesh::{
-    Geometry, GeometryError, Hit, MAX_COORDINATE, SurfaceSample, TriangleMesh, spawn_offset,
-};
+pub use mesh::{Geometry, GeometryError, Hit, MAX_COORDINATE, SurfaceSample, TriangleMesh};
 pub use prefetch::prefetch;
 pub use rng::{Domain, Rng};

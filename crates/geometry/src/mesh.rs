@@ -1,10 +1,11 @@
 use std::fmt;
 use std::time::Duration;
 
-use glam::{UVec2, Vec2, Vec3, Vec3A};
+use glam::{UVec2, Vec2, Vec3, Vec3A, Vec4};
 use obvhs::BvhBuildParams;
 use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::builder::build_cwbvh_from_tris;
+use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::ray::{Ray, RayHit};
 use obvhs::triangle::Triangle;
 
@@ -203,6 +204,10 @@ pub struct Geometry {
     total_area: f64,
     degenerate: usize,
     bounds: (Vec3, Vec3),
+    /// Spawn offset of each triangle, metres (see [`Geometry::spawn_offset`]).
+    offsets: Vec<f32>,
+    /// World position of the local frame's origin, metres (see [`Geometry::origin`]).
+    origin: Vec3,
 }
 
 impl fmt::Debug for Geometry {
@@ -211,6 +216,7 @@ impl fmt::Debug for Geometry {
             .field("triangles", &self.tris.len())
             .field("degenerate", &self.degenerate)
             .field("total_area", &self.total_area)
+            .field("origin", &self.origin)
             .finish()
     }
 }
@@ -297,11 +303,109 @@ fn make_ray(origin: Vec3, dir: Vec3, tmax: f32) -> Ray {
     }
 }
 
-/// The distance by which ray origins are pushed off a surface along its normal, metres:
-/// larger than f32 rounding at the point's magnitude, small against the merge radius.
-#[inline]
-pub fn spawn_offset(p: Vec3) -> f32 {
-    1e-5 * p.abs().max_element().max(1.0)
+/// Spawn offsets relative to the magnitude of the coordinates involved: 2⁻¹⁷ ≈ 7.6·10⁻⁶, or
+/// 64 units in the last place of f32. Every rounding error in a hit position (barycentric
+/// interpolation) and in the ray–triangle test that follows (Möller–Trumbore, whose distance
+/// errors are a few ulps of |origin − vertex|) is a few ulps of the largest coordinate
+/// magnitude of the triangle, so an offset of 64 ulps of it leaves a margin of an order of
+/// magnitude, at any scale (it has no absolute part).
+const RELATIVE_OFFSET: f32 = 1.0 / 131_072.0;
+
+/// `f32` unit roundoff bound used for the conservative slab test (2⁻²³, one ulp at 1).
+const ULP: f32 = f32::EPSILON;
+
+/// Which children of a CWBVH node the ray's segment `[tmin, tmax]` may touch: the hit mask that
+/// obvhs's `CwBvhNode::intersect_ray` returns, computed conservatively.
+///
+/// obvhs's own test (0.4) clamps every box's entry distance to an absolute 10⁻⁴ (in units of
+/// |dir|), so a surface nearer than that to the ray origin is never found: rays leaving a
+/// surface near a seam passed through the neighbouring wall, shadow segments passed through
+/// surfaces in their first 10⁻⁴ of length, and a millimetre-sized scene lost most of its
+/// contacts. Here the lower bound is the ray's own `tmin` (0), and each slab distance is
+/// widened by a bound on its rounding error so that a ray through a box's face (flat boxes of
+/// axis-aligned triangles have zero thickness) is never culled by rounding. A box is then
+/// accepted slightly too often, which costs a little time and never changes a result.
+#[inline(always)]
+fn node_hits(node: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
+    let adj_inv = node.compute_extent() * ray.inv_direction;
+    let adj_orig = (Vec3A::from(node.p) - ray.origin) * ray.inv_direction;
+    // t = q·adj_inv + adj_orig with q ≤ 255: |error| ≤ 4·ulp·(255·|adj_inv| + |adj_orig|)
+    // covers the roundings of p − o, of the reciprocal, of both products and of the sum.
+    let slack = (adj_inv.abs() * 255.0 + adj_orig.abs()) * (4.0 * ULP);
+    let lo = adj_orig - slack;
+    let hi = adj_orig + slack;
+    let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
+    let neg = ray.direction.cmplt(Vec3A::ZERO);
+    // Near and far planes per axis: for a negative direction the max plane is met first.
+    let (near_x, far_x) = if neg.test(0) {
+        (&node.child_max_x, &node.child_min_x)
+    } else {
+        (&node.child_min_x, &node.child_max_x)
+    };
+    let (near_y, far_y) = if neg.test(1) {
+        (&node.child_max_y, &node.child_min_y)
+    } else {
+        (&node.child_min_y, &node.child_max_y)
+    };
+    let (near_z, far_z) = if neg.test(2) {
+        (&node.child_max_z, &node.child_min_z)
+    } else {
+        (&node.child_min_z, &node.child_max_z)
+    };
+    #[inline(always)]
+    fn q4(v: &[u8; 8], i: usize) -> Vec4 {
+        Vec4::new(
+            v[i * 4] as f32,
+            v[i * 4 + 1] as f32,
+            v[i * 4 + 2] as f32,
+            v[i * 4 + 3] as f32,
+        )
+    }
+    let mut hit_mask = 0u32;
+    for i in 0..2 {
+        let tmin = (q4(near_x, i) * adj_inv.x + lo.x)
+            .max(q4(near_y, i) * adj_inv.y + lo.y)
+            .max(q4(near_z, i) * adj_inv.z + lo.z)
+            .max(Vec4::splat(ray.tmin));
+        let tmax = (q4(far_x, i) * adj_inv.x + hi.x)
+            .min(q4(far_y, i) * adj_inv.y + hi.y)
+            .min(q4(far_z, i) * adj_inv.z + hi.z)
+            .min(Vec4::splat(ray.tmax));
+        let mask = tmin.cmple(tmax).bitmask();
+        for j in 0..4 {
+            if mask & (1 << j) != 0 {
+                let child = i * 4 + j;
+                let bits = ((child_bits8 >> (child * 8)) & 0xff) as u32;
+                let index = ((bit_index8 >> (child * 8)) & 0xff) as u32;
+                hit_mask |= bits << index;
+            }
+        }
+    }
+    hit_mask
+}
+
+/// The origin of a mesh's local frame (see [`Geometry::origin`]): the centre of the bounds of
+/// its finite vertices when that centre is farther from the world origin than the largest
+/// extent, else zero (so scenes around the origin keep their coordinates).
+fn local_origin(mesh: &TriangleMesh) -> Vec3 {
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    for idx in &mesh.indices {
+        for &k in idx {
+            let p = mesh.positions[k as usize];
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+    }
+    if !(lo.is_finite() && hi.is_finite()) {
+        return Vec3::ZERO;
+    }
+    let centre = (lo + hi) * 0.5;
+    if centre.abs().max_element() > (hi - lo).max_element() {
+        centre
+    } else {
+        Vec3::ZERO
+    }
 }
 
 impl Geometry {
@@ -329,9 +433,6 @@ impl Geometry {
         {
             return Err(GeometryError::PositionTooLarge { vertex });
         }
-        let mut tris = Vec::with_capacity(mesh.indices.len());
-        let mut degenerate = 0;
-        let mut bounds = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         for (i, idx) in mesh.indices.iter().enumerate() {
             for &k in idx {
                 if k as usize >= mesh.positions.len() {
@@ -341,7 +442,18 @@ impl Geometry {
                     });
                 }
             }
-            let v = idx.map(|k| mesh.positions[k as usize]);
+        }
+        let origin = local_origin(&mesh);
+        let mut tris = Vec::with_capacity(mesh.indices.len());
+        let mut offsets = Vec::with_capacity(mesh.indices.len());
+        let mut degenerate = 0;
+        let mut bounds = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for (i, idx) in mesh.indices.iter().enumerate() {
+            // Local coordinates: exact (Sterbenz) for vertices within a factor of two of the
+            // origin, which is where a far-away scene's vertices are.
+            let v = idx.map(|k| mesh.positions[k as usize] - origin);
+            let magnitude = v.iter().fold(0.0f32, |m, p| m.max(p.abs().max_element()));
+            offsets.push(magnitude * RELATIVE_OFFSET);
             let cross = (v[1] - v[0]).cross(v[2] - v[0]);
             let area = 0.5 * cross.length();
             let ng = cross.normalize_or_zero();
@@ -423,7 +535,30 @@ impl Geometry {
             total_area: acc,
             degenerate,
             bounds,
+            offsets,
+            origin,
         })
+    }
+
+    /// World position of the origin of this geometry's frame, metres. Every position that
+    /// goes into or comes out of a `Geometry` (ray origins, [`Hit::p`], [`Geometry::bounds`],
+    /// [`Geometry::vertices`], surface samples) is relative to it: world = local + origin.
+    ///
+    /// It is zero unless the scene lies far from the world origin compared with its own size
+    /// (the centre of its bounds farther than its largest extent on some axis); then it is that
+    /// centre, so that f32 positions keep their precision relative to the scene's size, and
+    /// rendering does not depend on where the scene is placed.
+    pub fn origin(&self) -> Vec3 {
+        self.origin
+    }
+
+    /// The distance by which a ray leaving triangle `prim` is pushed off its plane, metres:
+    /// 2⁻¹⁷ (64 f32 ulps) of the largest coordinate magnitude of the triangle's vertices, in
+    /// this geometry's frame. Above every rounding error of a hit position on the triangle and
+    /// of the ray–triangle test, and relative, so it scales with the scene.
+    #[inline]
+    pub fn spawn_offset(&self, prim: u32) -> f32 {
+        self.offsets[prim as usize]
     }
 
     /// The closest surface along the ray `origin + t·dir`, `0 < t < tmax` (dir need not be unit;
@@ -441,7 +576,7 @@ impl Geometry {
             self.bvh,
             node,
             state,
-            node.intersect_ray(&traverse_ray, state.oct_inv4),
+            node_hits(node, &traverse_ray, state.oct_inv4),
             {
                 let t = self.rt[state.primitive_id as usize].intersect(&traverse_ray);
                 if t < traverse_ray.tmax {
@@ -486,7 +621,7 @@ impl Geometry {
     }
 
     /// True if any surface lies on the open segment from `from` to `to`. The caller offsets
-    /// `from` off its surface (see [`spawn_offset`]); `to` is typically a point light.
+    /// `from` off its surface (see [`Geometry::spawn_offset`]); `to` is typically a point light.
     #[inline]
     pub fn occluded(&self, from: Vec3, to: Vec3) -> bool {
         let d = to - from;
@@ -501,7 +636,7 @@ impl Geometry {
                 self.bvh,
                 node,
                 state,
-                node.intersect_ray(&ray, state.oct_inv4),
+                node_hits(node, &ray, state.oct_inv4),
                 {
                     if self.rt[state.primitive_id as usize].intersect(&ray) < ray.tmax {
                         occluded = true;
@@ -668,7 +803,7 @@ mod tests {
         assert!(g.occluded(a, Vec3::new(1.5, 0.5, 0.5)));
         // A light 1e-4 m from the floor is visible from a floor point beside it.
         let floor = Vec3::new(0.3, 0.0, 0.3);
-        let origin = floor + Vec3::Y * spawn_offset(floor);
+        let origin = floor + Vec3::Y * g.spawn_offset(0);
         assert!(!g.occluded(origin, Vec3::new(0.3, 1e-4, 0.3 + 1e-3)));
     }
 
