@@ -26,6 +26,7 @@
 //! assert!((geometry.total_area() - 4.0).abs() < 1e-6);
 //! ```
 
+mod build;
 mod frame;
 mod mesh;
 mod prefetch;

@@ -1,13 +1,10 @@
+use std::collections::HashSet;
 use std::fmt;
-use std::time::Duration;
 
 use glam::{UVec2, Vec2, Vec3, Vec3A, Vec4};
-use obvhs::BvhBuildParams;
 use obvhs::cwbvh::CwBvh;
-use obvhs::cwbvh::builder::build_cwbvh_from_tris;
 use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::ray::{Ray, RayHit};
-use obvhs::triangle::Triangle;
 
 use crate::sampling::uniform_triangle;
 
@@ -192,7 +189,7 @@ pub struct SurfaceSample {
 /// A mesh with its BVH: closest-hit and occlusion queries, areas and surface sampling.
 ///
 /// Triangles whose area is zero (or below 1e-20 m²) are kept out of the BVH and counted in
-/// [`Geometry::degenerate_count`].
+/// [`Geometry::degenerate_count`]; exact duplicates likewise, in [`Geometry::duplicate_count`].
 pub struct Geometry {
     tris: Vec<Tri>,
     /// Triangles in BVH leaf order, so leaf index → intersector without indirection.
@@ -203,6 +200,7 @@ pub struct Geometry {
     area_cdf: Vec<f64>,
     total_area: f64,
     degenerate: usize,
+    duplicates: usize,
     bounds: (Vec3, Vec3),
     /// Spawn offset of each triangle, metres (see [`Geometry::spawn_offset`]).
     offsets: Vec<f32>,
@@ -494,22 +492,22 @@ impl Geometry {
         if live.is_empty() {
             return Err(GeometryError::Empty);
         }
-        let obvhs_tris: Vec<Triangle> = live
-            .iter()
-            .map(|&i| {
-                let v = tris[i as usize].v;
-                Triangle {
-                    v0: v[0].into(),
-                    v1: v[1].into(),
-                    v2: v[2].into(),
-                }
+        // Exact duplicates (the same three vertices, in any order or winding) are left out of
+        // the BVH: a ray meets all copies at the same distance, so only one could ever be
+        // reported, and a pile of copies would make every ray through it test them all. The
+        // first copy in mesh order is the one kept, so the choice is deterministic.
+        let mut seen = HashSet::with_capacity(live.len());
+        let live: Vec<u32> = live
+            .into_iter()
+            .filter(|&i| {
+                let mut key = tris[i as usize].v.map(|p| p.to_array().map(f32::to_bits));
+                key.sort_unstable();
+                seen.insert(key)
             })
             .collect();
-        let bvh = build_cwbvh_from_tris(
-            &obvhs_tris,
-            BvhBuildParams::medium_build(),
-            &mut Duration::default(),
-        );
+        let duplicates = tris.len() - degenerate - live.len();
+        let live_vertices: Vec<[Vec3; 3]> = live.iter().map(|&i| tris[i as usize].v).collect();
+        let bvh = crate::build::build(&live_vertices);
         let leaf_to_prim: Vec<u32> = bvh
             .primitive_indices
             .iter()
@@ -534,6 +532,7 @@ impl Geometry {
             area_cdf,
             total_area: acc,
             degenerate,
+            duplicates,
             bounds,
             offsets,
             origin,
@@ -656,6 +655,17 @@ impl Geometry {
     /// Number of zero-area triangles that were left out of the BVH.
     pub fn degenerate_count(&self) -> usize {
         self.degenerate
+    }
+
+    /// Number of triangles left out of the BVH as exact duplicates of an earlier triangle
+    /// (same three vertices in any order); they still count in areas and surface sampling.
+    pub fn duplicate_count(&self) -> usize {
+        self.duplicates
+    }
+
+    /// Number of levels of the wide BVH (at most 32, the depth obvhs's traversal stack holds).
+    pub fn bvh_depth(&self) -> usize {
+        crate::build::wide_depth(&self.bvh)
     }
 
     /// Area of triangle `prim`, m² (0 for a degenerate one).
@@ -902,5 +912,90 @@ mod tests {
             .unwrap();
         assert!((h.ng - Vec3::Y).length() < 1e-6);
         assert!(h.ns.dot(h.ng) > 0.9 && (h.ns.length() - 1.0).abs() < 1e-5);
+    }
+
+    /// Issue 15 item 5: 20 000 identical quads took 97 s to load (obvhs's PLOC builder is
+    /// quadratic on coincident boxes, and made a chain 40 000 levels deep). Scaled down to
+    /// 5 000 copies (7 s before, as deep a chain); the check is structural: copies are counted
+    /// and left out, and the wide BVH stays within the 32 levels the traversal stack holds.
+    #[test]
+    fn identical_triangles_are_deduplicated_and_the_bvh_stays_shallow() {
+        let mut mesh = unit_box();
+        let quad = [
+            Vec3::new(0.25, 0.25, 0.5),
+            Vec3::new(0.75, 0.25, 0.5),
+            Vec3::new(0.75, 0.75, 0.5),
+            Vec3::new(0.25, 0.75, 0.5),
+        ];
+        let first = mesh.triangle_count() as u32;
+        for k in 0..5000 {
+            // Alternate windings: a reversed copy is the same surface for a ray.
+            let q = if k % 2 == 0 {
+                quad
+            } else {
+                [quad[0], quad[3], quad[2], quad[1]]
+            };
+            mesh.push_quad(q, 7);
+        }
+        let g = Geometry::new(mesh).unwrap();
+        // (0,1,2)+(0,2,3) and reversed (0,3,2)+(0,2,1): two distinct triangles in all.
+        assert_eq!(g.duplicate_count(), 2 * 5000 - 2);
+        assert!(
+            g.bvh_depth() <= crate::build::MAX_WIDE_DEPTH,
+            "{}",
+            g.bvh_depth()
+        );
+        let h = g
+            .intersect(Vec3::new(0.4, 0.6, 0.1), Vec3::Z, f32::INFINITY)
+            .unwrap();
+        assert!((h.t - 0.4).abs() < 1e-6);
+        // The first copy in mesh order is the one kept.
+        assert!(h.prim == first || h.prim == first + 1, "{}", h.prim);
+        assert_eq!(g.total_area(), 6.0 + 5000.0 * 0.25);
+    }
+
+    /// Nearly coincident distinct triangles (PLOC's other quadratic case: 8 000 took 2 s and a
+    /// chain 8 000 levels deep) and centroids in a geometric progression (each binned-SAH split
+    /// peels off one triangle): the wide BVH stays within the traversal stack's 32 levels, and
+    /// closest hits match brute force.
+    #[test]
+    fn near_coincident_and_geometric_triangles_keep_the_bvh_shallow_and_exact() {
+        let mut mesh = unit_box();
+        for i in 0..4000 {
+            let j = 1e-6 * i as f32;
+            let v = [
+                Vec3::new(0.2 + j, 0.2, 0.5),
+                Vec3::new(0.8, 0.2, 0.5 + j),
+                Vec3::new(0.5, 0.8, 0.5 - j),
+            ];
+            let base = mesh.positions.len() as u32;
+            mesh.positions.extend_from_slice(&v);
+            mesh.indices.push([base, base + 1, base + 2]);
+            mesh.materials.push(6);
+        }
+        for k in 0..60 {
+            let x = 0.05 + 0.85 * 0.75f32.powi(k);
+            let c = Vec3::new(x, 0.9, 0.9);
+            let base = mesh.positions.len() as u32;
+            mesh.positions
+                .extend([c, c + Vec3::X * 1e-3, c + Vec3::Z * 1e-3]);
+            mesh.indices.push([base, base + 1, base + 2]);
+            mesh.materials.push(6);
+        }
+        let g = Geometry::new(mesh.clone()).unwrap();
+        assert_eq!(g.duplicate_count(), 0);
+        assert!(
+            g.bvh_depth() <= crate::build::MAX_WIDE_DEPTH,
+            "{}",
+            g.bvh_depth()
+        );
+        let mut rng = Rng::new(12, Domain::Other, [0; 3]);
+        for _ in 0..2000 {
+            let o = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 0.9 + 0.05;
+            let d = crate::sampling::uniform_sphere(rng.uniform2());
+            let h = g.intersect(o, d, f32::INFINITY).expect("closed box");
+            let (t, _) = brute(&mesh, o, d).unwrap();
+            assert!((h.t as f64 - t).abs() < 1e-4, "t {} vs {}", h.t, t);
+        }
     }
 }
