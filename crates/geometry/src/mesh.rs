@@ -382,9 +382,15 @@ fn node_hits(node: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
     hit_mask
 }
 
+/// How far (in largest extents) the centre of a scene's bounds may lie from the world origin
+/// before the scene gets a frame of its own. Below it coordinates stay under 8.5 extents, so
+/// f32 keeps 20 bits relative to the scene's size (offsets at most 8.5 × 2⁻¹⁷ of it), and
+/// scenes placed around the origin keep their world coordinates.
+const RECENTRE_DISTANCE: f32 = 8.0;
+
 /// The origin of a mesh's local frame (see [`Geometry::origin`]): the centre of the bounds of
-/// its finite vertices when that centre is farther from the world origin than the largest
-/// extent, else zero (so scenes around the origin keep their coordinates).
+/// its vertices when that centre is more than [`RECENTRE_DISTANCE`] largest extents from the
+/// world origin, else zero.
 fn local_origin(mesh: &TriangleMesh) -> Vec3 {
     let mut lo = Vec3::splat(f32::INFINITY);
     let mut hi = Vec3::splat(f32::NEG_INFINITY);
@@ -399,7 +405,7 @@ fn local_origin(mesh: &TriangleMesh) -> Vec3 {
         return Vec3::ZERO;
     }
     let centre = (lo + hi) * 0.5;
-    if centre.abs().max_element() > (hi - lo).max_element() {
+    if centre.abs().max_element() > RECENTRE_DISTANCE * (hi - lo).max_element() {
         centre
     } else {
         Vec3::ZERO
@@ -544,9 +550,9 @@ impl Geometry {
     /// [`Geometry::vertices`], surface samples) is relative to it: world = local + origin.
     ///
     /// It is zero unless the scene lies far from the world origin compared with its own size
-    /// (the centre of its bounds farther than its largest extent on some axis); then it is that
-    /// centre, so that f32 positions keep their precision relative to the scene's size, and
-    /// rendering does not depend on where the scene is placed.
+    /// (the centre of its bounds more than 8 largest extents away on some axis); then it is
+    /// that centre, so that f32 positions keep their precision relative to the scene's size,
+    /// and rendering does not depend on where the scene is placed.
     pub fn origin(&self) -> Vec3 {
         self.origin
     }
