@@ -2,11 +2,13 @@
 //!
 //! - `intersect`: closest hits of incoherent secondary-like rays, 65,536 per iteration:
 //!   origins are surface points drawn with `Geometry::sample_surface` and pushed off the surface
-//!   by `spawn_offset` along the normal, directions uniform on the normal's hemisphere.
+//!   by `Geometry::spawn_offset` along the normal, directions uniform on the normal's hemisphere.
 //! - `occluded`: shadow segments, 65,536 per iteration, from such points to other sampled
 //!   surface points (each also pushed off its surface).
 //! - `bvh_build`: `Geometry::new` (validation and CWBVH build) of the large mesh, in
 //!   triangles per second.
+//! - `coincident_20k`: `Geometry::new` of 20,000 identical quads and of 20,000 quads stacked
+//!   1 µm apart (the BVH build must stay O(n log n) on coincident input).
 //!
 //! Two geometries: the `cornell-lambert` scene (30 triangles; its surfaces are two-sided, so
 //! each point uses the side facing the camera, the side a secondary ray leaves from; about 84 %
@@ -23,7 +25,7 @@ use std::f32::consts::PI;
 use std::sync::LazyLock;
 
 use bdpm_geometry::sampling::uniform_sphere;
-use bdpm_geometry::{Domain, Geometry, Rng, TriangleMesh, spawn_offset};
+use bdpm_geometry::{Domain, Geometry, Rng, TriangleMesh};
 use bdpm_load::load_scene;
 use bdpm_suite::{scene_path, thread_pool};
 use divan::Bencher;
@@ -76,7 +78,7 @@ impl Workload {
                 Some(eye) if s.ng.dot(eye - s.p) < 0.0 => -s.ng,
                 _ => s.ng,
             };
-            (s.p + n * spawn_offset(s.p), n)
+            (s.p + n * geometry.spawn_offset(s.prim), n)
         };
         let rays = (0..RAYS)
             .map(|_| {
@@ -237,5 +239,48 @@ mod sphere_130k {
             .counter(ItemsCount::new(mesh.triangle_count()))
             .with_inputs(|| mesh.clone())
             .bench_local_values(|mesh| pool.install(|| Geometry::new(mesh)));
+    }
+}
+
+/// Coincident triangles (issue 15 item 5): `Geometry::new` of 20,000 identical quads (40,000
+/// triangles, all but two left out as duplicates) and of 20,000 distinct quads stacked 1 µm
+/// apart, counted in triangles. obvhs's PLOC builder, used before, took 97 s on the first.
+mod coincident_20k {
+    use super::*;
+
+    /// `count` unit quads at z = 1 + k·`step` m, as one mesh.
+    fn stack(count: usize, step: f32) -> TriangleMesh {
+        let mut mesh = TriangleMesh::default();
+        for k in 0..count {
+            let z = 1.0 + k as f32 * step;
+            mesh.push_quad(
+                [
+                    Vec3::new(0.0, 0.0, z),
+                    Vec3::new(1.0, 0.0, z),
+                    Vec3::new(1.0, 1.0, z),
+                    Vec3::new(0.0, 1.0, z),
+                ],
+                0,
+            );
+        }
+        mesh
+    }
+
+    #[divan::bench(sample_count = 5)]
+    fn identical(bencher: Bencher) {
+        let mesh = stack(20_000, 0.0);
+        bencher
+            .counter(ItemsCount::new(mesh.triangle_count()))
+            .with_inputs(|| mesh.clone())
+            .bench_local_values(Geometry::new);
+    }
+
+    #[divan::bench(sample_count = 5)]
+    fn one_micrometre_apart(bencher: Bencher) {
+        let mesh = stack(20_000, 1e-6);
+        bencher
+            .counter(ItemsCount::new(mesh.triangle_count()))
+            .with_inputs(|| mesh.clone())
+            .bench_local_values(Geometry::new);
     }
 }

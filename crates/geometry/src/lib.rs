@@ -26,6 +26,7 @@
 //! assert!((geometry.total_area() - 4.0).abs() < 1e-6);
 //! ```
 
+mod build;
 mod frame;
 mod mesh;
 mod prefetch;
@@ -33,8 +34,6 @@ mod rng;
 pub mod sampling;
 
 pub use frame::Frame;
-pub use mesh::{
-    Geometry, GeometryError, Hit, MAX_COORDINATE, SurfaceSample, TriangleMesh, spawn_offset,
-};
+pub use mesh::{Geometry, GeometryError, Hit, MAX_COORDINATE, SurfaceSample, TriangleMesh};
 pub use prefetch::prefetch;
 pub use rng::{Domain, Rng};

@@ -1,12 +1,10 @@
+use std::collections::HashSet;
 use std::fmt;
-use std::time::Duration;
 
-use glam::{UVec2, Vec2, Vec3, Vec3A};
-use obvhs::BvhBuildParams;
+use glam::{UVec2, Vec2, Vec3, Vec3A, Vec4};
 use obvhs::cwbvh::CwBvh;
-use obvhs::cwbvh::builder::build_cwbvh_from_tris;
+use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::ray::{Ray, RayHit};
-use obvhs::triangle::Triangle;
 
 use crate::sampling::uniform_triangle;
 
@@ -191,7 +189,7 @@ pub struct SurfaceSample {
 /// A mesh with its BVH: closest-hit and occlusion queries, areas and surface sampling.
 ///
 /// Triangles whose area is zero (or below 1e-20 m²) are kept out of the BVH and counted in
-/// [`Geometry::degenerate_count`].
+/// [`Geometry::degenerate_count`]; exact duplicates likewise, in [`Geometry::duplicate_count`].
 pub struct Geometry {
     tris: Vec<Tri>,
     /// Triangles in BVH leaf order, so leaf index → intersector without indirection.
@@ -202,7 +200,12 @@ pub struct Geometry {
     area_cdf: Vec<f64>,
     total_area: f64,
     degenerate: usize,
+    duplicates: usize,
     bounds: (Vec3, Vec3),
+    /// Spawn offset of each triangle, metres (see [`Geometry::spawn_offset`]).
+    offsets: Vec<f32>,
+    /// World position of the local frame's origin, metres (see [`Geometry::origin`]).
+    origin: Vec3,
 }
 
 impl fmt::Debug for Geometry {
@@ -211,6 +214,7 @@ impl fmt::Debug for Geometry {
             .field("triangles", &self.tris.len())
             .field("degenerate", &self.degenerate)
             .field("total_area", &self.total_area)
+            .field("origin", &self.origin)
             .finish()
     }
 }
@@ -297,11 +301,115 @@ fn make_ray(origin: Vec3, dir: Vec3, tmax: f32) -> Ray {
     }
 }
 
-/// The distance by which ray origins are pushed off a surface along its normal, metres:
-/// larger than f32 rounding at the point's magnitude, small against the merge radius.
-#[inline]
-pub fn spawn_offset(p: Vec3) -> f32 {
-    1e-5 * p.abs().max_element().max(1.0)
+/// Spawn offsets relative to the magnitude of the coordinates involved: 2⁻¹⁷ ≈ 7.6·10⁻⁶, or
+/// 64 units in the last place of f32. Every rounding error in a hit position (barycentric
+/// interpolation) and in the ray–triangle test that follows (Möller–Trumbore, whose distance
+/// errors are a few ulps of |origin − vertex|) is a few ulps of the largest coordinate
+/// magnitude of the triangle, so an offset of 64 ulps of it leaves a margin of an order of
+/// magnitude, at any scale (it has no absolute part).
+const RELATIVE_OFFSET: f32 = 1.0 / 131_072.0;
+
+/// `f32` unit roundoff bound used for the conservative slab test (2⁻²³, one ulp at 1).
+const ULP: f32 = f32::EPSILON;
+
+/// Which children of a CWBVH node the ray's segment `[tmin, tmax]` may touch: the hit mask that
+/// obvhs's `CwBvhNode::intersect_ray` returns, computed conservatively.
+///
+/// obvhs's own test (0.4) clamps every box's entry distance to an absolute 10⁻⁴ (in units of
+/// |dir|), so a surface nearer than that to the ray origin is never found: rays leaving a
+/// surface near a seam passed through the neighbouring wall, shadow segments passed through
+/// surfaces in their first 10⁻⁴ of length, and a millimetre-sized scene lost most of its
+/// contacts. Here the lower bound is the ray's own `tmin` (0), and each slab distance is
+/// widened by a bound on its rounding error so that a ray through a box's face (flat boxes of
+/// axis-aligned triangles have zero thickness) is never culled by rounding. A box is then
+/// accepted slightly too often, which costs a little time and never changes a result.
+#[inline(always)]
+fn node_hits(node: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
+    let adj_inv = node.compute_extent() * ray.inv_direction;
+    let adj_orig = (Vec3A::from(node.p) - ray.origin) * ray.inv_direction;
+    // t = q·adj_inv + adj_orig with q ≤ 255: |error| ≤ 4·ulp·(255·|adj_inv| + |adj_orig|)
+    // covers the roundings of p − o, of the reciprocal, of both products and of the sum.
+    let slack = (adj_inv.abs() * 255.0 + adj_orig.abs()) * (4.0 * ULP);
+    let lo = adj_orig - slack;
+    let hi = adj_orig + slack;
+    let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
+    let neg = ray.direction.cmplt(Vec3A::ZERO);
+    // Near and far planes per axis: for a negative direction the max plane is met first.
+    let (near_x, far_x) = if neg.test(0) {
+        (&node.child_max_x, &node.child_min_x)
+    } else {
+        (&node.child_min_x, &node.child_max_x)
+    };
+    let (near_y, far_y) = if neg.test(1) {
+        (&node.child_max_y, &node.child_min_y)
+    } else {
+        (&node.child_min_y, &node.child_max_y)
+    };
+    let (near_z, far_z) = if neg.test(2) {
+        (&node.child_max_z, &node.child_min_z)
+    } else {
+        (&node.child_min_z, &node.child_max_z)
+    };
+    #[inline(always)]
+    fn q4(v: &[u8; 8], i: usize) -> Vec4 {
+        Vec4::new(
+            v[i * 4] as f32,
+            v[i * 4 + 1] as f32,
+            v[i * 4 + 2] as f32,
+            v[i * 4 + 3] as f32,
+        )
+    }
+    let mut hit_mask = 0u32;
+    for i in 0..2 {
+        let tmin = (q4(near_x, i) * adj_inv.x + lo.x)
+            .max(q4(near_y, i) * adj_inv.y + lo.y)
+            .max(q4(near_z, i) * adj_inv.z + lo.z)
+            .max(Vec4::splat(ray.tmin));
+        let tmax = (q4(far_x, i) * adj_inv.x + hi.x)
+            .min(q4(far_y, i) * adj_inv.y + hi.y)
+            .min(q4(far_z, i) * adj_inv.z + hi.z)
+            .min(Vec4::splat(ray.tmax));
+        let mask = tmin.cmple(tmax).bitmask();
+        for j in 0..4 {
+            if mask & (1 << j) != 0 {
+                let child = i * 4 + j;
+                let bits = ((child_bits8 >> (child * 8)) & 0xff) as u32;
+                let index = ((bit_index8 >> (child * 8)) & 0xff) as u32;
+                hit_mask |= bits << index;
+            }
+        }
+    }
+    hit_mask
+}
+
+/// How far (in largest extents) the centre of a scene's bounds may lie from the world origin
+/// before the scene gets a frame of its own. Below it coordinates stay under 8.5 extents, so
+/// f32 keeps 20 bits relative to the scene's size (offsets at most 8.5 × 2⁻¹⁷ of it), and
+/// scenes placed around the origin keep their world coordinates.
+const RECENTRE_DISTANCE: f32 = 8.0;
+
+/// The origin of a mesh's local frame (see [`Geometry::origin`]): the centre of the bounds of
+/// its vertices when that centre is more than [`RECENTRE_DISTANCE`] largest extents from the
+/// world origin, else zero.
+fn local_origin(mesh: &TriangleMesh) -> Vec3 {
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    for idx in &mesh.indices {
+        for &k in idx {
+            let p = mesh.positions[k as usize];
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+    }
+    if !(lo.is_finite() && hi.is_finite()) {
+        return Vec3::ZERO;
+    }
+    let centre = (lo + hi) * 0.5;
+    if centre.abs().max_element() > RECENTRE_DISTANCE * (hi - lo).max_element() {
+        centre
+    } else {
+        Vec3::ZERO
+    }
 }
 
 impl Geometry {
@@ -329,9 +437,6 @@ impl Geometry {
         {
             return Err(GeometryError::PositionTooLarge { vertex });
         }
-        let mut tris = Vec::with_capacity(mesh.indices.len());
-        let mut degenerate = 0;
-        let mut bounds = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         for (i, idx) in mesh.indices.iter().enumerate() {
             for &k in idx {
                 if k as usize >= mesh.positions.len() {
@@ -341,7 +446,18 @@ impl Geometry {
                     });
                 }
             }
-            let v = idx.map(|k| mesh.positions[k as usize]);
+        }
+        let origin = local_origin(&mesh);
+        let mut tris = Vec::with_capacity(mesh.indices.len());
+        let mut offsets = Vec::with_capacity(mesh.indices.len());
+        let mut degenerate = 0;
+        let mut bounds = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for (i, idx) in mesh.indices.iter().enumerate() {
+            // Local coordinates: exact (Sterbenz) for vertices within a factor of two of the
+            // origin, which is where a far-away scene's vertices are.
+            let v = idx.map(|k| mesh.positions[k as usize] - origin);
+            let magnitude = v.iter().fold(0.0f32, |m, p| m.max(p.abs().max_element()));
+            offsets.push(magnitude * RELATIVE_OFFSET);
             let cross = (v[1] - v[0]).cross(v[2] - v[0]);
             let area = 0.5 * cross.length();
             let ng = cross.normalize_or_zero();
@@ -382,22 +498,22 @@ impl Geometry {
         if live.is_empty() {
             return Err(GeometryError::Empty);
         }
-        let obvhs_tris: Vec<Triangle> = live
-            .iter()
-            .map(|&i| {
-                let v = tris[i as usize].v;
-                Triangle {
-                    v0: v[0].into(),
-                    v1: v[1].into(),
-                    v2: v[2].into(),
-                }
+        // Exact duplicates (the same three vertices, in any order or winding) are left out of
+        // the BVH: a ray meets all copies at the same distance, so only one could ever be
+        // reported, and a pile of copies would make every ray through it test them all. The
+        // first copy in mesh order is the one kept, so the choice is deterministic.
+        let mut seen = HashSet::with_capacity(live.len());
+        let live: Vec<u32> = live
+            .into_iter()
+            .filter(|&i| {
+                let mut key = tris[i as usize].v.map(|p| p.to_array().map(f32::to_bits));
+                key.sort_unstable();
+                seen.insert(key)
             })
             .collect();
-        let bvh = build_cwbvh_from_tris(
-            &obvhs_tris,
-            BvhBuildParams::medium_build(),
-            &mut Duration::default(),
-        );
+        let duplicates = tris.len() - degenerate - live.len();
+        let live_vertices: Vec<[Vec3; 3]> = live.iter().map(|&i| tris[i as usize].v).collect();
+        let bvh = crate::build::build(&live_vertices);
         let leaf_to_prim: Vec<u32> = bvh
             .primitive_indices
             .iter()
@@ -422,8 +538,32 @@ impl Geometry {
             area_cdf,
             total_area: acc,
             degenerate,
+            duplicates,
             bounds,
+            offsets,
+            origin,
         })
+    }
+
+    /// World position of the origin of this geometry's frame, metres. Every position that
+    /// goes into or comes out of a `Geometry` (ray origins, [`Hit::p`], [`Geometry::bounds`],
+    /// [`Geometry::vertices`], surface samples) is relative to it: world = local + origin.
+    ///
+    /// It is zero unless the scene lies far from the world origin compared with its own size
+    /// (the centre of its bounds more than 8 largest extents away on some axis); then it is
+    /// that centre, so that f32 positions keep their precision relative to the scene's size,
+    /// and rendering does not depend on where the scene is placed.
+    pub fn origin(&self) -> Vec3 {
+        self.origin
+    }
+
+    /// The distance by which a ray leaving triangle `prim` is pushed off its plane, metres:
+    /// 2⁻¹⁷ (64 f32 ulps) of the largest coordinate magnitude of the triangle's vertices, in
+    /// this geometry's frame. Above every rounding error of a hit position on the triangle and
+    /// of the ray–triangle test, and relative, so it scales with the scene.
+    #[inline]
+    pub fn spawn_offset(&self, prim: u32) -> f32 {
+        self.offsets[prim as usize]
     }
 
     /// The closest surface along the ray `origin + t·dir`, `0 < t < tmax` (dir need not be unit;
@@ -441,7 +581,7 @@ impl Geometry {
             self.bvh,
             node,
             state,
-            node.intersect_ray(&traverse_ray, state.oct_inv4),
+            node_hits(node, &traverse_ray, state.oct_inv4),
             {
                 let t = self.rt[state.primitive_id as usize].intersect(&traverse_ray);
                 if t < traverse_ray.tmax {
@@ -486,7 +626,7 @@ impl Geometry {
     }
 
     /// True if any surface lies on the open segment from `from` to `to`. The caller offsets
-    /// `from` off its surface (see [`spawn_offset`]); `to` is typically a point light.
+    /// `from` off its surface (see [`Geometry::spawn_offset`]); `to` is typically a point light.
     #[inline]
     pub fn occluded(&self, from: Vec3, to: Vec3) -> bool {
         let d = to - from;
@@ -501,7 +641,7 @@ impl Geometry {
                 self.bvh,
                 node,
                 state,
-                node.intersect_ray(&ray, state.oct_inv4),
+                node_hits(node, &ray, state.oct_inv4),
                 {
                     if self.rt[state.primitive_id as usize].intersect(&ray) < ray.tmax {
                         occluded = true;
@@ -521,6 +661,17 @@ impl Geometry {
     /// Number of zero-area triangles that were left out of the BVH.
     pub fn degenerate_count(&self) -> usize {
         self.degenerate
+    }
+
+    /// Number of triangles left out of the BVH as exact duplicates of an earlier triangle
+    /// (same three vertices in any order); they still count in areas and surface sampling.
+    pub fn duplicate_count(&self) -> usize {
+        self.duplicates
+    }
+
+    /// Number of levels of the wide BVH (at most 32, the depth obvhs's traversal stack holds).
+    pub fn bvh_depth(&self) -> usize {
+        crate::build::wide_depth(&self.bvh)
     }
 
     /// Area of triangle `prim`, m² (0 for a degenerate one).
@@ -668,7 +819,7 @@ mod tests {
         assert!(g.occluded(a, Vec3::new(1.5, 0.5, 0.5)));
         // A light 1e-4 m from the floor is visible from a floor point beside it.
         let floor = Vec3::new(0.3, 0.0, 0.3);
-        let origin = floor + Vec3::Y * spawn_offset(floor);
+        let origin = floor + Vec3::Y * g.spawn_offset(0);
         assert!(!g.occluded(origin, Vec3::new(0.3, 1e-4, 0.3 + 1e-3)));
     }
 
@@ -767,5 +918,90 @@ mod tests {
             .unwrap();
         assert!((h.ng - Vec3::Y).length() < 1e-6);
         assert!(h.ns.dot(h.ng) > 0.9 && (h.ns.length() - 1.0).abs() < 1e-5);
+    }
+
+    /// Issue 15 item 5: 20 000 identical quads took 97 s to load (obvhs's PLOC builder is
+    /// quadratic on coincident boxes, and made a chain 40 000 levels deep). Scaled down to
+    /// 5 000 copies (7 s before, as deep a chain); the check is structural: copies are counted
+    /// and left out, and the wide BVH stays within the 32 levels the traversal stack holds.
+    #[test]
+    fn identical_triangles_are_deduplicated_and_the_bvh_stays_shallow() {
+        let mut mesh = unit_box();
+        let quad = [
+            Vec3::new(0.25, 0.25, 0.5),
+            Vec3::new(0.75, 0.25, 0.5),
+            Vec3::new(0.75, 0.75, 0.5),
+            Vec3::new(0.25, 0.75, 0.5),
+        ];
+        let first = mesh.triangle_count() as u32;
+        for k in 0..5000 {
+            // Alternate windings: a reversed copy is the same surface for a ray.
+            let q = if k % 2 == 0 {
+                quad
+            } else {
+                [quad[0], quad[3], quad[2], quad[1]]
+            };
+            mesh.push_quad(q, 7);
+        }
+        let g = Geometry::new(mesh).unwrap();
+        // (0,1,2)+(0,2,3) and reversed (0,3,2)+(0,2,1): two distinct triangles in all.
+        assert_eq!(g.duplicate_count(), 2 * 5000 - 2);
+        assert!(
+            g.bvh_depth() <= crate::build::MAX_WIDE_DEPTH,
+            "{}",
+            g.bvh_depth()
+        );
+        let h = g
+            .intersect(Vec3::new(0.4, 0.6, 0.1), Vec3::Z, f32::INFINITY)
+            .unwrap();
+        assert!((h.t - 0.4).abs() < 1e-6);
+        // The first copy in mesh order is the one kept.
+        assert!(h.prim == first || h.prim == first + 1, "{}", h.prim);
+        assert_eq!(g.total_area(), 6.0 + 5000.0 * 0.25);
+    }
+
+    /// Nearly coincident distinct triangles (PLOC's other quadratic case: 8 000 took 2 s and a
+    /// chain 8 000 levels deep) and centroids in a geometric progression (each binned-SAH split
+    /// peels off one triangle): the wide BVH stays within the traversal stack's 32 levels, and
+    /// closest hits match brute force.
+    #[test]
+    fn near_coincident_and_geometric_triangles_keep_the_bvh_shallow_and_exact() {
+        let mut mesh = unit_box();
+        for i in 0..4000 {
+            let j = 1e-6 * i as f32;
+            let v = [
+                Vec3::new(0.2 + j, 0.2, 0.5),
+                Vec3::new(0.8, 0.2, 0.5 + j),
+                Vec3::new(0.5, 0.8, 0.5 - j),
+            ];
+            let base = mesh.positions.len() as u32;
+            mesh.positions.extend_from_slice(&v);
+            mesh.indices.push([base, base + 1, base + 2]);
+            mesh.materials.push(6);
+        }
+        for k in 0..60 {
+            let x = 0.05 + 0.85 * 0.75f32.powi(k);
+            let c = Vec3::new(x, 0.9, 0.9);
+            let base = mesh.positions.len() as u32;
+            mesh.positions
+                .extend([c, c + Vec3::X * 1e-3, c + Vec3::Z * 1e-3]);
+            mesh.indices.push([base, base + 1, base + 2]);
+            mesh.materials.push(6);
+        }
+        let g = Geometry::new(mesh.clone()).unwrap();
+        assert_eq!(g.duplicate_count(), 0);
+        assert!(
+            g.bvh_depth() <= crate::build::MAX_WIDE_DEPTH,
+            "{}",
+            g.bvh_depth()
+        );
+        let mut rng = Rng::new(12, Domain::Other, [0; 3]);
+        for _ in 0..2000 {
+            let o = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 0.9 + 0.05;
+            let d = crate::sampling::uniform_sphere(rng.uniform2());
+            let h = g.intersect(o, d, f32::INFINITY).expect("closed box");
+            let (t, _) = brute(&mesh, o, d).unwrap();
+            assert!((h.t as f64 - t).abs() < 1e-4, "t {} vs {}", h.t, t);
+        }
     }
 }

@@ -33,7 +33,7 @@ use std::f32::consts::PI;
 use std::fmt;
 
 use bdpm_bdf::{Bdf, luminance};
-use bdpm_geometry::{Frame, Geometry, Hit, spawn_offset};
+use bdpm_geometry::{Frame, Geometry, Hit};
 use glam::Vec3;
 
 /// An isotropic point light.
@@ -124,24 +124,26 @@ pub struct Shading {
 /// Geometry, materials, lights and camera of one render.
 #[derive(Debug)]
 pub struct Scene {
-    /// Surfaces and BVH.
+    /// Surfaces and BVH; its frame (world minus [`Geometry::origin`]) is the scene's frame.
     pub geometry: Geometry,
     /// Materials indexed by the triangles' material index.
     pub materials: Vec<Material>,
-    /// Point lights.
+    /// Point lights, positions in the geometry's frame.
     pub lights: Vec<PointLight>,
-    /// The camera.
+    /// The camera, position in the geometry's frame.
     pub camera: Camera,
     light_cdf: Vec<f32>,
 }
 
 impl Scene {
-    /// Assembles and checks a scene.
+    /// Assembles and checks a scene. The lights and the camera are given in world coordinates
+    /// and moved into the geometry's frame (see [`Geometry::origin`]; a no-op for scenes
+    /// around the origin), in which all of a `Scene`'s positions are then expressed.
     pub fn new(
         geometry: Geometry,
         materials: Vec<Material>,
-        lights: Vec<PointLight>,
-        camera: Camera,
+        mut lights: Vec<PointLight>,
+        mut camera: Camera,
     ) -> Result<Scene, SceneError> {
         for prim in 0..geometry.triangle_count() as u32 {
             let m = geometry.material(prim);
@@ -169,6 +171,11 @@ impl Scene {
             return Err(SceneError::NoLight);
         }
         light_cdf.iter_mut().for_each(|c| *c /= acc);
+        let origin = geometry.origin();
+        for l in &mut lights {
+            l.position -= origin;
+        }
+        camera.position -= origin;
         Ok(Scene {
             geometry,
             materials,
@@ -228,7 +235,7 @@ impl Scene {
     #[inline]
     pub fn spawn(&self, sh: &Shading, dir: Vec3) -> Vec3 {
         let side = if sh.ng.dot(dir) >= 0.0 { 1.0 } else { -1.0 };
-        sh.p + sh.ng * (side * spawn_offset(sh.p))
+        sh.p + sh.ng * (side * self.geometry.spawn_offset(sh.prim))
     }
 
     /// The BDF at `sh` for world directions `wo` and `wi`: zero unless both are on the side of
