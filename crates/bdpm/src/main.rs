@@ -2,6 +2,7 @@
 //! and writes images, reports and plots. All rendering logic lives in the library crates;
 //! this binary is the IO boundary.
 
+mod accum;
 mod bench;
 mod colormap;
 mod common;
@@ -34,6 +35,10 @@ enum Command {
     /// (run report) beside it. An interrupt stops after the pass in flight, writes what was
     /// rendered and exits with code 130; a second interrupt quits without writing.
     Render(render::RenderArgs),
+    /// Merge partial renders (their OUT.accum.exr files, from `render --first-pass`) into the
+    /// outputs of one render of all their passes, bit for bit: same scene, settings and seed
+    /// required, pass sets must not overlap, argument order does not matter.
+    Merge(render::MergeArgs),
     /// Map the weight w₀ = 1 − w₁ over every visible x₁ for a fixed x₀ (the preprint's Fig. 5):
     /// OUT.exr (channel w0) and OUT.png (log scale 0.008–1, x₀ marked). Modes whose weights
     /// depend on x₁ alone: bdd0, bdd1, threshold, algebraic-direct, algebraic, optimal.
@@ -60,6 +65,7 @@ fn main() -> ExitCode {
     let success = |()| ExitCode::SUCCESS;
     let result = match cli.command {
         Command::Render(args) => render::run(args),
+        Command::Merge(args) => render::merge(args),
         Command::Weights(args) => weights::run(args).map(success),
         Command::Predict(args) => predict::run(args).map(success),
         Command::Study(args) => study::run(args).map(success),

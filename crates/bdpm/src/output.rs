@@ -477,6 +477,17 @@ pub(crate) fn stage_exr_with_layers(
     })
 }
 
+/// Stages an EXR of arbitrary `channels` (any sample type) beside `path`, e.g. the
+/// accumulation file's u32 channels (see [`crate::accum`]).
+pub(crate) fn stage_exr_channels(
+    path: &Path,
+    size: (u32, u32),
+    channels: Vec<AnyChannel<FlatSamples>>,
+    attributes: &[(String, String)],
+) -> Result<Staged, String> {
+    stage(path, |f| encode_channels(f, size, channels, attributes))
+}
+
 /// Writes a float32 EXR with one channel, e.g. the weight map's `w0`.
 pub(crate) fn write_exr_single(
     path: &Path,

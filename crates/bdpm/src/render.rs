@@ -12,7 +12,10 @@ use clap::Args;
 use glam::DVec3;
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::common::{CliResult, Overrides, default_output, image_mean, prepare, say, thread_pool};
+use crate::accum::{self, Identity, PassRecord};
+use crate::common::{
+    CliResult, Overrides, default_output, image_mean, number, prepare, say, thread_pool, whole,
+};
 use crate::output::luminance;
 use crate::{output, report, signal};
 
@@ -38,6 +41,60 @@ pub(crate) struct RenderArgs {
     /// available on this machine (MemAvailable of /proc/meminfo), no limit where unknown.
     #[arg(long, value_parser = parse_bytes)]
     max_memory: Option<u64>,
+    /// Global index of the first pass: a partial render of passes K..K+N (with --passes N)
+    /// whose random streams are those of the same passes of a full render. Writes
+    /// OUT.accum.exr for `bdpm merge` and `--resume`.
+    #[arg(long, value_name = "K", value_parser = whole::<u32>)]
+    first_pass: Option<u32>,
+    /// Continue the render held by this accumulation file (finished or interrupted) with the
+    /// next --passes passes after the last one it holds; same scene and settings required.
+    #[arg(long, value_name = "PREVIOUS.accum.exr")]
+    resume: Option<PathBuf>,
+    /// Also write OUT.accum.exr, every pass's estimates for `bdpm merge` and `--resume`
+    /// (24 bytes per pixel per pass before compression; implied by --first-pass and --resume).
+    #[arg(long)]
+    accumulate: bool,
+    /// Stop after the pass during which the render time reaches SECONDS (--passes stays the
+    /// upper limit).
+    #[arg(long, value_name = "SECONDS", value_parser = positive)]
+    time_budget: Option<f64>,
+    /// Stop after the first pass that brings the image's mean relative standard error (of
+    /// the luminance, over pixels with a non-zero mean) below X, e.g. 0.05 (--passes stays the
+    /// upper limit).
+    #[arg(long, value_name = "X", value_parser = positive)]
+    target_noise: Option<f64>,
+}
+
+/// Arguments of `bdpm merge`.
+#[derive(Args, Debug)]
+pub(crate) struct MergeArgs {
+    /// Accumulation files of the parts (OUT.accum.exr of `bdpm render --first-pass`), in any
+    /// order.
+    #[arg(required = true, value_name = "PART.accum.exr")]
+    parts: Vec<PathBuf>,
+    /// Output EXR path; OUT.png, OUT-noise.png, OUT.json and OUT.accum.exr go beside it.
+    #[arg(short = 'o', long = "output")]
+    output: PathBuf,
+    /// Load the scene from this file instead of the path stored in the parts (its contents
+    /// must be the same: the hash is checked).
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// Do not draw a progress bar.
+    #[arg(long)]
+    quiet: bool,
+    /// Worker threads for preparing the renderer (default: all cores).
+    #[arg(long, value_parser = whole::<usize>)]
+    threads: Option<usize>,
+}
+
+/// A positive finite number for a flag.
+fn positive(s: &str) -> Result<f64, String> {
+    let v = number(s)?;
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("'{s}' is not a positive number"))
+    }
 }
 
 /// A byte count with an optional binary suffix (K, M, G, T; `B` or `iB` may follow).
@@ -106,6 +163,25 @@ impl LuminanceFilm {
         self.passes += 1;
     }
 
+    /// Mean over pixels with a non-zero mean luminance of (standard error of the mean) / mean;
+    /// `None` with fewer than two passes or an all-black image.
+    fn mean_relative_stderr(&self) -> Option<f64> {
+        if self.passes < 2 {
+            return None;
+        }
+        let k = self.passes as f64;
+        let (mut total, mut count) = (0.0, 0u64);
+        for (s, q) in self.sum.iter().zip(&self.sum_sq) {
+            let mean = s / k;
+            if mean > 0.0 {
+                let var = ((q - s * s / k) / (k - 1.0)).max(0.0);
+                total += (var / k).sqrt() / mean;
+                count += 1;
+            }
+        }
+        (count > 0).then(|| total / count as f64)
+    }
+
     /// √(unbiased per-pass variance) per pixel; zero with fewer than two passes.
     fn noise(&self) -> Vec<f64> {
         if self.passes < 2 {
@@ -156,11 +232,161 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
     // Installed first, so that an interrupt during loading and preparation also stops the
     // render cleanly (before its first pass) rather than killing it.
     signal::install()?;
+    if args.resume.is_some() && args.first_pass.is_some() {
+        return Err(
+            "--resume continues after the passes the file holds; do not also give --first-pass"
+                .into(),
+        );
+    }
+    let accumulate = args.accumulate || args.first_pass.is_some() || args.resume.is_some();
+    if args.techniques && accumulate {
+        return Err("--techniques cannot be combined with --first-pass, --resume or --accumulate: the accumulation file does not keep the technique layers".into());
+    }
+    let held = match &args.resume {
+        Some(path) => Some(accum::read(path)?),
+        None => None,
+    };
+    run_job(Job {
+        scene: args.scene,
+        overrides: args.overrides,
+        output: args.output,
+        quiet: args.quiet,
+        techniques: args.techniques,
+        max_memory: args.max_memory,
+        first_pass: args.first_pass,
+        held_from: held.iter().map(|h| h.path.clone()).collect(),
+        held,
+        accumulate,
+        time_budget: args.time_budget,
+        target_noise: args.target_noise,
+        merge: false,
+    })
+}
+
+/// Runs `bdpm merge`: checks that the parts belong to one render and do not overlap, then
+/// replays their passes in pass order into a fresh film and writes the outputs of `render`
+/// (and a merged accumulation file), with the bits of one render of the union of the passes.
+pub(crate) fn merge(args: MergeArgs) -> CliResult<ExitCode> {
+    signal::install()?;
+    let parts = args
+        .parts
+        .iter()
+        .map(|p| accum::read(p))
+        .collect::<Result<Vec<_>, _>>()?;
+    let reference = parts
+        .iter()
+        .min_by_key(|p| p.passes.first().map_or(u32::MAX, |r| r.index))
+        .map(|p| p.path.clone())
+        .unwrap_or_default();
+    let size = parts.first().map_or((0, 0), |p| p.size);
+    // Listed in pass order, not argument order, so that the report does not depend on it.
+    let mut sources: Vec<(u32, PathBuf)> = parts
+        .iter()
+        .map(|p| {
+            (
+                p.passes.first().map_or(u32::MAX, |r| r.index),
+                p.path.clone(),
+            )
+        })
+        .collect();
+    sources.sort();
+    let (identity, passes) = accum::combine(parts)?;
+    let mut overrides = accum::overrides_from_args(&identity.overrides)
+        .map_err(|e| format!("{}: {e}", reference.display()))?;
+    overrides.threads = args.threads;
+    let held = accum::Accumulation {
+        path: reference,
+        size,
+        identity: identity.clone(),
+        passes,
+    };
+    run_job(Job {
+        scene: args.scene.unwrap_or(identity.scene),
+        overrides,
+        output: Some(args.output),
+        quiet: args.quiet,
+        techniques: false,
+        max_memory: None,
+        first_pass: None,
+        held: Some(held),
+        held_from: sources.into_iter().map(|(_, p)| p).collect(),
+        accumulate: true,
+        time_budget: None,
+        target_noise: None,
+        merge: true,
+    })
+}
+
+/// One run of the render driver: passes replayed from accumulation files, then passes
+/// rendered, then the outputs.
+struct Job {
+    scene: PathBuf,
+    overrides: Overrides,
+    output: Option<PathBuf>,
+    quiet: bool,
+    techniques: bool,
+    max_memory: Option<u64>,
+    /// First pass to render (default 0, or after the held passes when resuming).
+    first_pass: Option<u32>,
+    /// Passes to replay before rendering (`--resume`, `bdpm merge`).
+    held: Option<accum::Accumulation>,
+    /// The files the held passes came from, for the report.
+    held_from: Vec<PathBuf>,
+    /// Write OUT.accum.exr.
+    accumulate: bool,
+    time_budget: Option<f64>,
+    target_noise: Option<f64>,
+    /// `bdpm merge`: render no pass.
+    merge: bool,
+}
+
+fn run_job(args: Job) -> CliResult<ExitCode> {
     let started = SystemTime::now();
     let t_start = Instant::now();
     let loaded = prepare(&args.scene, &args.overrides)?;
     let load_seconds = t_start.elapsed().as_secs_f64();
-    let (scene, settings) = (loaded.scene, loaded.settings);
+    let (scene, mut settings) = (loaded.scene, loaded.settings);
+    let identity = Identity::of(&args.scene, &settings, &args.overrides)?;
+    let (held, held_from) = match args.held {
+        Some(h) => {
+            if let Some(why) = identity.mismatch(&h.identity) {
+                return Err(format!(
+                    "{}: not a part of this render of {}: {why}",
+                    h.path.display(),
+                    args.scene.display()
+                ));
+            }
+            (h.passes, args.held_from)
+        }
+        None => (Vec::new(), Vec::new()),
+    };
+    if let Some(r) = held.first()
+        && r.estimates.len() != settings.width as usize * settings.height as usize
+    {
+        return Err(format!(
+            "{}: its passes do not have {}x{} pixels",
+            held_from[0].display(),
+            settings.width,
+            settings.height
+        ));
+    }
+    let first = match (args.first_pass, held.last()) {
+        (Some(k), _) => k,
+        (None, Some(last)) => last
+            .index
+            .checked_add(1)
+            .ok_or("no pass left after pass 4294967295")?,
+        (None, None) => 0,
+    };
+    let to_render = if args.merge {
+        settings.passes = held.len() as u32;
+        0
+    } else {
+        settings.passes
+    };
+    let end = first
+        .checked_add(to_render)
+        .ok_or("--first-pass + --passes exceeds the last pass index, 4294967295")?;
     if args.techniques && matches!(settings.mode, Mode::Path | Mode::Light) {
         return Err(format!(
             "--techniques: mode '{}' is a single technique with no layers to split; use a BDPM mode (e.g. --mode optimal)",
@@ -222,7 +448,7 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
     let bar = if args.quiet {
         ProgressBar::hidden()
     } else {
-        let bar = ProgressBar::new(settings.passes as u64 * renderer.work_per_pass());
+        let bar = ProgressBar::new(to_render as u64 * renderer.work_per_pass());
         let style = ProgressStyle::with_template(
             "{spinner} [{elapsed_precise}] {bar:40} {percent:>3}% pass {msg} (eta {eta})",
         )
@@ -242,13 +468,30 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
     let mut weights = WeightStats::default();
     let mut photon_map_bytes = 0u64;
     let mut photons_stored = 0u64;
+    // Held passes are replayed first: they all precede the passes rendered now, so the film
+    // adds every pass in pass order, exactly as one render of all of them would.
+    let mut records: Vec<PassRecord> = Vec::new();
+    let replayed = held.len() as u32;
+    for rec in held {
+        film.add_pass(&rec.estimates, rec.dropped);
+        luma.add_pass(&rec.estimates);
+        pass_means.push(image_mean(&rec.estimates));
+        samples += rec.samples;
+        photons_stored += rec.photons_stored;
+        records.push(rec);
+    }
+    let mut held_indices: Vec<u32> = records.iter().map(|r| r.index).collect();
+    let mut stop_reason = "completed";
+    let mut rendered = 0u32;
     let t_render = Instant::now();
-    for pass in 0..settings.passes {
+    for pass in first..end {
         if signal::requested() {
             break;
         }
-        bar.set_message(format!("{}/{}", pass + 1, settings.passes));
+        bar.set_message(format!("{}/{}", pass - first + 1, to_render));
         let out = pool.install(|| renderer.render_pass(pass, &|n| bar.inc(n)));
+        rendered += 1;
+        held_indices.push(pass);
         film.add_pass(&out.estimates, out.dropped);
         luma.add_pass(&out.estimates);
         if let (Some(sums), Some(t)) = (&mut techniques, &out.techniques) {
@@ -265,11 +508,38 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
                 None => stage_totals.push((name, secs)),
             }
         }
+        if args.accumulate {
+            records.push(PassRecord {
+                index: pass,
+                estimates: out.estimates,
+                dropped: out.dropped,
+                samples: out.samples,
+                photons_stored: out.photons_stored,
+            });
+        }
+        let last = pass + 1 == end;
+        if let Some(b) = args.time_budget
+            && t_render.elapsed().as_secs_f64() >= b
+            && !last
+        {
+            stop_reason = "time_budget";
+            break;
+        }
+        if let Some(x) = args.target_noise
+            && luma.mean_relative_stderr().is_some_and(|e| e < x)
+            && !last
+        {
+            stop_reason = "target_noise";
+            break;
+        }
     }
     let render_seconds = t_render.elapsed().as_secs_f64();
     bar.finish_and_clear();
     signal::begin_writing();
     let interrupted = signal::requested();
+    if interrupted {
+        stop_reason = "interrupted";
+    }
     if interrupted && film.passes() == 0 {
         eprintln!(
             "bdpm: interrupted before the first pass finished: nothing was written ({})",
@@ -299,6 +569,8 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
     let mut header = report::header_attributes(&settings, &renderer, radius_given);
     header.push(("passes_done".into(), film.passes().to_string()));
     header.push(("interrupted".into(), interrupted.to_string()));
+    header.push(("pass_list".into(), accum::ranges(&held_indices)));
+    header.push(("stop_reason".into(), stop_reason.into()));
     header.push(("run_id".into(), run_id.clone()));
     let layers = techniques
         .as_ref()
@@ -317,7 +589,38 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
     )
     .and_then(|bytes| output::stage_bytes(&outputs.noise_png, &bytes))
     .map_err(named(&outputs.noise_png))?;
+    let accum_path = args.accumulate.then(|| accum::path_beside(&outputs.exr));
+    let accum_file = match &accum_path {
+        Some(path) => {
+            let refs: Vec<&PassRecord> = records.iter().collect();
+            Some(
+                accum::stage(
+                    path,
+                    (settings.width, settings.height),
+                    &identity,
+                    &refs,
+                    &header,
+                )
+                .map_err(named(path))?,
+            )
+        }
+        None => None,
+    };
+    drop(records);
+    let plan = report::PassPlan {
+        passes_held: accum::ranges(&held_indices),
+        first_pass_rendered: (rendered > 0).then_some(first),
+        passes_rendered: rendered,
+        passes_replayed: replayed,
+        replayed_from: held_from.iter().map(|p| p.display().to_string()).collect(),
+        stop_reason,
+        time_budget_seconds: args.time_budget,
+        target_noise: args.target_noise,
+        mean_relative_standard_error: luma.mean_relative_stderr(),
+        accumulation_file: accum_path.as_ref().map(|p| p.display().to_string()),
+    };
     let run = report::RunReport::new(report::RunFacts {
+        plan: &plan,
         scene_path: &args.scene,
         settings: &settings,
         renderer: &renderer,
@@ -347,12 +650,21 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
     });
     let json = output::stage_bytes(&outputs.json, run.to_json().as_bytes())
         .map_err(named(&outputs.json))?;
-    output::commit_all(vec![png, noise_png, json, exr])?;
+    // The EXR stays last: the commit point of the set.
+    let mut staged = vec![png, noise_png, json];
+    staged.extend(accum_file);
+    staged.push(exr);
+    output::commit_all(staged)?;
     if interrupted {
         say!(
             "interrupted after {} of {} passes; the outputs hold those passes",
-            film.passes(),
-            settings.passes
+            rendered,
+            to_render
+        );
+    } else if stop_reason != "completed" {
+        say!(
+            "stopped by --{} after {rendered} of {to_render} passes",
+            stop_reason.replace('_', "-")
         );
     }
     say!(

@@ -35,6 +35,35 @@ pub(crate) struct RunFacts<'a> {
     pub(crate) warnings: &'a [String],
     /// The memory estimate made before the render, and what it was compared with.
     pub(crate) memory: MemoryFacts<'a>,
+    /// Which passes the outputs hold, where they came from and why the render stopped.
+    pub(crate) plan: &'a PassPlan,
+}
+
+/// Which passes a run's outputs hold and why it stopped (partial renders, merge, resume and
+/// budgets; docs/distributed.md).
+#[derive(Serialize, Clone, Debug)]
+pub(crate) struct PassPlan {
+    /// Every pass the outputs hold, as ranges of global pass indices (e.g. `0-3,6-9`).
+    pub(crate) passes_held: String,
+    /// First pass rendered by this run (`None` when it rendered none, e.g. `bdpm merge`).
+    pub(crate) first_pass_rendered: Option<u32>,
+    /// Passes rendered by this run.
+    pub(crate) passes_rendered: u32,
+    /// Passes replayed from accumulation files (`--resume`, `bdpm merge`).
+    pub(crate) passes_replayed: u32,
+    /// The accumulation files replayed.
+    pub(crate) replayed_from: Vec<String>,
+    /// `completed`, `interrupted`, `time_budget` or `target_noise`.
+    pub(crate) stop_reason: &'static str,
+    /// `--time-budget`, seconds of rendering.
+    pub(crate) time_budget_seconds: Option<f64>,
+    /// `--target-noise`: the mean relative standard error to stop below.
+    pub(crate) target_noise: Option<f64>,
+    /// Mean over pixels with a non-zero mean of the luminance's standard error of the mean
+    /// divided by its mean (dimensionless; `None` with fewer than two passes).
+    pub(crate) mean_relative_standard_error: Option<f64>,
+    /// The accumulation file written beside the EXR, if any.
+    pub(crate) accumulation_file: Option<String>,
 }
 
 /// The memory estimate and its limit.
@@ -173,6 +202,8 @@ pub(crate) struct RunReport {
     mean_radiance_standard_error: [f64; 3],
     mean_noise_sqrt_v: [f64; 3],
     pass_image_means: Vec<[f64; 3]>,
+    /// Which passes, from where, and why the render stopped.
+    plan: PassPlan,
     /// EXR, PNG preview, noise map PNG, JSON report.
     outputs: [String; 4],
     /// Warnings printed on stdout (skipped glTF content, a merge radius near the scene's
@@ -308,6 +339,7 @@ impl RunReport {
             mean_radiance: mean_of(&f.film.mean()),
             mean_radiance_standard_error: standard_error_of_mean(f.pass_means),
             pass_image_means: f.pass_means.to_vec(),
+            plan: f.plan.clone(),
             mean_noise_sqrt_v: mean_of(&noise),
             outputs: f.outputs.all().map(|p| p.display().to_string()),
             warnings: f.warnings.to_vec(),

@@ -1,0 +1,418 @@
+//! The accumulation file of a partial render (`OUT.accum.exr`, docs/distributed.md): every
+//! pass's per-pixel estimates in full f64 precision, with what identifies the render (scene
+//! hash, settings hash, seed, the overrides to rebuild the settings) and the pass list.
+//!
+//! Why per-pass estimates and not sums: the film adds passes into f64 sums in pass order, and
+//! f64 addition is not associative, so two partial sums added together give other bits than
+//! one render. Replaying the stored estimates in pass order into a fresh film reproduces the
+//! single render exactly. Cost: 24 bytes per pixel per pass (before the EXR's lossless
+//! compression).
+//!
+//! Layout: one EXR layer; per pass p, u32 channels `pNNNNNN.{R,G,B}.{hi,lo}` holding the high
+//! and low 32 bits of each f64 (EXR has no 64-bit float type); text attributes `accum.*`.
+use std::path::{Path, PathBuf};
+
+use exr::prelude::{AnyChannel, FlatSamples};
+use glam::DVec3;
+
+use crate::common::Overrides;
+use crate::output::{self, ExrLayer, Staged};
+use crate::study::reference::fnv1a;
+
+/// The value of `bdpm.accum.format`: bumped when the layout changes.
+pub(crate) const FORMAT: &str = "bdpm-accumulation-1";
+
+/// One pass as stored: its global index and what the film and the report need of it.
+#[derive(Clone, Debug)]
+pub(crate) struct PassRecord {
+    /// Global pass index (the key of its random streams).
+    pub(crate) index: u32,
+    /// Per-pixel pass estimates, row-major, W·m⁻²·sr⁻¹.
+    pub(crate) estimates: Vec<DVec3>,
+    /// Non-finite samples the pass dropped.
+    pub(crate) dropped: u64,
+    /// Camera samples the pass traced.
+    pub(crate) samples: u64,
+    /// Photons the pass stored.
+    pub(crate) photons_stored: u64,
+}
+
+/// What makes two partial renders parts of the same render.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Identity {
+    /// The scene file, absolute where it could be resolved.
+    pub(crate) scene: PathBuf,
+    /// FNV-1a of the scene file's bytes, hex.
+    pub(crate) scene_hash: String,
+    /// FNV-1a of the settings (pass count excluded), hex; covers seed, resolution, mode, ….
+    pub(crate) settings_hash: String,
+    /// Master seed (also inside the settings hash; kept readable for error messages).
+    pub(crate) seed: u64,
+    /// The command-line overrides that produced the settings, as arguments.
+    pub(crate) overrides: Vec<String>,
+}
+
+impl Identity {
+    /// The identity of a render of `scene` with `settings` made with `overrides`.
+    pub(crate) fn of(
+        scene: &Path,
+        settings: &bdpm_integrator::RenderSettings,
+        overrides: &Overrides,
+    ) -> Result<Identity, String> {
+        let bytes =
+            std::fs::read(scene).map_err(|e| format!("{}: cannot read: {e}", scene.display()))?;
+        Ok(Identity {
+            scene: std::fs::canonicalize(scene).unwrap_or_else(|_| scene.to_path_buf()),
+            scene_hash: format!("{:016x}", fnv1a(&bytes)),
+            settings_hash: settings_hash(settings),
+            seed: settings.seed,
+            overrides: overrides_to_args(overrides),
+        })
+    }
+
+    /// `None` when `other` is a part of the same render; else what differs, in words.
+    pub(crate) fn mismatch(&self, other: &Identity) -> Option<String> {
+        if self.scene_hash != other.scene_hash {
+            Some(format!(
+                "its scene file differs (hash {} against {})",
+                other.scene_hash, self.scene_hash
+            ))
+        } else if self.seed != other.seed {
+            Some(format!(
+                "its seed differs ({} against {})",
+                other.seed, self.seed
+            ))
+        } else if self.settings_hash != other.settings_hash {
+            Some(format!(
+                "its settings differ (settings hash {} against {})",
+                other.settings_hash, self.settings_hash
+            ))
+        } else {
+            None
+        }
+    }
+}
+
+/// FNV-1a of the settings' debug form with the pass count zeroed: a part's pass count is not
+/// part of what it renders (each pass depends on (seed, pass index, …) only).
+pub(crate) fn settings_hash(settings: &bdpm_integrator::RenderSettings) -> String {
+    let mut s = settings.clone();
+    s.passes = 0;
+    format!("{:016x}", fnv1a(format!("{s:?}").as_bytes()))
+}
+
+/// The overrides that shape the image as command-line arguments (`--threads` does not).
+pub(crate) fn overrides_to_args(o: &Overrides) -> Vec<String> {
+    let mut v = Vec::new();
+    let mut push = |k: &str, val: String| {
+        v.push(k.to_string());
+        v.push(val);
+    };
+    if let Some(m) = &o.mode {
+        push("--mode", m.clone());
+    }
+    if let Some((w, h)) = o.resolution {
+        push("--resolution", format!("{w}x{h}"));
+    }
+    if let Some(n) = o.photons {
+        push("--photons", n.to_string());
+    }
+    if let Some(n) = o.spp {
+        push("--spp", n.to_string());
+    }
+    if let Some(r) = o.radius {
+        // `{:?}` of an f64 round-trips exactly.
+        push("--radius", format!("{r:?}"));
+    }
+    if let Some(s) = o.seed {
+        push("--seed", s.to_string());
+    }
+    if let Some(m) = &o.noise_model {
+        push("--noise-model", m.clone());
+    }
+    if o.no_jitter {
+        v.push("--no-jitter".into());
+    }
+    v
+}
+
+/// Parses arguments made by [`overrides_to_args`] back into overrides.
+pub(crate) fn overrides_from_args(args: &[String]) -> Result<Overrides, String> {
+    use clap::Parser;
+    #[derive(Parser)]
+    struct Only {
+        #[command(flatten)]
+        o: Overrides,
+    }
+    Only::try_parse_from(std::iter::once("bdpm".to_string()).chain(args.iter().cloned()))
+        .map(|p| p.o)
+        .map_err(|e| format!("bad stored overrides {args:?}: {}", e.kind()))
+}
+
+/// The accumulation file beside the EXR `exr`: `OUT.accum.exr`.
+pub(crate) fn path_beside(exr: &Path) -> PathBuf {
+    exr.with_extension("accum.exr")
+}
+
+/// Pass indices as ranges, e.g. `0-3,6,8-9`.
+pub(crate) fn ranges(passes: &[u32]) -> String {
+    let mut out: Vec<String> = Vec::new();
+    let mut i = 0;
+    while i < passes.len() {
+        let mut j = i;
+        while j + 1 < passes.len() && passes[j + 1] == passes[j] + 1 {
+            j += 1;
+        }
+        out.push(if i == j {
+            passes[i].to_string()
+        } else {
+            format!("{}-{}", passes[i], passes[j])
+        });
+        i = j + 1;
+    }
+    out.join(",")
+}
+
+fn list<T: ToString>(values: impl Iterator<Item = T>) -> String {
+    values.map(|v| v.to_string()).collect::<Vec<_>>().join(",")
+}
+
+/// Stages the accumulation file at `path`: the passes (in the order given, which the callers
+/// keep ascending) and the identity, plus `extra` header attributes.
+pub(crate) fn stage(
+    path: &Path,
+    size: (u32, u32),
+    identity: &Identity,
+    passes: &[&PassRecord],
+    extra: &[(String, String)],
+) -> Result<Staged, String> {
+    let mut channels = Vec::with_capacity(passes.len() * 6);
+    for p in passes {
+        for (c, name) in ["R", "G", "B"].iter().enumerate() {
+            let bits = || p.estimates.iter().map(move |e| e[c].to_bits());
+            let hi = bits().map(|b| (b >> 32) as u32).collect();
+            let lo = bits().map(|b| b as u32).collect();
+            let base = format!("p{:06}.{name}", p.index);
+            channels.push(AnyChannel::new(
+                format!("{base}.hi").as_str(),
+                FlatSamples::U32(hi),
+            ));
+            channels.push(AnyChannel::new(
+                format!("{base}.lo").as_str(),
+                FlatSamples::U32(lo),
+            ));
+        }
+    }
+    let mut attrs = extra.to_vec();
+    let overrides = serde_json::to_string(&identity.overrides).map_err(|e| e.to_string())?;
+    attrs.extend([
+        ("accum.format".to_string(), FORMAT.to_string()),
+        (
+            "accum.scene".into(),
+            identity.scene.to_string_lossy().into_owned(),
+        ),
+        ("accum.scene_hash".into(), identity.scene_hash.clone()),
+        ("accum.settings_hash".into(), identity.settings_hash.clone()),
+        ("accum.seed".into(), identity.seed.to_string()),
+        ("accum.overrides".into(), overrides),
+        ("accum.passes".into(), list(passes.iter().map(|p| p.index))),
+        (
+            "accum.dropped".into(),
+            list(passes.iter().map(|p| p.dropped)),
+        ),
+        (
+            "accum.samples".into(),
+            list(passes.iter().map(|p| p.samples)),
+        ),
+        (
+            "accum.photons_stored".into(),
+            list(passes.iter().map(|p| p.photons_stored)),
+        ),
+    ]);
+    output::stage_exr_channels(path, size, channels, &attrs)
+}
+
+/// A partial render read back.
+pub(crate) struct Accumulation {
+    /// The file it came from.
+    pub(crate) path: PathBuf,
+    /// Image size, pixels.
+    pub(crate) size: (u32, u32),
+    /// Which render it is part of.
+    pub(crate) identity: Identity,
+    /// Its passes, ascending by index.
+    pub(crate) passes: Vec<PassRecord>,
+}
+
+/// Reads an accumulation file; every error is one line naming the file.
+pub(crate) fn read(path: &Path) -> Result<Accumulation, String> {
+    let layer = ExrLayer::read(path)?;
+    let bad = |what: &str| format!("{}: not a bdpm accumulation file ({what})", path.display());
+    let attr = |k: &str| {
+        layer
+            .attributes
+            .iter()
+            .find(|(n, _)| n == k)
+            .map(|(_, v)| v.as_str())
+            .ok_or_else(|| bad(&format!("no {k} attribute")))
+    };
+    let format = attr("accum.format")?;
+    if format != FORMAT {
+        return Err(bad(&format!(
+            "format '{format}', this bdpm reads '{FORMAT}'"
+        )));
+    }
+    fn numbers<T: std::str::FromStr>(s: &str) -> Option<Vec<T>> {
+        if s.is_empty() {
+            return Some(Vec::new());
+        }
+        s.split(',').map(|x| x.parse().ok()).collect()
+    }
+    let field = |k: &str| -> Result<Vec<u64>, String> {
+        numbers(attr(k)?).ok_or_else(|| bad(&format!("{k} is not a list of numbers")))
+    };
+    let indices: Vec<u32> = numbers(attr("accum.passes")?)
+        .ok_or_else(|| bad("accum.passes is not a list of pass numbers"))?;
+    let (dropped, samples, photons) = (
+        field("accum.dropped")?,
+        field("accum.samples")?,
+        field("accum.photons_stored")?,
+    );
+    if [dropped.len(), samples.len(), photons.len()] != [indices.len(); 3] {
+        return Err(bad("the per-pass lists differ in length"));
+    }
+    if indices.windows(2).any(|w| w[0] >= w[1]) {
+        return Err(bad("accum.passes is not strictly ascending"));
+    }
+    let overrides: Vec<String> = serde_json::from_str(attr("accum.overrides")?)
+        .map_err(|_| bad("accum.overrides is not a JSON list of strings"))?;
+    let seed = attr("accum.seed")?
+        .parse()
+        .map_err(|_| bad("accum.seed is not a number"))?;
+    let identity = Identity {
+        scene: PathBuf::from(attr("accum.scene")?),
+        scene_hash: attr("accum.scene_hash")?.to_string(),
+        settings_hash: attr("accum.settings_hash")?.to_string(),
+        seed,
+        overrides,
+    };
+    let mut passes = Vec::with_capacity(indices.len());
+    for (i, &index) in indices.iter().enumerate() {
+        let mut channels = Vec::with_capacity(6);
+        for name in ["R", "G", "B"] {
+            for half in ["hi", "lo"] {
+                let c = format!("p{index:06}.{name}.{half}");
+                channels.push(
+                    layer
+                        .channel(&c)
+                        .ok_or_else(|| bad(&format!("pass {index} has no channel {c}")))?,
+                );
+            }
+        }
+        // The u32 samples come back as exact f64 integers.
+        let word = |c: usize, px: usize| {
+            f64::from_bits(((channels[2 * c][px] as u64) << 32) | channels[2 * c + 1][px] as u64)
+        };
+        let estimates = (0..channels[0].len())
+            .map(|px| DVec3::new(word(0, px), word(1, px), word(2, px)))
+            .collect();
+        passes.push(PassRecord {
+            index,
+            estimates,
+            dropped: dropped[i],
+            samples: samples[i],
+            photons_stored: photons[i],
+        });
+    }
+    Ok(Accumulation {
+        path: path.to_path_buf(),
+        size: (layer.width, layer.height),
+        identity,
+        passes,
+    })
+}
+
+/// Checks that `parts` are parts of one render with disjoint pass sets, and returns all their
+/// passes sorted by index (so the result does not depend on the order of the parts). Errors
+/// are one line naming the offending file.
+pub(crate) fn combine(parts: Vec<Accumulation>) -> Result<(Identity, Vec<PassRecord>), String> {
+    let first = parts.first().ok_or("no parts to merge")?;
+    // The reference identity is the part holding the lowest pass: canonical, not argument order.
+    let reference = parts
+        .iter()
+        .min_by_key(|p| p.passes.first().map_or(u32::MAX, |r| r.index))
+        .unwrap_or(first);
+    for p in &parts {
+        if let Some(why) = reference.identity.mismatch(&p.identity) {
+            return Err(format!(
+                "{}: not a part of the same render as {}: {why}",
+                p.path.display(),
+                reference.path.display()
+            ));
+        }
+        if p.size != reference.size {
+            return Err(format!(
+                "{}: image size {}x{} differs from {}x{} of {}",
+                p.path.display(),
+                p.size.0,
+                p.size.1,
+                reference.size.0,
+                reference.size.1,
+                reference.path.display()
+            ));
+        }
+    }
+    let mut owner: std::collections::BTreeMap<u32, &Path> = Default::default();
+    for p in &parts {
+        let mut shared = Vec::new();
+        let mut other = None;
+        for r in &p.passes {
+            if let Some(o) = owner.get(&r.index) {
+                shared.push(r.index);
+                other = Some(*o);
+            }
+        }
+        if let Some(o) = other {
+            return Err(format!(
+                "{}: passes {} are also in {}",
+                p.path.display(),
+                ranges(&shared),
+                o.display()
+            ));
+        }
+        for r in &p.passes {
+            owner.insert(r.index, &p.path);
+        }
+    }
+    let identity = reference.identity.clone();
+    let mut passes: Vec<PassRecord> = parts.into_iter().flat_map(|p| p.passes).collect();
+    passes.sort_by_key(|p| p.index);
+    Ok((identity, passes))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_compress_runs() {
+        assert_eq!(ranges(&[0, 1, 2, 3, 6, 8, 9]), "0-3,6,8-9");
+        assert_eq!(ranges(&[]), "");
+    }
+
+    #[test]
+    fn overrides_round_trip() {
+        let o = Overrides {
+            mode: Some("optimal".into()),
+            resolution: Some((16, 8)),
+            photons: Some(100),
+            radius: Some(0.1),
+            seed: Some(7),
+            no_jitter: true,
+            ..Default::default()
+        };
+        let back = overrides_from_args(&overrides_to_args(&o)).unwrap();
+        assert_eq!(overrides_to_args(&back), overrides_to_args(&o));
+        assert_eq!(back.radius, Some(0.1));
+    }
+}
