@@ -1059,3 +1059,248 @@ fn memory_is_estimated_before_the_render_and_refused_above_the_limit() {
         );
     }
 }
+
+/// A small Cornell render for the partial-render tests: 16×16, few photons, one sample.
+fn small_render(out: &Path, extra: &[&str]) -> Output {
+    let out = run(bdpm()
+        .arg("render")
+        .arg(scene("cornell-lambert.toml"))
+        .args(["--resolution", "16x16", "--photons", "2000", "--spp", "1"])
+        .args(["--mode", "optimal", "--quiet"])
+        .args(extra)
+        .arg("-o")
+        .arg(out));
+    assert_success(&out);
+    out
+}
+
+fn merge(parts: &[PathBuf], out: &Path) -> Output {
+    run(bdpm()
+        .arg("merge")
+        .args(parts)
+        .args(["--quiet", "-o"])
+        .arg(out))
+}
+
+/// The report fields that must be bit-identical between two renders of the same passes (the
+/// JSON prints f64 so that it reads back exactly), and the EXR's mean, noise and stderr bits.
+fn assert_same_bits(a: &Path, b: &Path) {
+    let (ja, jb) = (
+        read_json(&a.with_extension("json")),
+        read_json(&b.with_extension("json")),
+    );
+    for key in [
+        "passes_done",
+        "mean_radiance",
+        "mean_radiance_standard_error",
+        "mean_noise_sqrt_v",
+        "pass_image_means",
+        "dropped_samples",
+        "camera_samples",
+    ] {
+        assert_eq!(
+            ja[key],
+            jb[key],
+            "{key}: {} vs {}",
+            a.display(),
+            b.display()
+        );
+    }
+    assert_eq!(ja["plan"]["passes_held"], jb["plan"]["passes_held"]);
+    let (ea, eb) = (Exr::read(a), Exr::read(b));
+    for prefix in ["", "noise", "stderr"] {
+        for c in rgb(prefix) {
+            let bits = |e: &Exr| {
+                e.channel(&c)
+                    .iter()
+                    .map(|v| v.to_bits())
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(bits(&ea), bits(&eb), "channel {c}");
+        }
+    }
+    for f in [a, b] {
+        let out = run(bdpm()
+            .arg("compare")
+            .arg("--require-identical")
+            .arg(a)
+            .arg(f));
+        assert_success(&out);
+    }
+}
+
+#[test]
+fn partial_renders_merged_in_any_order_equal_one_render() {
+    let dir = TempDir::new("merge");
+    let full = dir.path("full.exr");
+    small_render(&full, &["--passes", "10"]);
+    let mut parts = Vec::new();
+    for (first, n) in [(0, 4), (4, 2), (6, 4)] {
+        let out = dir.path(&format!("part{first}.exr"));
+        small_render(
+            &out,
+            &[
+                "--first-pass",
+                &first.to_string(),
+                "--passes",
+                &n.to_string(),
+            ],
+        );
+        parts.push(dir.path(&format!("part{first}.accum.exr")));
+    }
+    for (i, order) in [[2, 0, 1], [1, 2, 0]].iter().enumerate() {
+        let shuffled: Vec<PathBuf> = order.iter().map(|&k| parts[k].clone()).collect();
+        let merged = dir.path(&format!("merged{i}.exr"));
+        let out = merge(&shuffled, &merged);
+        assert_success(&out);
+        assert_same_bits(&full, &merged);
+        let json = read_json(&merged.with_extension("json"));
+        assert_eq!(json["plan"]["passes_held"], "0-9");
+        assert_eq!(json["plan"]["passes_replayed"], 10);
+        assert!(dir.path(&format!("merged{i}.accum.exr")).is_file());
+    }
+    // A merged accumulation file merges again: (0-3 + 4-5) + 6-9.
+    let ab = dir.path("ab.exr");
+    assert_success(&merge(&parts[..2], &ab));
+    let again = dir.path("again.exr");
+    assert_success(&merge(
+        &[parts[2].clone(), dir.path("ab.accum.exr")],
+        &again,
+    ));
+    assert_same_bits(&full, &again);
+    assert!(dir.hidden_files().is_empty(), "{:?}", dir.hidden_files());
+}
+
+#[test]
+fn overlapping_or_mismatched_parts_are_refused() {
+    let dir = TempDir::new("merge-bad");
+    small_render(&dir.path("a.exr"), &["--first-pass", "0", "--passes", "3"]);
+    small_render(&dir.path("b.exr"), &["--first-pass", "2", "--passes", "2"]);
+    small_render(
+        &dir.path("s.exr"),
+        &["--first-pass", "3", "--passes", "1", "--seed", "9"],
+    );
+    small_render(
+        &dir.path("m.exr"),
+        &["--first-pass", "3", "--passes", "1", "--no-jitter"],
+    );
+    let (a, b) = (dir.path("a.accum.exr"), dir.path("b.accum.exr"));
+    let out = merge(&[a.clone(), b.clone()], &dir.path("x.exr"));
+    assert_one_line_error(&out, &["b.accum.exr", "passes 2", "a.accum.exr"]);
+    let out = merge(&[a.clone(), dir.path("s.accum.exr")], &dir.path("x.exr"));
+    assert_one_line_error(&out, &["s.accum.exr", "seed"]);
+    let out = merge(&[dir.path("m.accum.exr"), a.clone()], &dir.path("x.exr"));
+    assert_one_line_error(&out, &["m.accum.exr", "settings"]);
+    // A plain render's EXR is not an accumulation file.
+    let out = merge(&[a.clone(), dir.path("b.exr")], &dir.path("x.exr"));
+    assert_one_line_error(&out, &["b.exr", "not a bdpm accumulation file"]);
+    // Resuming with other settings is refused the same way.
+    let out = run(bdpm()
+        .arg("render")
+        .arg(scene("cornell-lambert.toml"))
+        .args(["--resolution", "16x16", "--photons", "3000", "--spp", "1"])
+        .args(["--mode", "optimal", "--quiet", "--passes", "1", "--resume"])
+        .arg(&a)
+        .arg("-o")
+        .arg(dir.path("r.exr")));
+    assert_one_line_error(&out, &["a.accum.exr", "settings"]);
+    assert!(!dir.path("x.exr").exists() && !dir.path("r.exr").exists());
+}
+
+#[test]
+fn resumed_render_equals_an_uninterrupted_one() {
+    let dir = TempDir::new("resume");
+    let full = dir.path("full.exr");
+    small_render(&full, &["--passes", "5"]);
+    small_render(&dir.path("r.exr"), &["--passes", "2", "--accumulate"]);
+    // Resume in place: the file read is replaced by the one written.
+    let resumed = dir.path("r.exr");
+    small_render(
+        &resumed,
+        &[
+            "--passes",
+            "3",
+            "--resume",
+            dir.path("r.accum.exr").to_str().unwrap(),
+        ],
+    );
+    assert_same_bits(&full, &resumed);
+    let json = read_json(&resumed.with_extension("json"));
+    assert_eq!(json["plan"]["first_pass_rendered"], 2);
+    assert_eq!(json["plan"]["passes_replayed"], 2);
+}
+
+#[test]
+fn interrupted_render_resumes_after_the_passes_it_holds() {
+    let dir = TempDir::new("resume-int");
+    for wait in [1.5, 6.0] {
+        let mut child = bdpm()
+            .arg("render")
+            .arg(scene("cornell-lambert.toml"))
+            .args(["--resolution", "16x16", "--photons", "2000", "--spp", "1"])
+            .args(["--mode", "optimal", "--quiet", "--threads", "1"])
+            .args(["--passes", "100000", "--accumulate", "-o"])
+            .arg(dir.path("i.exr"))
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start bdpm");
+        std::thread::sleep(Duration::from_secs_f64(wait));
+        assert_eq!(interrupt(&mut child), Some(130));
+        if !dir.path("i.accum.exr").is_file() {
+            continue;
+        }
+        let done = read_json(&dir.path("i.json"))["passes_done"]
+            .as_u64()
+            .expect("passes_done");
+        assert!(done >= 1);
+        let accum = dir.path("i.accum.exr");
+        small_render(
+            &dir.path("i2.exr"),
+            &["--passes", "2", "--resume", accum.to_str().unwrap()],
+        );
+        let json = read_json(&dir.path("i2.json"));
+        assert_eq!(json["plan"]["first_pass_rendered"], done);
+        let full = dir.path("full.exr");
+        small_render(&full, &["--passes", &(done + 2).to_string()]);
+        assert_same_bits(&full, &dir.path("i2.exr"));
+        return;
+    }
+    panic!("the render did not finish a pass within 6 s");
+}
+
+#[test]
+fn budgets_stop_after_the_pass_that_crosses_them() {
+    let dir = TempDir::new("budget");
+    // Any pass takes longer than a microsecond: the first one crosses the budget.
+    let t = dir.path("t.exr");
+    small_render(&t, &["--passes", "50", "--time-budget", "0.000001"]);
+    let json = read_json(&t.with_extension("json"));
+    assert_eq!(json["passes_done"], 1);
+    assert_eq!(json["plan"]["stop_reason"], "time_budget");
+    assert_eq!(json["plan"]["time_budget_seconds"], 0.000001);
+
+    let x = 0.5;
+    let n = dir.path("n.exr");
+    small_render(&n, &["--passes", "200", "--target-noise", &x.to_string()]);
+    let json = read_json(&n.with_extension("json"));
+    assert_eq!(json["plan"]["stop_reason"], "target_noise");
+    let done = json["passes_done"].as_u64().expect("passes_done");
+    let reached = json["plan"]["mean_relative_standard_error"]
+        .as_f64()
+        .expect("mean_relative_standard_error");
+    assert!(
+        reached < x && (2..200).contains(&done),
+        "{reached} after {done}"
+    );
+    // One pass fewer had not reached it.
+    let before = dir.path("before.exr");
+    small_render(&before, &["--passes", &(done - 1).to_string()]);
+    let prior =
+        read_json(&before.with_extension("json"))["plan"]["mean_relative_standard_error"].as_f64();
+    assert!(
+        prior.is_none_or(|p| p >= x),
+        "{prior:?} after {} passes",
+        done - 1
+    );
+}
