@@ -481,6 +481,7 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
         records.push(rec);
     }
     let mut held_indices: Vec<u32> = records.iter().map(|r| r.index).collect();
+    let replayed_samples = samples;
     let mut stop_reason = "completed";
     let mut rendered = 0u32;
     let t_render = Instant::now();
@@ -534,6 +535,7 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
         }
     }
     let render_seconds = t_render.elapsed().as_secs_f64();
+    let rendered_samples = samples - replayed_samples;
     bar.finish_and_clear();
     signal::begin_writing();
     let interrupted = signal::requested();
@@ -628,6 +630,7 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
         film: &film,
         threads,
         samples,
+        rendered_samples,
         load_seconds,
         prepare_seconds,
         render_seconds,
@@ -667,15 +670,27 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
             stop_reason.replace('_', "-")
         );
     }
+    if replayed > 0 {
+        say!(
+            "replayed {replayed} passes ({}) from {}",
+            accum::ranges(&held_indices[..replayed as usize]),
+            held_from
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
     say!(
-        "rendered {} ({}x{}, mode {}, {} passes) in {:.2} s: {:.3} M samples/s on {} threads",
+        "rendered {} ({}x{}, mode {}, {} new passes, {} in all) in {:.2} s: {:.3} M samples/s on {} threads",
         args.scene.display(),
         settings.width,
         settings.height,
         settings.mode,
+        rendered,
         film.passes(),
         render_seconds,
-        samples as f64 / render_seconds.max(1e-9) / 1e6,
+        rendered_samples as f64 / render_seconds.max(1e-9) / 1e6,
         threads
     );
     for w in &warnings[known_before..] {

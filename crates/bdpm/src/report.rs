@@ -17,6 +17,8 @@ pub(crate) struct RunFacts<'a> {
     pub(crate) film: &'a Film,
     pub(crate) threads: usize,
     pub(crate) samples: u64,
+    /// Camera samples of the passes rendered in this run (not replayed), for the rate.
+    pub(crate) rendered_samples: u64,
     pub(crate) load_seconds: f64,
     pub(crate) prepare_seconds: f64,
     pub(crate) render_seconds: f64,
@@ -313,7 +315,7 @@ impl RunReport {
                 load_s: f.load_seconds,
                 prepare_s: f.prepare_seconds,
                 render_s: f.render_seconds,
-                samples_per_second: f.samples as f64 / f.render_seconds.max(1e-9),
+                samples_per_second: f.rendered_samples as f64 / f.render_seconds.max(1e-9),
                 pass_stages: f
                     .pass_stages
                     .iter()
