@@ -10,7 +10,16 @@ repo=$(pwd)
 bdpm="$repo/target/release/bdpm"
 [ -x "$bdpm" ] || cargo build --release -p bdpm
 if ! command -v slurmctld >/dev/null || ! command -v munged >/dev/null; then
-    DEBIAN_FRONTEND=noninteractive apt-get install -y -q slurm-wlm munge >/dev/null
+    # A machine that cannot install the packages (no root, no apt, no package lists) cannot
+    # run this test at all: say so and stop without failing; everything after this point
+    # that fails is a failure of the recipe.
+    if ! { [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null &&
+        { DEBIAN_FRONTEND=noninteractive apt-get install -y -q slurm-wlm munge >/dev/null 2>&1 ||
+          { apt-get update -q >/dev/null 2>&1 &&
+            DEBIAN_FRONTEND=noninteractive apt-get install -y -q slurm-wlm munge >/dev/null 2>&1; }; }; }; then
+        echo "SKIPPED: the Slurm test needs root and the slurm-wlm and munge packages"
+        exit 0
+    fi
 fi
 dir=$(mktemp -d /tmp/bdpm-slurm.XXXXXX)
 chmod 755 "$dir"  # munged runs as munge and must reach its socket directory
