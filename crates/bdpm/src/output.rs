@@ -412,14 +412,42 @@ fn channel(name: &str, values: impl Iterator<Item = f32>) -> AnyChannel<FlatSamp
     AnyChannel::new(name, FlatSamples::F32(values.collect()))
 }
 
-fn rgb_channels(prefix: &str, data: &[DVec3], out: &mut Vec<AnyChannel<FlatSamples>>) {
-    for (c, name) in ["R", "G", "B"].iter().enumerate() {
+/// Sample type of an EXR's colour and layer channels (`--exr-precision`); the accumulation
+/// file is always exact and does not use this.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum Precision {
+    /// 32-bit float (the default).
+    #[default]
+    Float,
+    /// 16-bit half float: half the size, about 3 significant digits, overflows above 65504.
+    Half,
+}
+
+/// An extra EXR layer: name, its three channel names and per-pixel values.
+pub(crate) type ExtraLayer<'a> = (&'a str, [&'a str; 3], Vec<DVec3>);
+
+/// Channel names of an RGB layer.
+pub(crate) const RGB: [&str; 3] = ["R", "G", "B"];
+
+fn rgb_channels(
+    prefix: &str,
+    names: [&str; 3],
+    data: &[DVec3],
+    precision: Precision,
+    out: &mut Vec<AnyChannel<FlatSamples>>,
+) {
+    for (c, name) in names.iter().enumerate() {
         let full = if prefix.is_empty() {
             name.to_string()
         } else {
             format!("{prefix}.{name}")
         };
-        out.push(channel(&full, data.iter().map(|v| v[c] as f32)));
+        let values = data.iter().map(|v| v[c]);
+        let samples = match precision {
+            Precision::Float => FlatSamples::F32(values.map(|x| x as f32).collect()),
+            Precision::Half => FlatSamples::F16(values.map(exr::prelude::f16::from_f64).collect()),
+        };
+        out.push(AnyChannel::new(full.as_str(), samples));
     }
 }
 
@@ -431,22 +459,16 @@ pub(crate) fn write_exr(
     film: &Film,
     attributes: &[(String, String)],
 ) -> Result<(), String> {
-    write_exr_with_layers(path, film, attributes, &[])
-}
-
-/// [`write_exr`] plus `extra` RGB layers (name, per-pixel values), e.g. the technique layers.
-pub(crate) fn write_exr_with_layers(
-    path: &Path,
-    film: &Film,
-    attributes: &[(String, String)],
-    extra: &[(&str, Vec<DVec3>)],
-) -> Result<(), String> {
-    let channels = film_channels(film, extra);
+    let channels = film_channels(film, &[], Precision::Float);
     write_channels(path, (film.width, film.height), channels, attributes)
 }
 
-/// The film's mean, `noise` and `stderr` RGB layers, then `extra`.
-fn film_channels(film: &Film, extra: &[(&str, Vec<DVec3>)]) -> Vec<AnyChannel<FlatSamples>> {
+/// The film's mean, `noise` and `stderr` RGB layers, then `extra`, at `precision`.
+fn film_channels(
+    film: &Film,
+    extra: &[ExtraLayer<'_>],
+    precision: Precision,
+) -> Vec<AnyChannel<FlatSamples>> {
     let mean = film.mean();
     let noise: Vec<DVec3> = film
         .pass_variance()
@@ -455,23 +477,25 @@ fn film_channels(film: &Film, extra: &[(&str, Vec<DVec3>)]) -> Vec<AnyChannel<Fl
         .collect();
     let stderr = film.standard_error();
     let mut channels = Vec::new();
-    rgb_channels("", &mean, &mut channels);
-    rgb_channels("noise", &noise, &mut channels);
-    rgb_channels("stderr", &stderr, &mut channels);
-    for (name, data) in extra {
-        rgb_channels(name, data, &mut channels);
+    rgb_channels("", RGB, &mean, precision, &mut channels);
+    rgb_channels("noise", RGB, &noise, precision, &mut channels);
+    rgb_channels("stderr", RGB, &stderr, precision, &mut channels);
+    for (name, names, data) in extra {
+        rgb_channels(name, *names, data, precision, &mut channels);
     }
     channels
 }
 
-/// [`write_exr_with_layers`] to a staged temporary file beside `path` (see [`stage`]).
+/// Stages the film's EXR (see [`write_exr`]) plus `extra` layers (e.g. the technique or
+/// first-hit layers) at `precision`, as a temporary file beside `path` (see [`stage`]).
 pub(crate) fn stage_exr_with_layers(
     path: &Path,
     film: &Film,
     attributes: &[(String, String)],
-    extra: &[(&str, Vec<DVec3>)],
+    extra: &[ExtraLayer<'_>],
+    precision: Precision,
 ) -> Result<Staged, String> {
-    let channels = film_channels(film, extra);
+    let channels = film_channels(film, extra, precision);
     stage(path, |f| {
         encode_channels(f, (film.width, film.height), channels, attributes)
     })

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use std::time::{Instant, SystemTime};
 
 use bdpm_integrator::{
-    Film, Mode, Renderer, Techniques, WeightStats, estimate_memory, human_bytes,
+    Film, Mode, Renderer, Techniques, WeightStats, estimate_memory, first_hit_layers, human_bytes,
 };
 use clap::Args;
 use glam::DVec3;
@@ -36,6 +36,14 @@ pub(crate) struct RenderArgs {
     /// x1_raw, x1_weighted (BDPM modes only; direct + x0_weighted + x1_weighted = the image).
     #[arg(long)]
     techniques: bool,
+    /// Also write denoiser inputs as EXR layers albedo.R/G/B (directional albedo of the
+    /// surface first seen, in [0, 1]) and normal.X/Y/Z (its world-space unit shading normal),
+    /// averaged over the pixel's camera samples of pass 0; 0 where nothing is seen.
+    #[arg(long)]
+    aov: bool,
+    /// Sample type of the EXR's colour and layer channels (OUT.accum.exr stays exact).
+    #[arg(long, value_enum, value_name = "P", default_value = "float")]
+    exr_precision: output::Precision,
     /// Refuse to start a render whose estimated peak memory exceeds this, e.g. 8G, 512M,
     /// 100000K or a number of bytes (K, M, G, T are powers of 1024). Default: the memory
     /// available on this machine (MemAvailable of /proc/meminfo), no limit where unknown.
@@ -213,15 +221,15 @@ impl TechniqueSums {
     }
 
     /// The named layers: means over `passes`.
-    fn layers(&self, passes: u32) -> Vec<(&'static str, Vec<DVec3>)> {
+    fn layers(&self, passes: u32) -> Vec<output::ExtraLayer<'static>> {
         let k = passes.max(1) as f64;
         let layer = |f: fn(&Techniques) -> DVec3| self.sums.iter().map(|t| f(t) / k).collect();
         vec![
-            ("direct", layer(|t| t.direct)),
-            ("x0_raw", layer(|t| t.x0_raw)),
-            ("x0_weighted", layer(|t| t.x0_weighted)),
-            ("x1_raw", layer(|t| t.x1_raw)),
-            ("x1_weighted", layer(|t| t.x1_weighted)),
+            ("direct", output::RGB, layer(|t| t.direct)),
+            ("x0_raw", output::RGB, layer(|t| t.x0_raw)),
+            ("x0_weighted", output::RGB, layer(|t| t.x0_weighted)),
+            ("x1_raw", output::RGB, layer(|t| t.x1_raw)),
+            ("x1_weighted", output::RGB, layer(|t| t.x1_weighted)),
         ]
     }
 }
@@ -252,6 +260,8 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
         output: args.output,
         quiet: args.quiet,
         techniques: args.techniques,
+        aov: args.aov,
+        precision: args.exr_precision,
         max_memory: args.max_memory,
         first_pass: args.first_pass,
         held_from: held.iter().map(|h| h.path.clone()).collect(),
@@ -306,6 +316,8 @@ pub(crate) fn merge(args: MergeArgs) -> CliResult<ExitCode> {
         output: Some(args.output),
         quiet: args.quiet,
         techniques: false,
+        aov: false,
+        precision: output::Precision::Float,
         max_memory: None,
         first_pass: None,
         held: Some(held),
@@ -325,6 +337,10 @@ struct Job {
     output: Option<PathBuf>,
     quiet: bool,
     techniques: bool,
+    /// Write the first-hit `albedo` and `normal` layers.
+    aov: bool,
+    /// Sample type of the EXR's channels.
+    precision: output::Precision,
     max_memory: Option<u64>,
     /// First pass to render (default 0, or after the held passes when resuming).
     first_pass: Option<u32>,
@@ -574,11 +590,16 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
     header.push(("pass_list".into(), accum::ranges(&held_indices)));
     header.push(("stop_reason".into(), stop_reason.into()));
     header.push(("run_id".into(), run_id.clone()));
-    let layers = techniques
+    let mut layers = techniques
         .as_ref()
         .map(|t| t.layers(film.passes()))
         .unwrap_or_default();
-    let exr = output::stage_exr_with_layers(&outputs.exr, &film, &header, &layers)
+    if args.aov {
+        let first = pool.install(|| first_hit_layers(&scene, &settings));
+        layers.push(("albedo", output::RGB, first.albedo));
+        layers.push(("normal", ["X", "Y", "Z"], first.normal));
+    }
+    let exr = output::stage_exr_with_layers(&outputs.exr, &film, &header, &layers, args.precision)
         .map_err(named(&outputs.exr))?;
     drop(layers);
     let png = output::encode_png(&film)

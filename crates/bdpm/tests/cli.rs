@@ -75,6 +75,8 @@ struct Exr {
     width: usize,
     height: usize,
     channels: HashMap<String, Vec<f32>>,
+    /// Names of the channels stored as half floats.
+    halves: Vec<String>,
     attributes: HashMap<String, String>,
 }
 
@@ -85,11 +87,17 @@ impl Exr {
         assert_eq!(image.layer_data.len(), 1, "one layer");
         let layer = &image.layer_data[0];
         let mut channels = HashMap::new();
+        let mut halves = Vec::new();
         for c in &layer.channel_data.list {
-            let exr::prelude::FlatSamples::F32(v) = &c.sample_data else {
-                panic!("channel {} is not float32", c.name);
+            let v = match &c.sample_data {
+                exr::prelude::FlatSamples::F32(v) => v.clone(),
+                exr::prelude::FlatSamples::F16(v) => {
+                    halves.push(c.name.to_string());
+                    v.iter().map(|x| x.to_f32()).collect()
+                }
+                _ => panic!("channel {} is not float32 or half", c.name),
             };
-            channels.insert(c.name.to_string(), v.clone());
+            channels.insert(c.name.to_string(), v);
         }
         let mut attributes = HashMap::new();
         for (k, v) in &layer.attributes.other {
@@ -101,6 +109,7 @@ impl Exr {
             width: layer.size.0,
             height: layer.size.1,
             channels,
+            halves,
             attributes,
         }
     }
@@ -1303,4 +1312,97 @@ fn budgets_stop_after_the_pass_that_crosses_them() {
         "{prior:?} after {} passes",
         done - 1
     );
+}
+
+/// Renders cornell-lambert at 24×24 with `extra` flags into `dir/name`.
+fn render_small(dir: &TempDir, name: &str, extra: &[&str]) -> Exr {
+    let out = run(bdpm()
+        .arg("render")
+        .arg(scene("cornell-lambert.toml"))
+        .args(["--resolution", "24x24", "--passes", "1", "--spp", "2"])
+        .args(["--photons", "5000", "--quiet"])
+        .args(extra)
+        .arg("-o")
+        .arg(dir.path(name)));
+    assert_success(&out);
+    Exr::read(&dir.path(name))
+}
+
+#[test]
+fn aov_layers_hold_first_hit_albedo_and_normal_without_changing_the_image() {
+    let dir = TempDir::new("aov");
+    let plain = render_small(&dir, "plain.exr", &[]);
+    let with = render_small(&dir, "aov.exr", &["--aov"]);
+    for c in rgb("") {
+        let (a, b) = (plain.channel(&c), with.channel(&c));
+        assert!(
+            a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits()),
+            "{c}: --aov changed the image bits"
+        );
+    }
+    assert!(plain.channels.keys().all(|k| !k.starts_with("albedo")));
+    let albedo = rgb("albedo").map(|c| with.channel(&c).to_vec());
+    let normal = ["X", "Y", "Z"].map(|c| with.channel(&format!("normal.{c}")).to_vec());
+    let pixels = with.width * with.height;
+    let mut seen = 0;
+    for i in 0..pixels {
+        for a in &albedo {
+            assert!((0.0..=1.0).contains(&a[i]), "albedo {} at pixel {i}", a[i]);
+        }
+        let len = (normal.iter().map(|n| (n[i] as f64).powi(2)).sum::<f64>()).sqrt();
+        if albedo.iter().any(|a| a[i] > 0.0) {
+            seen += 1;
+            assert!((len - 1.0).abs() < 1e-5, "normal length {len} at pixel {i}");
+        } else {
+            assert!(
+                len == 0.0 || (len - 1.0).abs() < 1e-5,
+                "normal length {len}"
+            );
+        }
+    }
+    assert!(seen > pixels / 2, "{seen} of {pixels} pixels see a surface");
+    // The floor (y = 0) in front of the blocks: its normal is +y.
+    let (x, y) = cornell_pixel([2.2, 0.0, 0.5], with.width);
+    let i = y as usize * with.width + x as usize;
+    let n = [normal[0][i], normal[1][i], normal[2][i]];
+    assert!(n[1] > 0.99, "floor normal {n:?} at ({x}, {y})");
+    assert!(albedo[0][i] > 0.1, "floor albedo {}", albedo[0][i]);
+}
+
+#[test]
+fn half_precision_exr_is_readable_and_close_to_float() {
+    let dir = TempDir::new("half");
+    let float = render_small(&dir, "f.exr", &["--aov"]);
+    let half = render_small(&dir, "h.exr", &["--aov", "--exr-precision", "half"]);
+    assert!(float.halves.is_empty());
+    for name in float.channels.keys() {
+        assert!(half.halves.contains(name), "{name} is not half");
+        let (f, h) = (float.channel(name), half.channel(name));
+        for (a, b) in f.iter().zip(h) {
+            assert!(
+                (a - b).abs() <= 1e-3 * a.abs() + 1e-6,
+                "{name}: float {a} vs half {b}"
+            );
+        }
+    }
+    let same_layers = {
+        let mut a: Vec<_> = float.channels.keys().collect();
+        let mut b: Vec<_> = half.channels.keys().collect();
+        a.sort();
+        b.sort();
+        a == b
+    };
+    assert!(same_layers);
+}
+
+#[test]
+fn bad_exr_precision_is_refused() {
+    let dir = TempDir::new("precision-bad");
+    let out = run(bdpm()
+        .arg("render")
+        .arg(scene("cornell-lambert.toml"))
+        .args(["--resolution", "8x8", "--exr-precision", "double", "-o"])
+        .arg(dir.path("p.exr")));
+    assert_one_line_error(&out, &["--exr-precision", "double"]);
+    assert!(!dir.path("p.exr").exists());
 }

@@ -25,7 +25,10 @@ pub use bdpm_mis::NoiseModel;
 pub use film::Film;
 pub use memory::{MemoryEstimate, MemoryItem, PILOT_PHOTONS, estimate_memory, human_bytes};
 pub use predict::{JITTER_RAYS, Prediction};
-pub use render::{PassOutput, RenderError, Renderer, StageReport, render_path_pass};
+pub use render::{
+    FirstHitLayers, PassOutput, RenderError, Renderer, StageReport, first_hit_layers,
+    render_path_pass,
+};
 pub use settings::{
     FOOTPRINT_TABLE_RAYS, MIN_RADIUS, Mode, PINHOLE_TABLE_RAYS, RenderSettings, check_radius,
     default_radius,

@@ -518,3 +518,48 @@ pub fn render_path_pass(
         weights: WeightStats::default(),
     }
 }
+
+/// Per-pixel first-hit layers for denoisers (Open Image Denoise and the like), see
+/// [`first_hit_layers`].
+#[derive(Clone, Debug)]
+pub struct FirstHitLayers {
+    /// Directional albedo µ(wo) of the surface first seen, averaged over the pixel's samples,
+    /// each channel in [0, 1]; 0 where nothing is seen. Row-major.
+    pub albedo: Vec<DVec3>,
+    /// World-space unit shading normal at the first hit (facing the camera), averaged over the
+    /// pixel's samples and renormalised; 0 where nothing is seen. Row-major.
+    pub normal: Vec<DVec3>,
+}
+
+/// Traces one primary ray per camera sample of pass 0 (the same jittered positions: the
+/// camera stream of (seed, 0, pixel, sample)) and records the first hit's directional albedo
+/// and shading normal. Costs `spp` ray casts per pixel, independent of the radiance passes,
+/// whose bits it does not touch.
+pub fn first_hit_layers(scene: &Scene, settings: &RenderSettings) -> FirstHitLayers {
+    let (w, h) = (settings.width as usize, settings.height as usize);
+    let cam = &scene.camera;
+    let spp = settings.spp.max(1);
+    let mut pixels = vec![(DVec3::ZERO, DVec3::ZERO); w * h];
+    pixels.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        for (x, px) in row.iter_mut().enumerate() {
+            let pixel = (y * w + x) as u64;
+            let (mut albedo, mut normal) = (DVec3::ZERO, DVec3::ZERO);
+            for s in 0..spp {
+                let mut rng = Rng::new(settings.seed, Domain::Camera, [0, pixel, s as u64]);
+                let [jx, jy] = pixel_offset(rng.uniform2(), settings.pixel_jitter);
+                let dir = cam.ray_direction(x as f32 + jx, y as f32 + jy);
+                let Some(hit) = scene.geometry.intersect(cam.position, dir, f32::INFINITY) else {
+                    continue;
+                };
+                let wo = -dir;
+                let sh = scene.shade(&hit, wo);
+                let a = scene.bdf(sh.material).albedo(sh.frame.to_local(wo));
+                albedo += a.clamp(Vec3::ZERO, Vec3::ONE).as_dvec3();
+                normal += sh.frame.n.as_dvec3();
+            }
+            *px = (albedo / spp as f64, normal.normalize_or_zero());
+        }
+    });
+    let (albedo, normal) = pixels.into_iter().unzip();
+    FirstHitLayers { albedo, normal }
+}
