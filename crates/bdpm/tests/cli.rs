@@ -418,23 +418,7 @@ fn interrupted_render_writes_what_it_has() {
             .spawn()
             .expect("start bdpm");
         std::thread::sleep(Duration::from_secs_f64(wait));
-        let status = Command::new("kill")
-            .args(["-INT", &child.id().to_string()])
-            .status()
-            .expect("run kill");
-        assert!(status.success());
-        let start = Instant::now();
-        let code = loop {
-            if let Some(s) = child.try_wait().expect("wait") {
-                break s.code();
-            }
-            if start.elapsed() > Duration::from_secs(60) {
-                let _ = child.kill();
-                let _ = child.wait();
-                panic!("bdpm did not stop within 60 s of SIGINT");
-            }
-            std::thread::sleep(Duration::from_millis(20));
-        };
+        let code = interrupt(&mut child);
         let out = child.wait_with_output().expect("output");
         let stderr = text(&out.stderr);
         assert!(!stderr.contains("panicked"), "{stderr}");

@@ -286,9 +286,7 @@ impl<'a> Mix<'a> {
     /// Where the weights' radiance-cache lookup for the point `p` of triangle `prim` towards
     /// `wo` reads (None without a cache); see [`Self::pair_at`].
     pub(crate) fn cache_slot(&self, prim: u32, p: Vec3, wo: Vec3) -> Option<CacheSlot> {
-        self.cache
-            .filter(|_| self.needs.radiance_cache)
-            .and_then(|c| c.slot(prim, p, wo))
+        self.cache_needed().and_then(|c| c.slot(prim, p, wo))
     }
 
     /// [`Self::pair`] with the cache slot of (x₁, −v) found beforehand by [`Self::cache_slot`],
@@ -307,8 +305,7 @@ impl<'a> Mix<'a> {
             0.0
         };
         let cached = self
-            .cache
-            .filter(|_| self.needs.radiance_cache)
+            .cache_needed()
             .map(|cache| slot.map_or((0.0, 0.0), |s| cache.at(s)));
         self.pair_with(x0, x1, f0, direct, cached)
     }
