@@ -84,8 +84,12 @@ pub struct RadianceCache {
 }
 
 /// A bin of a [`RadianceCache`], as [`RadianceCache::slot`] finds it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct CacheSlot(usize);
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CacheSlot {
+    index: usize,
+    /// b/L_d of the bin's triangle where b is not stored (see [`CellTriangle::b_per_ld`]).
+    b_per_ld: f32,
+}
 
 /// A triangle as the cell lookup needs it: vertices, normal, and the per-triangle parts of the
 /// barycentric solve (edges, their Gram matrix and its determinant), computed once.
@@ -99,10 +103,13 @@ struct CellTriangle {
     d12: f32,
     d22: f32,
     det: f32,
+    /// b / L_d = luminance(k_d)/π, sr⁻¹, for a Lambert triangle of a cache that does not store
+    /// b (method.md §7: b = ∫f·L_d = (k_d/π)·L_d there); 0 where b is stored.
+    b_per_ld: f32,
 }
 
 impl CellTriangle {
-    fn new(v: [Vec3; 3], ng: Vec3) -> CellTriangle {
+    fn new(v: [Vec3; 3], ng: Vec3, b_per_ld: f32) -> CellTriangle {
         let e1 = v[1] - v[0];
         let e2 = v[2] - v[0];
         let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
@@ -115,6 +122,7 @@ impl CellTriangle {
             d12,
             d22,
             det: d11 * d22 - d12 * d12,
+            b_per_ld,
         }
     }
 }
@@ -233,7 +241,13 @@ impl RadianceCache {
             };
             first_cell.push(cells);
             subdivision.push(n as u16);
-            tri.push(CellTriangle::new(v, g.normal(prim)));
+            // The one place the Lambert b is derived: L_d's cells hold the rest.
+            let b_per_ld = if lambert {
+                luminance(scene.bdf(g.material(prim)).kd()) / PI
+            } else {
+                0.0
+            };
+            tri.push(CellTriangle::new(v, g.normal(prim), b_per_ld));
             cells += n * n;
         }
         let slots = cells as usize * 2 * side_bins;
@@ -278,13 +292,13 @@ impl RadianceCache {
             }
             let Some(sc) = arrival.scatter else { return };
             let vx = &arrival.vertex;
-            if sc.direction.dot(vx.normal) <= 0.0 {
+            if sc.direction.dot(vx.at.n) <= 0.0 {
                 return;
             }
-            let Some(cell_side) = this.cell_side(vx.prim, vx.position, vx.normal) else {
+            let Some(cell_side) = this.cell_side(vx.at.prim, vx.at.p, vx.at.n) else {
                 return;
             };
-            let local = Frame::from_normal(vx.normal).to_local(sc.direction);
+            let local = Frame::from_normal(vx.at.n).to_local(sc.direction);
             let slot = (cell_side * this.side_bins + this.bin(local)) as u32;
             let e_s = luminance(arrival.power * sc.weight);
             out.push((slot, e_s, e_s * luminance(sc.f)));
@@ -375,9 +389,9 @@ impl RadianceCache {
         (y.min(self.grid - 1) * self.grid + x.min(self.grid - 1)) as usize
     }
 
-    /// L_d and b (luminances) leaving triangle `prim` at point `p` towards the unit world
-    /// direction `wo`, on the side of `wo`. b is 0 when the cache does not store it (Lambert:
-    /// use (kd/π)·L_d).
+    /// L_d (W·m⁻²·sr⁻¹) and b (W·m⁻²·sr⁻²), luminances, leaving triangle `prim` at point `p`
+    /// towards the unit world direction `wo`, on the side of `wo`. Where b is not stored
+    /// (Lambert-only scenes) it is (k_d/π)·L_d, exactly.
     pub fn lookup(&self, prim: u32, p: Vec3, wo: Vec3) -> (f32, f32) {
         self.slot(prim, p, wo).map_or((0.0, 0.0), |s| self.at(s))
     }
@@ -386,7 +400,8 @@ impl RadianceCache {
     /// unknown or degenerate triangle). Splitting the lookup lets a caller [`Self::prefetch`]
     /// the bin and do other work before reading it with [`Self::at`].
     pub fn slot(&self, prim: u32, p: Vec3, wo: Vec3) -> Option<CacheSlot> {
-        let ng = self.tri.get(prim as usize)?.ng;
+        let t = self.tri.get(prim as usize)?;
+        let ng = t.ng;
         let n = if ng.dot(wo) < 0.0 { -ng } else { ng };
         let cell_side = self.cell_side(prim, p, n)?;
         // One bin (Lambert-only scenes) needs no direction.
@@ -395,7 +410,10 @@ impl RadianceCache {
         } else {
             self.bin(Frame::from_normal(n).to_local(wo))
         };
-        Some(CacheSlot(cell_side * self.side_bins + bin))
+        Some(CacheSlot {
+            index: cell_side * self.side_bins + bin,
+            b_per_ld: t.b_per_ld,
+        })
     }
 
     /// Whether [`Self::slot`] of triangle `prim` reads the same side of its cells for the
@@ -416,19 +434,19 @@ impl RadianceCache {
     /// Hints the CPU to fetch the bin at `slot` (no effect on results).
     #[inline]
     pub fn prefetch(&self, slot: CacheSlot) {
-        if let Some(v) = self.values.get(slot.0 * self.stride) {
+        if let Some(v) = self.values.get(slot.index * self.stride) {
             bdpm_geometry::prefetch(v);
         }
     }
 
     /// L_d and b at `slot` (see [`Self::lookup`]).
     pub fn at(&self, slot: CacheSlot) -> (f32, f32) {
-        let slot = slot.0;
-        let k = slot * self.stride;
+        let k = slot.index * self.stride;
         if self.stride == 2 {
             (self.values[k], self.values[k + 1])
         } else {
-            (self.values[k], 0.0)
+            let ld = self.values[k];
+            (ld, slot.b_per_ld * ld)
         }
     }
 

@@ -285,13 +285,13 @@ impl LeafTri {
 #[inline(always)]
 fn make_ray(origin: Vec3, dir: Vec3, tmax: f32) -> Ray {
     let direction = Vec3A::from(dir);
-    // obvhs's `safe_inverse`: ±1/ε for components within ε of zero, else 1/x.
+    // ±1/ε for components within ε of zero, else 1/x. The sign must be the one the traversal
+    // orders the slabs by (x < 0, so −0 counts as positive): `signum` would make −0's inverse
+    // negative, swap the near and far planes of that axis and miss every box (axis-aligned
+    // rays such as −n of a wall with n = (0, 0, 1) produced directions with −0 components).
     let tiny = direction.abs().cmple(Vec3A::splat(f32::EPSILON));
-    let inv_direction = Vec3A::select(
-        tiny,
-        direction.signum() / f32::EPSILON,
-        Vec3A::ONE / direction,
-    );
+    let sign = Vec3A::select(direction.cmplt(Vec3A::ZERO), -Vec3A::ONE, Vec3A::ONE);
+    let inv_direction = Vec3A::select(tiny, sign / f32::EPSILON, Vec3A::ONE / direction);
     Ray {
         origin: Vec3A::from(origin),
         direction,

@@ -7,10 +7,11 @@ use bdpm_cache::{CacheSlot, RadianceCache};
 use bdpm_geometry::Hit;
 use bdpm_geometry::{Frame, Rng};
 use bdpm_mis::{Budget, Heuristic, Needs, Pair, PathKind, acceptance_area, acceptance_probability};
-use bdpm_photon::{PathVertex, PhotonMap, PhotonQuery, survival_at};
+use bdpm_photon::{PhotonMap, PhotonQuery, survival_at};
 use bdpm_scene::{Scene, Shading};
 
 use crate::table::PixelWeights;
+use bdpm_scene::WeightVertex;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
@@ -55,20 +56,6 @@ impl WeightStats {
         self.outside_unit += o.outside_unit;
         self.clamped_cb += o.clamped_cb;
     }
-}
-
-/// Everything that weights need to know about a candidate second vertex x₁ (the camera's own
-/// x₁, or a photon's previous vertex y_p), described identically for both so that the two
-/// techniques evaluate the same function w₁(x₀, x₁) (method.md §2).
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct WeightVertex {
-    pub(crate) p: Vec3,
-    /// Geometric normal on the side that x₀ sees.
-    pub(crate) n: Vec3,
-    pub(crate) material: u32,
-    pub(crate) prim: u32,
-    /// Bit l set iff light l is visible from the vertex.
-    pub(crate) lights: u32,
 }
 
 /// Camera samples that [`Mix::sample_batch`] takes together: enough for each sample's
@@ -141,65 +128,6 @@ pub(crate) struct Mix<'a> {
     /// Test-only: compute a photon's y_p inputs at every visit, not once per photon
     /// ([`Mix::prev_inputs`]); the image bits must not change.
     pub(crate) per_visit_inputs: bool,
-}
-
-/// Visibility bits of the (first 32) lights from a shaded point.
-pub(crate) fn light_mask(scene: &Scene, sh: &Shading) -> u32 {
-    let mut mask = 0;
-    for (l, light) in scene.lights.iter().enumerate().take(32) {
-        if scene.light_visible(sh, light) {
-            mask |= 1 << l;
-        }
-    }
-    mask
-}
-
-/// L₀ leaving `v` towards the unit direction `wo`, using stored visibility bits and the
-/// geometric-normal frame (the same evaluation for camera vertices and photon vertices).
-pub(crate) fn direct_masked(scene: &Scene, v: &WeightVertex, wo: Vec3) -> Vec3 {
-    if v.lights == 0 || v.n.dot(wo) <= 0.0 {
-        return Vec3::ZERO;
-    }
-    let frame = Frame::from_normal(v.n);
-    let bdf = scene.bdf(v.material);
-    let wo_l = frame.to_local(wo);
-    let mut sum = Vec3::ZERO;
-    for (l, light) in scene.lights.iter().enumerate().take(32) {
-        if v.lights & (1 << l) == 0 {
-            continue;
-        }
-        let to = light.position - v.p;
-        let d2 = to.length_squared();
-        let wi = to / d2.sqrt();
-        let cos = v.n.dot(wi);
-        if cos > 0.0 {
-            sum += bdf.eval(wo_l, frame.to_local(wi)) * light.intensity() * (cos / d2);
-        }
-    }
-    sum
-}
-
-impl WeightVertex {
-    /// The vertex a camera ray found, with its light visibility (one shadow ray per light).
-    pub(crate) fn from_shading(scene: &Scene, sh: &Shading) -> WeightVertex {
-        WeightVertex {
-            p: sh.p,
-            n: sh.ng,
-            material: sh.material,
-            prim: sh.prim,
-            lights: light_mask(scene, sh),
-        }
-    }
-
-    pub(crate) fn from_photon_vertex(pv: &PathVertex) -> WeightVertex {
-        WeightVertex {
-            p: pv.position,
-            n: pv.normal,
-            material: pv.material,
-            prim: pv.prim,
-            lights: pv.visible_lights,
-        }
-    }
 }
 
 /// The camera side of x₀: the shading point, its outgoing direction and its BDF data.
@@ -300,7 +228,7 @@ impl<'a> Mix<'a> {
         slot: Option<CacheSlot>,
     ) -> Pair {
         let direct = if self.needs.direct_at_x1 {
-            luminance(direct_masked(self.scene, x1, -v))
+            luminance(self.scene.direct_masked(x1, -v))
         } else {
             0.0
         };
@@ -327,14 +255,9 @@ impl<'a> Mix<'a> {
             direct: direct as f64,
             ..Pair::default()
         };
-        if let (Some(cache), Some((ld, b))) = (self.cache, cached) {
+        if let (Some(_), Some((ld, b))) = (self.cache, cached) {
             pair.indirect = ld as f64;
-            pair.b = if cache.stats().stores_b {
-                b as f64
-            } else {
-                // Lambert: b = (kd/π)·L_d (method.md §7).
-                (luminance(self.scene.bdf(x1.material).kd()) / PI * ld) as f64
-            };
+            pair.b = b as f64;
         }
         if let Heuristic::Threshold { .. } = self.heuristic {
             pair.light_distance = self
@@ -415,14 +338,14 @@ impl<'a> Mix<'a> {
         let mut beta = 1.0;
         loop {
             let y = map.vertex(index);
-            let d = to_p - y.position;
+            let d = to_p - y.at.p;
             let d2 = d.length_squared();
             if d2 <= 0.0 {
                 return beta;
             }
             let dir = d / d2.sqrt();
-            let frame = Frame::from_normal(y.normal);
-            let bdf = self.scene.bdf(y.material);
+            let frame = Frame::from_normal(y.at.n);
+            let bdf = self.scene.bdf(y.at.material);
             let out = bdf.outgoing(frame.to_local(y.incoming));
             let p = y.survival * bdf.pdf_at(&out, frame.to_local(dir)) * to_n.dot(dir).abs() / d2;
             beta *= acceptance_probability(p as f64, area);
@@ -430,8 +353,7 @@ impl<'a> Mix<'a> {
                 return beta;
             }
             if y.depth == 0 {
-                let emission =
-                    self.emission_density(y.light as usize, &WeightVertex::from_photon_vertex(y));
+                let emission = self.emission_density(y.light as usize, &y.at);
                 return beta * acceptance_probability(emission, area);
             }
             // A map not stored path by path (hand-made in tests) ends the walk here.
@@ -439,7 +361,7 @@ impl<'a> Mix<'a> {
                 debug_assert!(false, "light-path vertices are not consecutive");
                 return beta;
             }
-            (to_p, to_n) = (y.position, y.normal);
+            (to_p, to_n) = (y.at.p, y.at.n);
             index -= 1;
         }
     }
@@ -488,15 +410,15 @@ impl<'a> Mix<'a> {
     }
 
     /// The weight inputs of every photon's previous vertex y_p that do not depend on where
-    /// the photon landed, one [L₀, L_d] (luminances, W·m⁻²·sr⁻¹) per photon of `map`, in its
-    /// order: for a Lambert y_p, L₀(y_p) and the cache's L_d on the side of y_p's normal
+    /// the photon landed, one [L₀, L_d, b] (luminances: W·m⁻²·sr⁻¹, b in W·m⁻²·sr⁻²) per photon of `map`, in its
+    /// order: for a Lambert y_p, L₀(y_p) and the cache's L_d and b on the side of y_p's normal
     /// (isotropic there; `merge_at_x0` checks the side), NaN for the others. Empty when the
     /// mode's weights at x₀ read neither, or the cache has directional bins or stores b.
     ///
     /// A merge at x₀ visits a photon once per camera sample whose disk holds it, several
     /// times per pass at high resolution; computing these once per photon gives the same
     /// numbers, bit for bit, as [`Self::pair`] would for each visit.
-    pub(crate) fn prev_inputs(&self, map: &PhotonMap) -> Vec<[f32; 2]> {
+    pub(crate) fn prev_inputs(&self, map: &PhotonMap) -> Vec<[f32; 3]> {
         let reads_inputs = self.needs.direct_at_x1 || self.needs.radiance_cache;
         let per_visit = matches!(self.heuristic, Heuristic::Bdd0)
             || self.camera_x1_weighting
@@ -511,19 +433,20 @@ impl<'a> Mix<'a> {
             .par_iter()
             .map(|ph| {
                 let prev = map.vertex(ph.prev);
-                if !self.scene.bdf(prev.material).is_lambert() {
-                    return [f32::NAN; 2];
+                if !self.scene.bdf(prev.at.material).is_lambert() {
+                    return [f32::NAN; 3];
                 }
-                let y = WeightVertex::from_photon_vertex(prev);
+                let y = prev.at;
                 let l0 = if self.needs.direct_at_x1 {
-                    luminance(direct_masked(self.scene, &y, y.n))
+                    luminance(self.scene.direct_masked(&y, y.n))
                 } else {
                     0.0
                 };
-                let ld = self.cache_needed().map_or(0.0, |c| {
-                    self.cache_slot(y.prim, y.p, y.n).map_or(0.0, |s| c.at(s).0)
+                let (ld, b) = self.cache_needed().map_or((0.0, 0.0), |c| {
+                    self.cache_slot(y.prim, y.p, y.n)
+                        .map_or((0.0, 0.0), |s| c.at(s))
                 });
-                [l0, ld]
+                [l0, ld, b]
             })
             .collect()
     }
@@ -558,7 +481,7 @@ impl<'a> Mix<'a> {
     pub(crate) fn sample_batch<'s>(
         &'s self,
         map: &PhotonMap,
-        prev_inputs: &[[f32; 2]],
+        prev_inputs: &[[f32; 3]],
         jobs: &mut [Job],
         slots: &mut Slots<'s>,
         pixel: Option<&PixelWeights>,
@@ -665,7 +588,7 @@ impl<'a> Mix<'a> {
             cache.prefetch(slot);
         }
         let sh1 = scene.shade(&hit1, wo1);
-        let x1 = WeightVertex::from_shading(scene, &sh1);
+        let x1 = scene.weight_vertex(&sh1);
         let lights = x1.lights;
         let pair = self.pair_at(x0, &x1, v, s.f, slot);
         let dist2 = (x1.p - x0.sh.p).length_squared();
@@ -693,16 +616,8 @@ impl<'a> Mix<'a> {
         } else {
             w_const
         };
-        for (l, light) in scene.lights.iter().enumerate() {
-            // The visibility bits already hold the shadow rays of the first 32 lights.
-            let c = if l < 32 {
-                if lights & (1 << l) == 0 {
-                    continue;
-                }
-                scene.direct_unshadowed(&sh1, wo1, light)
-            } else {
-                scene.direct_from(&sh1, wo1, light)
-            };
+        for l in 0..scene.lights.len() {
+            let c = scene.direct_from_masked(&sh1, wo1, l, lights);
             if c == Vec3::ZERO {
                 continue;
             }
@@ -761,7 +676,7 @@ impl<'a> Mix<'a> {
         let mut ph_weighted = Vec3::ZERO;
         map.finish_query(query, |ph| {
             let prev = map.vertex(ph.prev);
-            let wp = (prev.position - ph.position).normalize_or_zero();
+            let wp = (prev.at.p - ph.position).normalize_or_zero();
             let f = scene.eval(&sh1, wo1, wp);
             if f == Vec3::ZERO {
                 return;
@@ -804,7 +719,7 @@ impl<'a> Mix<'a> {
     fn merge_at_x0(
         &self,
         x0: &FirstVertex<'_>,
-        (map, prev_inputs): (&PhotonMap, &[[f32; 2]]),
+        (map, prev_inputs): (&PhotonMap, &[[f32; 3]]),
         query: &PhotonQuery,
         pixel: Option<&PixelWeights>,
         camera_w1: Option<f64>,
@@ -817,8 +732,8 @@ impl<'a> Mix<'a> {
         let pure = matches!(self.heuristic, Heuristic::Bdd0);
         map.finish_query_indexed(query, |i, ph| {
             let prev = map.vertex(ph.prev);
-            let to_prev = prev.position - x0.sh.p;
-            let wp = (prev.position - ph.position).normalize_or_zero();
+            let to_prev = prev.at.p - x0.sh.p;
+            let wp = (prev.at.p - ph.position).normalize_or_zero();
             let f = scene.eval(&x0.sh, x0.u, wp);
             if f == Vec3::ZERO {
                 return;
@@ -835,14 +750,14 @@ impl<'a> Mix<'a> {
                     return;
                 }
                 let v = to_prev / dist2.sqrt();
-                let y = WeightVertex::from_photon_vertex(prev);
+                let y = prev.at;
                 let f0 = scene.eval(&x0.sh, x0.u, v);
                 let mut pair = match prev_inputs.get(i) {
-                    Some(&[l0, ld]) if !l0.is_nan() && self.same_cache_side(&y, -v) => {
+                    Some(&[l0, ld, b]) if !l0.is_nan() && self.same_cache_side(&y, -v) => {
                         // direct_masked's own test of the side; the rest of L₀ is the same
                         // number for any direction on it (method-notes.md, "Precomputed inputs").
                         let direct = if y.n.dot(-v) <= 0.0 { 0.0 } else { l0 };
-                        let cached = self.cache_needed().map(|_| (ld, 0.0));
+                        let cached = self.cache_needed().map(|_| (ld, b));
                         self.pair_with(x0, &y, f0, direct, cached)
                     }
                     _ => self.pair(x0, &y, v, f0),

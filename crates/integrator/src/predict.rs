@@ -44,7 +44,7 @@ use bdpm_geometry::{Domain, Rng};
 use bdpm_mis::{Budget, Heuristic, Pair, PathKind, effective_samples};
 use rayon::prelude::*;
 
-use crate::bdpm::{FirstVertex, Mix, WeightVertex};
+use crate::bdpm::{FirstVertex, Mix};
 use crate::render::{RenderError, Renderer};
 use crate::settings::{Mode, PINHOLE_TABLE_RAYS};
 use crate::table::footprint_overlap;
@@ -307,7 +307,7 @@ fn direction(
         .intersect(scene.spawn(&x0.sh, v), v, f32::INFINITY)?;
     let wo1 = -v;
     let sh1 = scene.shade(&hit1, wo1);
-    let x1 = WeightVertex::from_shading(scene, &sh1);
+    let x1 = scene.weight_vertex(&sh1);
     let pair = mix.pair(x0, &x1, v, s.f);
     let dist2 = (x1.p - x0.sh.p).length_squared();
     let per_light = h.needs().densities;
@@ -347,15 +347,8 @@ fn direction(
 
     // L₀(x₁→x₀) light by light, as BDD=1 evaluates it (shading normal, visibility bits).
     let (mut l0_w, mut l0_w0_sq) = (0.0f64, 0.0f64);
-    for (l, light) in scene.lights.iter().enumerate() {
-        let c = if l < 32 {
-            if x1.lights & (1 << l) == 0 {
-                continue;
-            }
-            scene.direct_unshadowed(&sh1, wo1, light)
-        } else {
-            scene.direct_from(&sh1, wo1, light)
-        };
+    for l in 0..scene.lights.len() {
+        let c = scene.direct_from_masked(&sh1, wo1, l, x1.lights);
         let c = luminance(c) as f64;
         if c == 0.0 {
             continue;

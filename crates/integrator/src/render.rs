@@ -7,7 +7,7 @@ use rayon::prelude::*;
 
 use bdpm_bdf::luminance;
 use bdpm_cache::{CacheSettings, RadianceCache};
-use bdpm_mis::{Budget, CB_EPSILON, Heuristic, NoiseModel};
+use bdpm_mis::{Budget, Heuristic, NoiseModel};
 use bdpm_photon::{PhotonMap, TraceOptions};
 
 use crate::bdpm::{BATCH, Job, Mix, Slots, Techniques, WeightStats, scene_default_radius};
@@ -137,12 +137,12 @@ impl<'a> Renderer<'a> {
                 .pixels()
                 .iter()
                 .filter(|p| {
-                    let c = Budget {
+                    Budget {
                         camera_samples: p.camera_samples,
                         ..budget
                     }
-                    .c();
-                    c * p.terms.b >= 1.0 - CB_EPSILON
+                    .one_minus_cb(p.terms.b)
+                    .1
                 })
                 .count();
             let (rho, n_eff) = table::mean_overlap(&table);

@@ -9,7 +9,7 @@ use bdpm_mis::{
 use bdpm_scene::{Scene, Shading};
 use rayon::prelude::*;
 
-use crate::bdpm::{FirstVertex, Mix, WeightVertex};
+use crate::bdpm::{FirstVertex, Mix};
 
 /// What the weights of one pixel's camera samples need beyond the pair (x₀, x₁).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -86,7 +86,7 @@ pub(crate) fn pixel_terms(
             continue;
         };
         let sh1 = scene.shade(&hit1, -v);
-        let x1 = WeightVertex::from_shading(scene, &sh1);
+        let x1 = scene.weight_vertex(&sh1);
         let pair = mix.pair(x0, &x1, v, s.f);
         let cos_over_pdf = (s.wi.z / s.pdf) as f64;
         if split {

@@ -3,7 +3,6 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::bdpm::WeightVertex;
 use crate::render::{RenderError, Renderer};
 use crate::settings::Mode;
 use crate::table::{TableSpec, pixel_weights};
@@ -117,7 +116,7 @@ impl Renderer<'_> {
                 }
                 let v = to / dist;
                 let sh1 = scene.shade(&hit1, -v);
-                let x1 = WeightVertex::from_shading(scene, &sh1);
+                let x1 = scene.weight_vertex(&sh1);
                 // Behind x₀'s tangent plane no path x₁→x₀ exists; the map shows the weight the
                 // formula gives with v mirrored into x₀'s hemisphere (for Lambert f̃ = 1/π for every
                 // x₁, as in the preprint's Fig. 5) rather than a meaningless w₀ = 1.

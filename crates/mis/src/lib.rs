@@ -81,6 +81,19 @@ impl Budget {
         if c_n_b == 0.0 { 0.0 } else { sat(c_n_b / n_b) }
     }
 
+    /// 1 − c·B for a pixel's B (W·m⁻², negative or NaN read as 0), with c·B clamped to 1 − ε
+    /// where 1 − c·B ≤ [`CB_EPSILON`] (there the noise functional is no longer convex,
+    /// method.md §4); the flag says whether it was. The one definition of the clamp, for the
+    /// weights and for any report that counts clamped pixels.
+    pub fn one_minus_cb(&self, big_b: f64) -> (f64, bool) {
+        let cb = mul(self.c(), nonneg(big_b));
+        if 1.0 - cb <= CB_EPSILON {
+            (CB_EPSILON, true)
+        } else {
+            (1.0 - cb, false)
+        }
+    }
+
     /// S·N_F/Φ (W⁻¹·m²), the factor of κ(L) = (S·N_F/Φ)·L.
     fn photon_density_factor(&self) -> f64 {
         ratio_sat(
@@ -571,12 +584,9 @@ impl OptimalTerms {
 /// G̃ = A/(1 − c·B), w₁ = N_B (f̃ + c·G̃)/D = W₁ + N_B·c·G̃/D.
 fn optimal(budget: &Budget, pair: &Pair, pixel: Option<&PixelTerms>, clamp: bool) -> Weight {
     let terms = OptimalTerms::new(budget, pair.f_tilde, total_radiance(pair), pair.b);
-    let (a, b) = pixel.map_or((0.0, 0.0), |p| (nonneg(p.a), nonneg(p.b)));
-
-    // 1 − c·B ≤ ε: the noise functional is no longer convex; clamp c·B to 1 − ε.
-    let cb = mul(budget.c(), b);
-    let clamped_cb = 1.0 - cb <= CB_EPSILON;
-    let one_minus_cb = if clamped_cb { CB_EPSILON } else { 1.0 - cb };
+    let (a, b) = pixel.map_or((0.0, 0.0), |p| (p.a, p.b));
+    let a = nonneg(a);
+    let (one_minus_cb, clamped_cb) = budget.one_minus_cb(b);
     let g_tilde = sat(a / one_minus_cb);
     // N_B·c·G̃, sr⁻¹: the correlation term of the numerator.
     let correlation = mul(budget.correlation_factor(), g_tilde);
@@ -658,10 +668,9 @@ fn optimal_per_path(
     clamp: bool,
 ) -> Weight {
     let t = SplitTerms::new(budget, pair.f_tilde, pair.direct, pair.indirect, pair.b);
-    let (a, b) = pixel.map_or((0.0, 0.0), |p| (nonneg(p.a), nonneg(p.b)));
-    let cb = mul(budget.c(), b);
-    let clamped_cb = 1.0 - cb <= CB_EPSILON;
-    let one_minus_cb = if clamped_cb { CB_EPSILON } else { 1.0 - cb };
+    let (a, b) = pixel.map_or((0.0, 0.0), |p| (p.a, p.b));
+    let a = nonneg(a);
+    let (one_minus_cb, clamped_cb) = budget.one_minus_cb(b);
     let g = mul(budget.correlation_factor(), sat(a / one_minus_cb));
     let w1 = if t.denominator == 0.0 {
         0.0

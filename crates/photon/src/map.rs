@@ -125,7 +125,7 @@ impl PhotonMap {
                 if a.vertex.depth >= 1 {
                     // A path's vertices are pushed consecutively, so y_p is the one just before.
                     photons.push(Photon {
-                        position: a.vertex.position,
+                        position: a.vertex.at.p,
                         power: a.power,
                         prev: index - 1,
                         vertex: index,

@@ -3,7 +3,7 @@
 use bdpm_bdf::{Bdf, Outgoing};
 use bdpm_geometry::sampling::uniform_sphere;
 use bdpm_geometry::{Domain, Rng};
-use bdpm_scene::{Scene, Shading};
+use bdpm_scene::{Scene, Shading, WeightVertex};
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -19,27 +19,19 @@ pub const MAX_SURVIVAL: f32 = 0.95;
 /// light (which is direct light and not itself stored as a [`Photon`](crate::Photon)).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PathVertex {
-    /// Position, m.
-    pub position: Vec3,
-    /// Unit geometric normal, flipped to the side the light arrived from (surfaces are
-    /// two-sided).
-    pub normal: Vec3,
+    /// Position, normal (flipped to the side the light arrived from: surfaces are two-sided),
+    /// material, triangle and light visibility, as the MIS weights read them. The visibility
+    /// bits are filled only with [`TraceOptions::light_visibility`] and only at vertices the
+    /// path continued from (each is the previous vertex y_p of the next stored photon, where
+    /// the weights read it); 0 elsewhere.
+    pub at: WeightVertex,
     /// Unit direction from this vertex back towards where the light came from (the previous
     /// vertex, or the light for depth 0).
     pub incoming: Vec3,
-    /// Triangle index.
-    pub prim: u32,
-    /// Material index.
-    pub material: u32,
     /// Index of the light that emitted this path.
     pub light: u16,
     /// Number of scatterings before this arrival: 0 = reached directly from the light.
     pub depth: u16,
-    /// Bit `l` is set iff light `l` (only `l < 32`) lies on the side of `normal` and no surface
-    /// blocks the segment to it. Filled only with [`TraceOptions::light_visibility`] and only at
-    /// vertices the path continued from (each is the previous vertex y_p of the next stored
-    /// photon, where the weights read it); 0 elsewhere.
-    pub visible_lights: u32,
     /// Russian-roulette survival probability q used when scattering at this vertex
     /// (dimensionless): [`survival_probability`] of the material for `incoming`. Recorded even
     /// where the path ended (absorbed, failed BDF sample or the depth cap), because the weights
@@ -59,7 +51,7 @@ pub struct TraceOptions {
     pub domain: Domain,
     /// Pass index (stream key): photon `i` of pass `pass` uses `Rng::new(seed, domain, [pass, i, 0])`.
     pub pass: u32,
-    /// Fill [`PathVertex::visible_lights`] (one shadow ray per light, up to 32, per vertex the
+    /// Fill the visibility bits of [`PathVertex::at`] (one shadow ray per light, up to 32, per vertex the
     /// path continues from).
     pub light_visibility: bool,
     /// Hard cap on scatterings per path (arrivals have depth ≤ `max_depth`), a guard for
@@ -222,21 +214,6 @@ pub(crate) fn trace_chunks<A: Send>(
         .collect()
 }
 
-/// Bit mask of the lights (first 32) that are on the side of `sh.ng` and unoccluded from `sh`.
-fn visible_lights(scene: &Scene, sh: &Shading) -> u32 {
-    let mut mask = 0;
-    for (l, light) in scene.lights.iter().enumerate().take(32) {
-        let to = light.position - sh.p;
-        if sh.ng.dot(to) <= 0.0 {
-            continue;
-        }
-        if !scene.geometry.occluded(scene.spawn(sh, to), light.position) {
-            mask |= 1 << l;
-        }
-    }
-    mask
-}
-
 /// The random walk of photon `index` of the pass.
 fn trace_one(
     scene: &Scene,
@@ -269,15 +246,11 @@ fn trace_one(
         let in_local = bdf.outgoing(sh.frame.to_local(incoming));
         let survival = survival_at(bdf, &in_local);
         let mut vertex = PathVertex {
-            position: sh.p,
-            normal: sh.ng,
+            // The visibility bits are filled below once it is known whether the path goes on.
+            at: WeightVertex::at(&sh, 0),
             incoming,
-            prim: sh.prim,
-            material: sh.material,
             light,
             depth: depth as u16,
-            // Filled below once it is known whether the path goes on.
-            visible_lights: 0,
             survival,
         };
         // The random numbers are drawn in a fixed order whatever happens, so that a visitor's
@@ -299,7 +272,7 @@ fn trace_one(
         // Only a vertex the path leaves is some photon's previous vertex, the one place the
         // weights read light visibility: a path's last vertex would waste its shadow rays.
         if options.light_visibility && continued {
-            vertex.visible_lights = visible_lights(scene, &sh);
+            vertex.at.lights = scene.visible_light_mask(&sh);
         }
         visit(&PhotonArrival {
             photon: index,

@@ -5,19 +5,22 @@ mod common;
 use bdpm_bdf::Bdf;
 use bdpm_geometry::{Domain, Rng};
 use bdpm_photon::{PathVertex, Photon, PhotonMap, TraceOptions, survival_probability};
+use bdpm_scene::WeightVertex;
 use common::*;
 use glam::Vec3;
 
 fn dummy_vertex() -> PathVertex {
     PathVertex {
-        position: Vec3::ZERO,
-        normal: Vec3::Z,
+        at: WeightVertex {
+            p: Vec3::ZERO,
+            n: Vec3::Z,
+            material: 0,
+            prim: 0,
+            lights: 0,
+        },
         incoming: Vec3::Z,
-        prim: 0,
-        material: 0,
         light: 0,
         depth: 0,
-        visible_lights: 0,
         survival: 0.5,
     }
 }
@@ -165,15 +168,15 @@ fn bits(map: &PhotonMap) -> Vec<u32> {
         out.extend([p.prev, p.vertex]);
     }
     for v in &map.vertices {
-        for w in [v.position, v.normal, v.incoming] {
+        for w in [v.at.p, v.at.n, v.incoming] {
             out.extend(w.to_array().map(f32::to_bits));
         }
         out.extend([
-            v.prim,
-            v.material,
+            v.at.prim,
+            v.at.material,
             v.light as u32,
             v.depth as u32,
-            v.visible_lights,
+            v.at.lights,
         ]);
         out.push(v.survival.to_bits());
     }
@@ -211,11 +214,11 @@ fn photons_point_back_to_their_previous_vertex() {
     for p in &map.photons {
         let v = map.vertex(p.vertex);
         let y = map.vertex(p.prev);
-        assert_eq!(v.position, p.position);
+        assert_eq!(v.at.p, p.position);
         assert!(v.depth >= 1);
         assert_eq!(y.depth + 1, v.depth);
         assert_eq!(y.light, v.light);
-        let to_prev = y.position - p.position;
+        let to_prev = y.at.p - p.position;
         let d = to_prev.length();
         // Positions carry absolute rounding ~1e-6 m plus the 1e-5 m spawn offset.
         assert!(
@@ -225,16 +228,16 @@ fn photons_point_back_to_their_previous_vertex() {
             to_prev / d
         );
         // The normal faces the side the light came from, and the previous vertex left on its side.
-        assert!(v.normal.dot(v.incoming) > 0.0);
-        assert!(y.normal.dot(-v.incoming) > 0.0);
+        assert!(v.at.n.dot(v.incoming) > 0.0);
+        assert!(y.at.n.dot(-v.incoming) > 0.0);
     }
     for v in &map.vertices {
-        let frame = bdpm_geometry::Frame::from_normal(v.normal);
-        let q = survival_probability(scene.bdf(v.material), frame.to_local(v.incoming));
+        let frame = bdpm_geometry::Frame::from_normal(v.at.n);
+        let q = survival_probability(scene.bdf(v.at.material), frame.to_local(v.incoming));
         assert_eq!(q.to_bits(), v.survival.to_bits());
         assert!(v.survival <= 0.95);
         if v.depth == 0 {
-            let to_light = (scene.lights[v.light as usize].position - v.position).normalize();
+            let to_light = (scene.lights[v.light as usize].position - v.at.p).normalize();
             assert!((to_light - v.incoming).length() < 1e-4);
         }
     }
@@ -252,24 +255,23 @@ fn light_visibility_bits_match_analytic_shadows() {
     // Visibility is recorded where the weights read it: at each photon's previous vertex.
     for v in map.photons.iter().map(|p| map.vertex(p.prev)) {
         for (l, light) in scene.lights.iter().enumerate() {
-            let to = light.position - v.position;
+            let to = light.position - v.at.p;
             // A vertex on the shelf itself sees only the lights on its own side; that is the
             // side test below, so its segment "crosses" nothing.
             // (A wall vertex just below the shelf is not on it: its segment does cross the
             // shelf's plane, within 10⁻⁴ m of its start, which the ray kernel now sees.)
-            let on_shelf =
-                (v.position.y - 0.5).abs() < 1e-4 && v.position.x < 0.7 && v.normal.y.abs() > 0.5;
+            let on_shelf = (v.at.p.y - 0.5).abs() < 1e-4 && v.at.p.x < 0.7 && v.at.n.y.abs() > 0.5;
             let crosses = !on_shelf && {
-                let t = (0.5 - v.position.y) / to.y;
-                let c = v.position + to * t;
+                let t = (0.5 - v.at.p.y) / to.y;
+                let c = v.at.p + to * t;
                 // Skip segments that graze the shelf's edge (numerically ambiguous).
                 if (c.x - 0.7).abs() < 1e-3 {
                     continue;
                 }
                 t > 0.0 && t < 1.0 && c.x < 0.7
             };
-            let want = v.normal.dot(to) > 0.0 && !crosses;
-            let got = v.visible_lights & (1 << l) != 0;
+            let want = v.at.n.dot(to) > 0.0 && !crosses;
+            let got = v.at.lights & (1 << l) != 0;
             assert_eq!(got, want, "vertex {:?}, light {l}", v);
             checked += 1;
             set += got as usize;
@@ -285,7 +287,7 @@ fn light_visibility_bits_match_analytic_shadows() {
 
     // Without the option no bits are set.
     let plain = PhotonMap::trace(&scene, &TraceOptions::new(2_000, 8, 0), 0.02);
-    assert!(plain.vertices.iter().all(|v| v.visible_lights == 0));
+    assert!(plain.vertices.iter().all(|v| v.at.lights == 0));
 }
 
 /// In a closed box every path ends by absorption at its last vertex, which is nobody's previous
@@ -303,11 +305,11 @@ fn light_visibility_is_recorded_only_where_paths_continue() {
         .map(|w| w[0])
         .collect();
     assert!(last.len() > 1_000, "{}", last.len());
-    assert!(last.iter().all(|v| v.visible_lights == 0));
+    assert!(last.iter().all(|v| v.at.lights == 0));
     let prev_lit = map
         .photons
         .iter()
-        .filter(|p| map.vertex(p.prev).visible_lights != 0)
+        .filter(|p| map.vertex(p.prev).at.lights != 0)
         .count();
     assert!(
         prev_lit > map.photons.len() / 2,

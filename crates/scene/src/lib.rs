@@ -26,8 +26,10 @@
 //! ```
 
 mod camera;
+mod vertex;
 
 pub use camera::Camera;
+pub use vertex::{MASKED_LIGHTS, WeightVertex};
 
 use std::f32::consts::PI;
 use std::fmt;
