@@ -13,15 +13,17 @@ use std::time::Instant;
 use bdpm_integrator::{Mode, Renderer};
 use clap::Args;
 
-use crate::common::{CliResult, Overrides, parse_resolution, prepare, thread_pool};
-use crate::output::write_atomic;
+use bdpm_output::cli::{
+    CliResult, Overrides, cpu_model, load_average, parse_resolution, prepare, thread_pool,
+};
+use bdpm_output::files::write_atomic;
 
 /// The modes a benchmark times by default: every BDPM weight mode.
 const DEFAULT_MODES: &[&str] = bdpm_mis::Heuristic::ALL_NAMES;
 
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]
-pub(crate) struct BenchArgs {
+pub struct BenchArgs {
     /// Scene file (TOML).
     scene: PathBuf,
     /// Modes to time, comma-separated (default: every BDPM mode).
@@ -81,27 +83,6 @@ struct Cell {
     pass_s: f64,
     /// Preparatory stages: (name, median s).
     prep: Vec<(String, f64)>,
-}
-
-/// One line of /proc/loadavg (its first three fields), or "unknown".
-fn load_average() -> String {
-    std::fs::read_to_string("/proc/loadavg")
-        .ok()
-        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
-        .unwrap_or_else(|| "unknown".into())
-}
-
-/// The CPU model from /proc/cpuinfo, or "unknown".
-fn cpu_model() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split_once(':'))
-                .map(|(_, v)| v.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown".into())
 }
 
 fn rate(count: f64, seconds: f64) -> f64 {
