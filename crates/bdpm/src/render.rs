@@ -5,18 +5,20 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::{Instant, SystemTime};
 
-use bdpm_integrator::{Film, Mode, Renderer, WeightStats, estimate_memory, first_hit_layers, human_bytes};
+use bdpm_integrator::{
+    Film, Mode, Renderer, WeightStats, estimate_memory, first_hit_layers, human_bytes,
+};
 use bdpm_output::accum::{self, Identity, PassRecord};
 use bdpm_output::cli::{
-    CliResult, Overrides, available_memory, default_output, image_mean, parse_bytes,
-    peak_resident_memory, positive, prepare, progress_bar, thread_pool, whole,
+    CliResult, Overrides, available_memory, default_output, parse_bytes, peak_resident_memory,
+    positive, prepare, progress_bar, thread_pool, whole,
 };
 use bdpm_output::exr::{self as exr_file, Precision, RGB, TechniqueSums};
 use bdpm_output::files::{self, Outputs};
 use bdpm_output::preview;
 use bdpm_output::report;
 use bdpm_output::say;
-use bdpm_output::stats::PixelStats;
+use bdpm_output::stats::{PixelStats, image_mean};
 use clap::Args;
 use glam::DVec3;
 
@@ -432,8 +434,9 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
         layers.push(("albedo", RGB, first.albedo));
         layers.push(("normal", ["X", "Y", "Z"], first.normal));
     }
-    let exr = exr_file::stage_exr_with_layers(&outputs.exr, &film, &header, &layers, args.precision)
-        .map_err(named(&outputs.exr))?;
+    let exr =
+        exr_file::stage_exr_with_layers(&outputs.exr, &film, &header, &layers, args.precision)
+            .map_err(named(&outputs.exr))?;
     drop(layers);
     let png = preview::encode_png(&film)
         .and_then(|bytes| files::stage_bytes(&outputs.png, &bytes))

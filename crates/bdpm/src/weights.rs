@@ -219,9 +219,9 @@ fn weight_png(map: &WeightMap) -> CliResult<Canvas> {
         .collect();
     let legend = Legend {
         title: vec![
-            "w0 = 1 - w1".into(),
+            "w₀ = 1 − w₁".into(),
             "log scale".into(),
-            "+ marks x0".into(),
+            "+ marks x₀".into(),
         ],
         ticks: TICKS
             .iter()

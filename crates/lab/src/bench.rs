@@ -18,9 +18,6 @@ use bdpm_output::cli::{
 };
 use bdpm_output::files::write_atomic;
 
-/// The modes a benchmark times by default: every BDPM weight mode.
-const DEFAULT_MODES: &[&str] = bdpm_mis::Heuristic::ALL_NAMES;
-
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -181,11 +178,7 @@ pub(crate) fn run(args: BenchArgs) -> CliResult<()> {
     if threads_list.contains(&0) {
         return Err("--threads-list: thread counts must be at least 1".into());
     }
-    let names: Vec<String> = if args.modes.is_empty() {
-        DEFAULT_MODES.iter().map(|s| s.to_string()).collect()
-    } else {
-        args.modes.iter().map(|s| s.trim().to_string()).collect()
-    };
+    let (names, modes) = crate::parse_modes(&args.modes)?;
     let overrides = Overrides {
         resolution: args.resolution,
         photons: args.photons,
@@ -195,17 +188,6 @@ pub(crate) fn run(args: BenchArgs) -> CliResult<()> {
     };
     let loaded = prepare(&args.scene, &overrides)?;
     let (scene, base) = (loaded.scene, loaded.settings);
-    let modes: Vec<Mode> = names
-        .iter()
-        .map(|n| {
-            Mode::parse(n).ok_or_else(|| {
-                format!(
-                    "--modes: unknown mode '{n}'; expected some of {}",
-                    Mode::names().join(", ")
-                )
-            })
-        })
-        .collect::<CliResult<_>>()?;
 
     let load_before = load_average();
     let started = Instant::now();

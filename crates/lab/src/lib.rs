@@ -9,6 +9,8 @@
 //! renderer alone (`render`, `merge`, `weights`), without this crate.
 use std::process::ExitCode;
 
+use bdpm_integrator::Mode;
+use bdpm_output::cli::CliResult;
 use clap::Subcommand;
 
 mod bench;
@@ -48,4 +50,29 @@ pub fn run(command: Command) -> Result<ExitCode, String> {
         Command::Bench(args) => bench::run(args).map(success),
         Command::Compare(args) => compare::run(args),
     }
+}
+
+/// The modes of `--modes` (names as given, trimmed) and what they parse to; every BDPM weight
+/// mode when the list is empty. Study and bench compare the same default set.
+fn parse_modes(list: &[String]) -> CliResult<(Vec<String>, Vec<Mode>)> {
+    let names: Vec<String> = if list.is_empty() {
+        bdpm_mis::Heuristic::ALL_NAMES
+            .iter()
+            .map(|s| s.to_string())
+            .collect()
+    } else {
+        list.iter().map(|s| s.trim().to_string()).collect()
+    };
+    let modes = names
+        .iter()
+        .map(|n| {
+            Mode::parse(n).ok_or_else(|| {
+                format!(
+                    "--modes: unknown mode '{n}'; expected some of {}",
+                    Mode::names().join(", ")
+                )
+            })
+        })
+        .collect::<CliResult<_>>()?;
+    Ok((names, modes))
 }

@@ -92,6 +92,8 @@ fn read_measured(path: &Path) -> CliResult<Measured> {
         .iter()
         .zip(g)
         .zip(b)
+        // Not `stats::luminance` of the squares: this order of the products is what the
+        // outputs were made with, and it keeps their bits.
         .map(|((r, g), b)| 0.2126 * r * r + 0.7152 * g * g + 0.0722 * b * b)
         .collect();
     Ok(Measured {

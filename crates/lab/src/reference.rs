@@ -5,11 +5,11 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use bdpm_integrator::{Film, Mode, RenderSettings, Renderer};
-use bdpm_scene::Scene;
-use glam::DVec3;
 use bdpm_output::accum::fnv1a;
 use bdpm_output::cli::progress_bar;
 use bdpm_output::exr::{ExrLayer, write_exr};
+use bdpm_scene::Scene;
+use glam::DVec3;
 
 /// Seed offset of the reference render, so that its random streams are independent of the
 /// study's (the streams are keyed by the seed).

@@ -10,8 +10,7 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use bdpm_integrator::{Film, Mode, Renderer};
-use clap::Args;
+use bdpm_integrator::{Film, Renderer};
 use bdpm_output::cli::{
     CliResult, Overrides, load_average, prepare, process_cpu_seconds, progress_bar, thread_pool,
 };
@@ -19,11 +18,9 @@ use bdpm_output::files::write_atomic;
 use bdpm_output::plot;
 use bdpm_output::preview::write_png;
 use bdpm_output::stats::{PixelStats, luminance};
+use clap::Args;
 
 use crate::reference;
-
-/// The modes a study compares by default: every BDPM weight mode.
-const DEFAULT_MODES: &[&str] = bdpm_mis::Heuristic::ALL_NAMES;
 
 /// Arguments of this subcommand. The shared `--mode` is hidden: a study takes `--modes`
 /// (and still refuses `--mode` with a message saying so).
@@ -343,22 +340,7 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
             "--time-budget must be a positive number of seconds, not {b}"
         ));
     }
-    let names: Vec<String> = if args.modes.is_empty() {
-        DEFAULT_MODES.iter().map(|s| s.to_string()).collect()
-    } else {
-        args.modes.iter().map(|s| s.trim().to_string()).collect()
-    };
-    let modes: Vec<Mode> = names
-        .iter()
-        .map(|n| {
-            Mode::parse(n).ok_or_else(|| {
-                format!(
-                    "--modes: unknown mode '{n}'; expected some of {}",
-                    Mode::names().join(", ")
-                )
-            })
-        })
-        .collect::<CliResult<_>>()?;
+    let (names, modes) = crate::parse_modes(&args.modes)?;
     let loaded = prepare(&args.scene, &args.overrides)?;
     let (scene, settings) = (loaded.scene, loaded.settings);
     let pool = thread_pool(args.overrides.threads)?;
@@ -692,5 +674,4 @@ mod tests {
         assert!(text.starts_with("mode,pass,wall_time_s,rmse,rel_rmse,mean_sqrt_v,"));
         assert_eq!(text.lines().count(), 5);
     }
-
 }

@@ -345,8 +345,10 @@ pub fn combine(parts: Vec<Accumulation>) -> Result<(Accumulation, Vec<PathBuf>),
         reference.size,
         reference.identity.clone(),
     );
-    let mut sources: Vec<(u32, PathBuf)> =
-        parts.iter().map(|p| (first_pass(p), p.path.clone())).collect();
+    let mut sources: Vec<(u32, PathBuf)> = parts
+        .iter()
+        .map(|p| (first_pass(p), p.path.clone()))
+        .collect();
     sources.sort();
     let mut passes: Vec<PassRecord> = parts.into_iter().flat_map(|p| p.passes).collect();
     passes.sort_by_key(|p| p.index);

@@ -191,12 +191,6 @@ pub fn thread_pool(threads: Option<usize>) -> CliResult<rayon::ThreadPool> {
         .map_err(|e| format!("cannot start worker threads: {e}"))
 }
 
-/// Mean over pixels of one pass's estimates, per channel.
-pub fn image_mean(estimates: &[glam::DVec3]) -> [f64; 3] {
-    let sum: glam::DVec3 = estimates.iter().copied().sum();
-    (sum / estimates.len().max(1) as f64).to_array()
-}
-
 /// The render's EXR when neither `-o` nor the scene file names one: `out/<scene>.exr`.
 pub fn default_output(scene: &Path) -> PathBuf {
     let stem = scene.file_stem().map(|s| s.to_string_lossy().into_owned());
@@ -404,7 +398,6 @@ mod tests {
         assert_eq!(back.to_args(), o.to_args());
         assert_eq!(back.radius, Some(0.1));
     }
-
 
     #[test]
     fn byte_counts_parse() {

@@ -171,7 +171,12 @@ pub fn compose(
     let pad = 6 * ts;
     let bar_w = 10 * ts;
     let tick_w = 3 * ts;
-    let label_w = legend.ticks.iter().map(|(_, l)| text_w(l)).max().unwrap_or(0);
+    let label_w = legend
+        .ticks
+        .iter()
+        .map(|(_, l)| text_w(l))
+        .max()
+        .unwrap_or(0);
     let title_w = legend.title.iter().map(text_w).max().unwrap_or(0);
     let panel_w = (bar_w + tick_w + label_w).max(title_w) + 2 * pad;
     let title_h = legend.title.len() as u32 * line;
@@ -336,9 +341,19 @@ mod tests {
         assert_eq!(&l.canvas.rgb[0..3], &[1, 2, 3]);
         assert_eq!(l.centre(1, 0), (10, 3));
         // The legend's text is drawn: the panel holds colours other than its own and the bar's.
-        let thin = compose(1024, 8, &vec![[0; 3]; 1024 * 8], &legend, ColourMap::Viridis);
+        let thin = compose(
+            1024,
+            8,
+            &vec![[0; 3]; 1024 * 8],
+            &legend,
+            ColourMap::Viridis,
+        );
         assert_eq!(thin.expect("drawn").scale, 2);
-        let text_like = l.canvas.rgb.chunks(3).filter(|p| p[0] > 200 && p[1] > 200 && p[2] > 200);
+        let text_like = l
+            .canvas
+            .rgb
+            .chunks(3)
+            .filter(|p| p[0] > 200 && p[1] > 200 && p[2] > 200);
         assert!(text_like.count() > 20);
     }
 }

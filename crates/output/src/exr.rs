@@ -123,11 +123,7 @@ fn rgb_channels(
 /// Writes the film as a float32 EXR: default R, G, B = mean radiance (W·m⁻²·sr⁻¹); layer
 /// `noise` = √(per-pass variance) (the preprint's √V); layer `stderr` = standard error of the
 /// mean. `attributes` go into the header as text.
-pub fn write_exr(
-    path: &Path,
-    film: &Film,
-    attributes: &[(String, String)],
-) -> Result<(), String> {
+pub fn write_exr(path: &Path, film: &Film, attributes: &[(String, String)]) -> Result<(), String> {
     let channels = film_channels(film, &[], Precision::Float);
     write_channels(path, (film.width, film.height), channels, attributes)
 }
@@ -246,7 +242,6 @@ fn encode_channels(
         .map_err(|e| format!("cannot write EXR: {e}"))?;
     writer.flush().map_err(|e| format!("cannot write EXR: {e}"))
 }
-
 
 /// Sums of the technique layers over passes.
 pub struct TechniqueSums {

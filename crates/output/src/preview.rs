@@ -8,7 +8,6 @@ use crate::colormap::{ColourMap, Legend, compose, linear_ticks};
 use crate::files::write_atomic;
 use crate::stats::luminance;
 
-
 /// Linear → sRGB transfer function, in [0, 1].
 fn srgb(x: f64) -> f64 {
     let x = x.clamp(0.0, 1.0);
@@ -54,12 +53,7 @@ pub fn encode_png_rgb8(width: u32, height: u32, rgb: &[u8]) -> Result<Vec<u8>, S
 }
 
 /// Writes an 8-bit RGB image atomically.
-pub fn write_png_rgb8(
-    path: &Path,
-    width: u32,
-    height: u32,
-    rgb: &[u8],
-) -> Result<(), String> {
+pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), String> {
     write_atomic(path, &encode_png_rgb8(width, height, rgb)?)
 }
 
@@ -110,8 +104,8 @@ pub fn encode_noise_png(
         .map(|v| ColourMap::Viridis.colour(if max > 0.0 { v / max } else { 0.0 }))
         .collect();
     let mut title = vec![
-        "noise sqrt V".to_string(),
-        "W m-2 sr-1".into(),
+        "noise √V".to_string(),
+        "W·m⁻²·sr⁻¹".into(),
         "linear, max p99".into(),
     ];
     if passes < 2 {
@@ -125,4 +119,3 @@ pub fn encode_noise_png(
         .canvas
         .encode_png()
 }
-

@@ -7,6 +7,7 @@ use bdpm_load::LoadReport;
 use serde::Serialize;
 
 use crate::files::Outputs;
+use crate::stats::image_mean;
 
 /// Everything the report is made from.
 pub struct RunFacts<'a> {
@@ -233,11 +234,6 @@ pub struct RunReport {
     memory: MemoryOut,
 }
 
-fn mean_of(v: &[glam::DVec3]) -> [f64; 3] {
-    let s: glam::DVec3 = v.iter().copied().sum();
-    (s / v.len().max(1) as f64).to_array()
-}
-
 /// Standard error of the mean of `samples` (per channel); 0 with fewer than two.
 fn standard_error_of_mean(samples: &[[f64; 3]]) -> [f64; 3] {
     let n = samples.len() as f64;
@@ -357,11 +353,11 @@ impl RunReport {
                 stored_total: f.photons_stored,
                 largest_map_bytes: f.photon_map_bytes,
             },
-            mean_radiance: mean_of(&f.film.mean()),
+            mean_radiance: image_mean(&f.film.mean()),
             mean_radiance_standard_error: standard_error_of_mean(f.pass_means),
             pass_image_means: f.pass_means.to_vec(),
             plan: f.plan.clone(),
-            mean_noise_sqrt_v: mean_of(&noise),
+            mean_noise_sqrt_v: image_mean(&noise),
             outputs: f.outputs.all().map(|p| p.display().to_string()),
             warnings: f.warnings.to_vec(),
             memory: MemoryOut {

@@ -10,6 +10,12 @@ pub fn luminance(c: DVec3) -> f64 {
     0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
 }
 
+/// Mean over pixels of an image (e.g. one pass's estimates), per channel.
+pub fn image_mean(pixels: &[DVec3]) -> [f64; 3] {
+    let sum: DVec3 = pixels.iter().copied().sum();
+    (sum / pixels.len().max(1) as f64).to_array()
+}
+
 /// Per-pixel sums of the pass luminance and of its square, over the passes added so far.
 #[derive(Clone, Debug)]
 pub struct PixelStats {
