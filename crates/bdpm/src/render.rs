@@ -24,6 +24,9 @@ use glam::DVec3;
 
 use crate::signal;
 
+// The field docs are clap's help text, printed in a terminal: `<scene>` there is a
+// placeholder, not an HTML tag.
+#[allow(rustdoc::invalid_html_tags)]
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]
 pub(crate) struct RenderArgs {

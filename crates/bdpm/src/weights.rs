@@ -30,6 +30,9 @@ const NO_SURFACE: [u8; 3] = [0, 0, 0];
 /// Colour of the cross that marks x₀: red, which viridis does not contain.
 const MARK: [u8; 3] = [255, 40, 40];
 
+// The field docs are clap's help text, printed in a terminal: `<scene>` there is a
+// placeholder, not an HTML tag.
+#[allow(rustdoc::invalid_html_tags)]
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]
 #[command(group(ArgGroup::new("target").required(true).args(["x0", "pixel"])))]
@@ -78,7 +81,7 @@ fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
     Ok((p(x)?, p(y)?))
 }
 
-/// out/<scene>-weights-<mode>.exr.
+/// `out/<scene>-weights-<mode>.exr`.
 fn default_output(scene: &Path, mode: Mode) -> PathBuf {
     let stem = scene
         .file_stem()

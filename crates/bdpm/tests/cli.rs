@@ -341,7 +341,7 @@ fn bad_input_gives_one_line_naming_file_and_field() {
         let out = run(bdpm()
             .arg("render")
             .arg(&path)
-            .args(&extra)
+            .args(extra)
             .args(["--quiet", "-o"])
             .arg(&out_exr));
         if needles.is_empty() {

@@ -18,6 +18,9 @@ use bdpm_output::cli::{
 };
 use bdpm_output::files::write_atomic;
 
+// The field docs are clap's help text, printed in a terminal: `<scene>` there is a
+// placeholder, not an HTML tag.
+#[allow(rustdoc::invalid_html_tags)]
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]
 pub struct BenchArgs {

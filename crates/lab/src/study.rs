@@ -22,6 +22,9 @@ use clap::Args;
 
 use crate::reference;
 
+// The field docs are clap's help text, printed in a terminal: `<scene>` there is a
+// placeholder, not an HTML tag.
+#[allow(rustdoc::invalid_html_tags)]
 /// Arguments of this subcommand. The shared `--mode` is hidden: a study takes `--modes`
 /// (and still refuses `--mode` with a message saying so).
 #[derive(Args, Debug)]
