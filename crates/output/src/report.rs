@@ -7,7 +7,7 @@ use bdpm_load::LoadReport;
 use serde::Serialize;
 
 use crate::files::Outputs;
-use crate::stats::image_mean;
+use crate::stats::{image_mean, standard_error_of_mean};
 
 /// Everything the report is made from.
 pub struct RunFacts<'a> {
@@ -232,21 +232,6 @@ pub struct RunReport {
     warnings: Vec<String>,
     /// The memory estimate made before rendering, its limit and the measured peak.
     memory: MemoryOut,
-}
-
-/// Standard error of the mean of `samples` (per channel); 0 with fewer than two.
-fn standard_error_of_mean(samples: &[[f64; 3]]) -> [f64; 3] {
-    let n = samples.len() as f64;
-    if samples.len() < 2 {
-        return [0.0; 3];
-    }
-    let mut out = [0.0; 3];
-    for (c, o) in out.iter_mut().enumerate() {
-        let mean = samples.iter().map(|s| s[c]).sum::<f64>() / n;
-        let var = samples.iter().map(|s| (s[c] - mean).powi(2)).sum::<f64>() / (n - 1.0);
-        *o = (var / n).sqrt();
-    }
-    out
 }
 
 /// The settings as asked for, with the merge radius and the weight clamp in force (the

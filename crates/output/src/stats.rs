@@ -1,4 +1,4 @@
-//! Per-pixel statistics over passes: the one luminance and the one accumulator of the
+//! Statistics over passes: the one luminance and the one per-pixel accumulator of the
 //! driver (the noise map and `--target-noise` of `bdpm render`, the error curves of `bdpm
 //! study`). The film of the integrator keeps per-channel statistics; these are of the
 //! luminance, which the per-channel ones cannot give (they lack the covariances between
@@ -14,6 +14,22 @@ pub fn luminance(c: DVec3) -> f64 {
 pub fn image_mean(pixels: &[DVec3]) -> [f64; 3] {
     let sum: DVec3 = pixels.iter().copied().sum();
     (sum / pixels.len().max(1) as f64).to_array()
+}
+
+/// Standard error of the mean of `samples` (per channel, e.g. the image means of the
+/// passes), from their spread; 0 with fewer than two.
+pub fn standard_error_of_mean(samples: &[[f64; 3]]) -> [f64; 3] {
+    let n = samples.len() as f64;
+    if samples.len() < 2 {
+        return [0.0; 3];
+    }
+    let mut out = [0.0; 3];
+    for (c, o) in out.iter_mut().enumerate() {
+        let mean = samples.iter().map(|s| s[c]).sum::<f64>() / n;
+        let var = samples.iter().map(|s| (s[c] - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        *o = (var / n).sqrt();
+    }
+    out
 }
 
 /// Per-pixel sums of the pass luminance and of its square, over the passes added so far.
