@@ -9,6 +9,7 @@ use glam::Vec3;
 
 use bdpm_output::cli::{CliResult, Overrides, prepare, thread_pool};
 use bdpm_output::colormap::{Canvas, ColourMap, Legend, compose};
+use bdpm_output::files::stem_of;
 use bdpm_output::{exr, say};
 
 /// Bottom of the PNG's colour scale: w₀ at or below it gets the bottom colour. 2⁻⁷, the
@@ -83,10 +84,7 @@ fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
 
 /// `out/<scene>-weights-<mode>.exr`.
 fn default_output(scene: &Path, mode: Mode) -> PathBuf {
-    let stem = scene
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "scene".into());
+    let stem = stem_of(scene, "scene");
     PathBuf::from("out").join(format!("{stem}-weights-{}.exr", mode.name()))
 }
 

@@ -16,7 +16,7 @@ use clap::Args;
 use bdpm_output::cli::{
     CliResult, Overrides, cpu_model, load_average, parse_resolution, prepare, thread_pool,
 };
-use bdpm_output::files::write_atomic;
+use bdpm_output::files::stem_of;
 
 // The field docs are clap's help text, printed in a terminal: `<scene>` there is a
 // placeholder, not an HTML tag.
@@ -288,18 +288,11 @@ pub(crate) fn run(args: BenchArgs) -> CliResult<()> {
             }
         }
     }
-    let stem = args
-        .scene
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "scene".into());
+    let stem = stem_of(&args.scene, "scene");
     let path = args
         .output
         .unwrap_or_else(|| PathBuf::from("out").join(format!("bench-{stem}.md")));
-    write_atomic(&path, md.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
-    println!("{md}");
-    println!("wrote {}", path.display());
-    Ok(())
+    crate::publish(&path, &md)
 }
 
 #[cfg(test)]

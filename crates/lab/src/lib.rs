@@ -7,10 +7,12 @@
 //! and the CLI tests all call `bdpm compare`, `bdpm study`, `bdpm bench` and `bdpm predict`,
 //! and keep working unchanged; `cargo build -p bdpm --no-default-features` builds the
 //! renderer alone (`render`, `merge`, `weights`), without this crate.
+use std::path::Path;
 use std::process::ExitCode;
 
 use bdpm_integrator::Mode;
 use bdpm_output::cli::CliResult;
+use bdpm_output::files::write_atomic;
 use clap::Subcommand;
 
 mod bench;
@@ -75,4 +77,12 @@ fn parse_modes(list: &[String]) -> CliResult<(Vec<String>, Vec<Mode>)> {
         })
         .collect::<CliResult<_>>()?;
     Ok((names, modes))
+}
+
+/// Writes a markdown report to `path` and prints it, then where it went.
+fn publish(path: &Path, md: &str) -> CliResult<()> {
+    write_atomic(path, md.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
+    println!("{md}");
+    println!("wrote {}", path.display());
+    Ok(())
 }

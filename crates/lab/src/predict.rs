@@ -23,6 +23,7 @@ use serde::Serialize;
 
 use bdpm_output::cli::{CliResult, Overrides, prepare, thread_pool};
 use bdpm_output::colormap::{Canvas, ColourMap, Legend, compose, format_value};
+use bdpm_output::files::stem_of;
 use bdpm_output::{exr, files, say};
 
 /// Side of the pixel blocks over which V is also compared (summed over the block's pixels):
@@ -292,10 +293,7 @@ fn block_sums(predicted: &[f64], measured: &[f64], width: u32, height: u32) -> V
 
 /// Default output: beside the measured render, `<stem>-predict.exr`.
 fn default_output(measured: &Path) -> PathBuf {
-    let stem = measured
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "render".into());
+    let stem = stem_of(measured, "render");
     measured.with_file_name(format!("{stem}-predict.exr"))
 }
 
@@ -583,7 +581,7 @@ fn print_summary(r: &Report<'_>) {
 
 /// OUT-headroom.png beside OUT.exr.
 fn headroom_png_path(exr: &Path) -> PathBuf {
-    let stem = exr.file_stem().unwrap_or_default().to_string_lossy();
+    let stem = stem_of(exr, "");
     exr.with_file_name(format!("{stem}-headroom.png"))
 }
 

@@ -8,6 +8,7 @@ use bdpm_integrator::{Film, Mode, RenderSettings, Renderer};
 use bdpm_output::accum::fnv1a;
 use bdpm_output::cli::progress_bar;
 use bdpm_output::exr::{ExrLayer, write_exr};
+use bdpm_output::files::stem_of;
 use bdpm_scene::Scene;
 use glam::DVec3;
 
@@ -51,10 +52,7 @@ pub(crate) fn cache_path(scene_path: &Path, settings: &RenderSettings) -> Result
         .map_err(|e| format!("{}: cannot read: {e}", scene_path.display()))?;
     let mut key = bytes;
     key.extend_from_slice(format!("{settings:?}").as_bytes());
-    let stem = scene_path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "scene".into());
+    let stem = stem_of(scene_path, "scene");
     Ok(PathBuf::from("out").join(format!(
         "reference-{stem}-{}x{}-{:016x}.exr",
         settings.width,

@@ -14,7 +14,7 @@ use bdpm_integrator::{Film, Renderer};
 use bdpm_output::cli::{
     CliResult, Overrides, load_average, prepare, process_cpu_seconds, progress_bar, thread_pool,
 };
-use bdpm_output::files::write_atomic;
+use bdpm_output::files::{stem_of, write_atomic};
 use bdpm_output::plot;
 use bdpm_output::preview::write_png;
 use bdpm_output::stats::{PixelStats, luminance};
@@ -347,11 +347,7 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
     let loaded = prepare(&args.scene, &args.overrides)?;
     let (scene, settings) = (loaded.scene, loaded.settings);
     let pool = thread_pool(args.overrides.threads)?;
-    let stem = args
-        .scene
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "scene".into());
+    let stem = stem_of(&args.scene, "scene");
     let dir = args
         .output
         .clone()
@@ -599,10 +595,7 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
     );
     let md = markdown(&header, &refs, &runs, &baseline, &args.clock, &all_files);
     let md_path = dir.join("study.md");
-    write_atomic(&md_path, md.as_bytes()).map_err(|e| format!("{}: {e}", md_path.display()))?;
-    println!("{md}");
-    println!("wrote {}", md_path.display());
-    Ok(())
+    crate::publish(&md_path, &md)
 }
 
 #[cfg(test)]

@@ -8,6 +8,8 @@ use bdpm_integrator::{Mode, NoiseModel, RenderSettings};
 use bdpm_load::{LoadReport, load_scene};
 use bdpm_scene::Scene;
 use clap::Args;
+
+use crate::files::stem_of;
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// `println!` that ignores a closed standard output (as in `bdpm render … | head`) instead of
@@ -193,8 +195,7 @@ pub fn thread_pool(threads: Option<usize>) -> CliResult<rayon::ThreadPool> {
 
 /// The render's EXR when neither `-o` nor the scene file names one: `out/<scene>.exr`.
 pub fn default_output(scene: &Path) -> PathBuf {
-    let stem = scene.file_stem().map(|s| s.to_string_lossy().into_owned());
-    PathBuf::from("out").join(format!("{}.exr", stem.unwrap_or_else(|| "render".into())))
+    PathBuf::from("out").join(format!("{}.exr", stem_of(scene, "render")))
 }
 
 /// A scene loaded from `path` with `overrides` applied (the camera resized to match).

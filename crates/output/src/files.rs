@@ -22,10 +22,7 @@ impl Outputs {
     /// OUT.exr, OUT.png, OUT-noise.png and OUT.json for a requested OUT(.exr).
     pub fn beside(exr: &Path) -> Outputs {
         let exr = exr.with_extension("exr");
-        let stem = exr
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
+        let stem = stem_of(&exr, "");
         Outputs {
             png: exr.with_extension("png"),
             noise_png: exr.with_file_name(format!("{stem}-noise.png")),
@@ -38,6 +35,15 @@ impl Outputs {
     pub fn all(&self) -> [&Path; 4] {
         [&self.exr, &self.png, &self.noise_png, &self.json]
     }
+}
+
+/// The file name of `path` without its extension, as text (`fallback` if it has none): the
+/// stem that names a command's default outputs.
+pub fn stem_of(path: &Path, fallback: &str) -> String {
+    path.file_stem().map_or_else(
+        || fallback.to_string(),
+        |s| s.to_string_lossy().into_owned(),
+    )
 }
 
 /// Suffix of every temporary file the driver writes. A render removes stale ones of its own
