@@ -1,19 +1,10 @@
 //! `bdpm`: the command-line driver. It parses arguments, loads the scene, runs the integrator
-//! and writes images, reports and plots. All rendering logic lives in the library crates;
-//! this binary is the IO boundary.
+//! and writes images and reports (through `bdpm-output`). All rendering logic lives in the
+//! library crates; this binary is the IO boundary. The lab's subcommands (study, bench,
+//! compare, predict) come from `bdpm-lab` with the default feature `lab`.
 
-mod accum;
-mod bench;
-mod colormap;
-mod common;
-mod compare;
-mod font;
-mod output;
-mod predict;
 mod render;
-mod report;
 mod signal;
-mod study;
 mod weights;
 
 use std::process::ExitCode;
@@ -43,18 +34,10 @@ enum Command {
     /// OUT.exr (channel w0) and OUT.png (log scale 0.008–1, x₀ marked). Modes whose weights
     /// depend on x₁ alone: bdd0, bdd1, threshold, algebraic-direct, algebraic, optimal.
     Weights(weights::WeightsArgs),
-    /// Evaluate the noise model of method.md §12 per pixel for a mode's weights and compare it
-    /// with the per-pass variance V of a render made with the same settings (--measured):
-    /// OUT.exr (predicted and measured V, ratio, terms T0, T1, T2, T_jitter), OUT.png
-    /// (log2 predicted/measured) and OUT.json (correlations, ratio quantiles, term shares).
-    Predict(predict::PredictArgs),
-    /// Error against run time for several modes: CSV, plots and a markdown table.
-    Study(study::StudyArgs),
-    /// Throughput benchmarks: photons/s and camera samples/s per mode, 1 and N threads.
-    Bench(bench::BenchArgs),
-    /// Compare two renders: bit-identical mean radiance or not, image means, and the fraction
-    /// of pixels within k combined standard errors.
-    Compare(compare::CompareArgs),
+    /// The lab: study, bench, compare, predict.
+    #[cfg(feature = "lab")]
+    #[command(flatten)]
+    Lab(bdpm_lab::Command),
 }
 
 fn main() -> ExitCode {
@@ -67,10 +50,8 @@ fn main() -> ExitCode {
         Command::Render(args) => render::run(args),
         Command::Merge(args) => render::merge(args),
         Command::Weights(args) => weights::run(args).map(success),
-        Command::Predict(args) => predict::run(args).map(success),
-        Command::Study(args) => study::run(args).map(success),
-        Command::Bench(args) => bench::run(args).map(success),
-        Command::Compare(args) => compare::run(args),
+        #[cfg(feature = "lab")]
+        Command::Lab(command) => bdpm_lab::run(command),
     };
     match result {
         Ok(code) => code,

@@ -6,19 +6,27 @@ use std::process::ExitCode;
 use std::time::{Instant, SystemTime};
 
 use bdpm_integrator::{
-    Film, Mode, Renderer, Techniques, WeightStats, estimate_memory, first_hit_layers, human_bytes,
+    Film, Mode, Renderer, WeightStats, estimate_memory, first_hit_layers, human_bytes,
 };
+use bdpm_output::accum::{self, Identity, PassRecord};
+use bdpm_output::cli::{
+    CliResult, Overrides, available_memory, default_output, parse_bytes, peak_resident_memory,
+    positive, prepare, progress_bar, thread_pool, whole,
+};
+use bdpm_output::exr::{self as exr_file, Precision, RGB, TechniqueSums};
+use bdpm_output::files::{self, Outputs};
+use bdpm_output::preview;
+use bdpm_output::report;
+use bdpm_output::say;
+use bdpm_output::stats::{PixelStats, image_mean};
 use clap::Args;
 use glam::DVec3;
-use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::accum::{self, Identity, PassRecord};
-use crate::common::{
-    CliResult, Overrides, default_output, image_mean, number, prepare, say, thread_pool, whole,
-};
-use crate::output::luminance;
-use crate::{output, report, signal};
+use crate::signal;
 
+// The field docs are clap's help text, printed in a terminal: `<scene>` there is a
+// placeholder, not an HTML tag.
+#[allow(rustdoc::invalid_html_tags)]
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]
 pub(crate) struct RenderArgs {
@@ -43,7 +51,7 @@ pub(crate) struct RenderArgs {
     aov: bool,
     /// Sample type of the EXR's colour and layer channels (OUT.accum.exr stays exact).
     #[arg(long, value_enum, value_name = "P", default_value = "float")]
-    exr_precision: output::Precision,
+    exr_precision: Precision,
     /// Refuse to start a render whose estimated peak memory exceeds this, e.g. 8G, 512M,
     /// 100000K or a number of bytes (K, M, G, T are powers of 1024). Default: the memory
     /// available on this machine (MemAvailable of /proc/meminfo), no limit where unknown.
@@ -95,145 +103,6 @@ pub(crate) struct MergeArgs {
     threads: Option<usize>,
 }
 
-/// A positive finite number for a flag.
-fn positive(s: &str) -> Result<f64, String> {
-    let v = number(s)?;
-    if v.is_finite() && v > 0.0 {
-        Ok(v)
-    } else {
-        Err(format!("'{s}' is not a positive number"))
-    }
-}
-
-/// A byte count with an optional binary suffix (K, M, G, T; `B` or `iB` may follow).
-fn parse_bytes(s: &str) -> Result<u64, String> {
-    let t = s.trim();
-    let t = t
-        .strip_suffix("iB")
-        .or_else(|| t.strip_suffix('B'))
-        .unwrap_or(t);
-    let (digits, shift) = match t.chars().last().map(|c| c.to_ascii_uppercase()) {
-        Some('K') => (&t[..t.len() - 1], 10),
-        Some('M') => (&t[..t.len() - 1], 20),
-        Some('G') => (&t[..t.len() - 1], 30),
-        Some('T') => (&t[..t.len() - 1], 40),
-        _ => (t, 0),
-    };
-    let bad = || format!("'{s}' is not a size such as 8G, 512M or 1000000");
-    let value: f64 = digits.trim().parse().map_err(|_| bad())?;
-    let bytes = value * (1u64 << shift) as f64;
-    if !(bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64) {
-        return Err(bad());
-    }
-    Ok(bytes as u64)
-}
-
-/// MemAvailable of /proc/meminfo, bytes (`None` where there is no such file).
-fn available_memory() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
-}
-
-/// The process's peak resident memory so far (VmHWM of /proc/self/status), bytes.
-fn peak_resident_memory() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = text.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
-}
-
-/// Per-pixel sums of the pass luminance and its square: the noise map shows √V of the
-/// luminance itself, which the film's per-channel variances cannot give (they lack the
-/// covariances between channels).
-struct LuminanceFilm {
-    sum: Vec<f64>,
-    sum_sq: Vec<f64>,
-    passes: u32,
-}
-
-impl LuminanceFilm {
-    fn new(pixels: usize) -> LuminanceFilm {
-        LuminanceFilm {
-            sum: vec![0.0; pixels],
-            sum_sq: vec![0.0; pixels],
-            passes: 0,
-        }
-    }
-
-    fn add_pass(&mut self, estimates: &[DVec3]) {
-        for ((s, q), e) in self.sum.iter_mut().zip(&mut self.sum_sq).zip(estimates) {
-            let l = luminance(*e);
-            *s += l;
-            *q += l * l;
-        }
-        self.passes += 1;
-    }
-
-    /// Mean over pixels with a non-zero mean luminance of (standard error of the mean) / mean;
-    /// `None` with fewer than two passes or an all-black image.
-    fn mean_relative_stderr(&self) -> Option<f64> {
-        if self.passes < 2 {
-            return None;
-        }
-        let k = self.passes as f64;
-        let (mut total, mut count) = (0.0, 0u64);
-        for (s, q) in self.sum.iter().zip(&self.sum_sq) {
-            let mean = s / k;
-            if mean > 0.0 {
-                let var = ((q - s * s / k) / (k - 1.0)).max(0.0);
-                total += (var / k).sqrt() / mean;
-                count += 1;
-            }
-        }
-        (count > 0).then(|| total / count as f64)
-    }
-
-    /// √(unbiased per-pass variance) per pixel; zero with fewer than two passes.
-    fn noise(&self) -> Vec<f64> {
-        if self.passes < 2 {
-            return vec![0.0; self.sum.len()];
-        }
-        let k = self.passes as f64;
-        self.sum
-            .iter()
-            .zip(&self.sum_sq)
-            .map(|(s, q)| ((q - s * s / k) / (k - 1.0)).max(0.0).sqrt())
-            .collect()
-    }
-}
-
-/// Sums of the technique layers over passes.
-struct TechniqueSums {
-    sums: Vec<Techniques>,
-}
-
-impl TechniqueSums {
-    fn add_pass(&mut self, pass: &[Techniques]) {
-        for (s, t) in self.sums.iter_mut().zip(pass) {
-            s.direct += t.direct;
-            s.x0_raw += t.x0_raw;
-            s.x0_weighted += t.x0_weighted;
-            s.x1_raw += t.x1_raw;
-            s.x1_weighted += t.x1_weighted;
-        }
-    }
-
-    /// The named layers: means over `passes`.
-    fn layers(&self, passes: u32) -> Vec<output::ExtraLayer<'static>> {
-        let k = passes.max(1) as f64;
-        let layer = |f: fn(&Techniques) -> DVec3| self.sums.iter().map(|t| f(t) / k).collect();
-        vec![
-            ("direct", output::RGB, layer(|t| t.direct)),
-            ("x0_raw", output::RGB, layer(|t| t.x0_raw)),
-            ("x0_weighted", output::RGB, layer(|t| t.x0_weighted)),
-            ("x1_raw", output::RGB, layer(|t| t.x1_raw)),
-            ("x1_weighted", output::RGB, layer(|t| t.x1_weighted)),
-        ]
-    }
-}
-
 /// Runs the subcommand. Exit code 0 after a complete render, [`signal::EXIT_INTERRUPTED`]
 /// after an interrupted one (whose outputs hold the passes done, if any).
 pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
@@ -283,45 +152,22 @@ pub(crate) fn merge(args: MergeArgs) -> CliResult<ExitCode> {
         .iter()
         .map(|p| accum::read(p))
         .collect::<Result<Vec<_>, _>>()?;
-    let reference = parts
-        .iter()
-        .min_by_key(|p| p.passes.first().map_or(u32::MAX, |r| r.index))
-        .map(|p| p.path.clone())
-        .unwrap_or_default();
-    let size = parts.first().map_or((0, 0), |p| p.size);
-    // Listed in pass order, not argument order, so that the report does not depend on it.
-    let mut sources: Vec<(u32, PathBuf)> = parts
-        .iter()
-        .map(|p| {
-            (
-                p.passes.first().map_or(u32::MAX, |r| r.index),
-                p.path.clone(),
-            )
-        })
-        .collect();
-    sources.sort();
-    let (identity, passes) = accum::combine(parts)?;
-    let mut overrides = accum::overrides_from_args(&identity.overrides)
-        .map_err(|e| format!("{}: {e}", reference.display()))?;
+    let (held, sources) = accum::combine(parts)?;
+    let mut overrides = Overrides::from_args(&held.identity.overrides)
+        .map_err(|e| format!("{}: {e}", held.path.display()))?;
     overrides.threads = args.threads;
-    let held = accum::Accumulation {
-        path: reference,
-        size,
-        identity: identity.clone(),
-        passes,
-    };
     run_job(Job {
-        scene: args.scene.unwrap_or(identity.scene),
+        scene: args.scene.unwrap_or_else(|| held.identity.scene.clone()),
         overrides,
         output: Some(args.output),
         quiet: args.quiet,
         techniques: false,
         aov: false,
-        precision: output::Precision::Float,
+        precision: Precision::Float,
         max_memory: None,
         first_pass: None,
         held: Some(held),
-        held_from: sources.into_iter().map(|(_, p)| p).collect(),
+        held_from: sources,
         accumulate: true,
         time_budget: None,
         target_noise: None,
@@ -340,7 +186,7 @@ struct Job {
     /// Write the first-hit `albedo` and `normal` layers.
     aov: bool,
     /// Sample type of the EXR's channels.
-    precision: output::Precision,
+    precision: Precision,
     max_memory: Option<u64>,
     /// First pass to render (default 0, or after the held passes when resuming).
     first_pass: Option<u32>,
@@ -416,8 +262,8 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
     // Before any work: a directory that cannot be written, an output name that is a
     // directory or a device, or a second render to the same output is refused now, not after
     // the render. The lock is held until the files are in place.
-    let outputs = output::Outputs::beside(&requested);
-    let _lock = output::claim(&requested, &outputs, started)?;
+    let outputs = Outputs::beside(&requested);
+    let _lock = files::claim(&requested, &outputs, started)?;
     let pool = thread_pool(args.overrides.threads)?;
     let threads = pool.current_num_threads();
 
@@ -461,23 +307,15 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
         say!("warning: {w}");
     }
 
-    let bar = if args.quiet {
-        ProgressBar::hidden()
-    } else {
-        let bar = ProgressBar::new(to_render as u64 * renderer.work_per_pass());
-        let style = ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {bar:40} {percent:>3}% pass {msg} (eta {eta})",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar());
-        bar.set_style(style);
-        bar
-    };
+    let bar = progress_bar(
+        args.quiet,
+        Some(to_render as u64 * renderer.work_per_pass()),
+        "{spinner} [{elapsed_precise}] {bar:40} {percent:>3}% pass {msg} (eta {eta})",
+    );
     let pixels = settings.width as usize * settings.height as usize;
     let mut film = Film::new(settings.width, settings.height);
-    let mut luma = LuminanceFilm::new(pixels);
-    let mut techniques = args.techniques.then(|| TechniqueSums {
-        sums: vec![Techniques::default(); pixels],
-    });
+    let mut luma = PixelStats::new(pixels);
+    let mut techniques = args.techniques.then(|| TechniqueSums::new(pixels));
     let mut samples = 0u64;
     let mut pass_means = Vec::new();
     let mut stage_totals: Vec<(&'static str, f64)> = Vec::new();
@@ -569,7 +407,7 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
     // The files are written as a set: each to a temporary file beside its target, and only
     // when all four are complete are they renamed into place, the EXR last. A full disk or a
     // kill before that leaves the previous set whole (docs/robustness.md, "Outputs as a set").
-    let run_id = output::run_id();
+    let run_id = files::run_id();
     let known_before = warnings.len();
     if film.mean().iter().all(|c| *c == DVec3::ZERO) {
         warnings.push(format!(
@@ -596,21 +434,22 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
         .unwrap_or_default();
     if args.aov {
         let first = pool.install(|| first_hit_layers(&scene, &settings));
-        layers.push(("albedo", output::RGB, first.albedo));
+        layers.push(("albedo", RGB, first.albedo));
         layers.push(("normal", ["X", "Y", "Z"], first.normal));
     }
-    let exr = output::stage_exr_with_layers(&outputs.exr, &film, &header, &layers, args.precision)
-        .map_err(named(&outputs.exr))?;
+    let exr =
+        exr_file::stage_exr_with_layers(&outputs.exr, &film, &header, &layers, args.precision)
+            .map_err(named(&outputs.exr))?;
     drop(layers);
-    let png = output::encode_png(&film)
-        .and_then(|bytes| output::stage_bytes(&outputs.png, &bytes))
+    let png = preview::encode_png(&film)
+        .and_then(|bytes| files::stage_bytes(&outputs.png, &bytes))
         .map_err(named(&outputs.png))?;
-    let noise_png = output::encode_noise_png(
+    let noise_png = preview::encode_noise_png(
         (settings.width, settings.height),
         &luma.noise(),
         film.passes(),
     )
-    .and_then(|bytes| output::stage_bytes(&outputs.noise_png, &bytes))
+    .and_then(|bytes| files::stage_bytes(&outputs.noise_png, &bytes))
     .map_err(named(&outputs.noise_png))?;
     let accum_path = args.accumulate.then(|| accum::path_beside(&outputs.exr));
     let accum_file = match &accum_path {
@@ -672,13 +511,13 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
             peak_resident: peak_resident_memory(),
         },
     });
-    let json = output::stage_bytes(&outputs.json, run.to_json().as_bytes())
+    let json = files::stage_bytes(&outputs.json, run.to_json().as_bytes())
         .map_err(named(&outputs.json))?;
     // The EXR stays last: the commit point of the set.
     let mut staged = vec![png, noise_png, json];
     staged.extend(accum_file);
     staged.push(exr);
-    output::commit_all(staged)?;
+    files::commit_all(staged)?;
     if interrupted {
         say!(
             "interrupted after {} of {} passes; the outputs hold those passes",

@@ -7,9 +7,10 @@ use bdpm_integrator::{Mode, Renderer, WeightMap, WeightTarget};
 use clap::{ArgGroup, Args};
 use glam::Vec3;
 
-use crate::colormap::{Canvas, Legend, compose, viridis};
-use crate::common::{CliResult, Overrides, prepare, say, thread_pool};
-use crate::output;
+use bdpm_output::cli::{CliResult, Overrides, prepare, thread_pool};
+use bdpm_output::colormap::{Canvas, ColourMap, Legend, compose};
+use bdpm_output::files::stem_of;
+use bdpm_output::{exr, say};
 
 /// Bottom of the PNG's colour scale: w₀ at or below it gets the bottom colour. 2⁻⁷, the
 /// smallest value the preprint's Fig. 5 scale distinguishes.
@@ -30,6 +31,9 @@ const NO_SURFACE: [u8; 3] = [0, 0, 0];
 /// Colour of the cross that marks x₀: red, which viridis does not contain.
 const MARK: [u8; 3] = [255, 40, 40];
 
+// The field docs are clap's help text, printed in a terminal: `<scene>` there is a
+// placeholder, not an HTML tag.
+#[allow(rustdoc::invalid_html_tags)]
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]
 #[command(group(ArgGroup::new("target").required(true).args(["x0", "pixel"])))]
@@ -78,12 +82,9 @@ fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
     Ok((p(x)?, p(y)?))
 }
 
-/// out/<scene>-weights-<mode>.exr.
+/// `out/<scene>-weights-<mode>.exr`.
 fn default_output(scene: &Path, mode: Mode) -> PathBuf {
-    let stem = scene
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "scene".into());
+    let stem = stem_of(scene, "scene");
     PathBuf::from("out").join(format!("{stem}-weights-{}.exr", mode.name()))
 }
 
@@ -151,7 +152,7 @@ pub(crate) fn run(args: WeightsArgs) -> CliResult<()> {
         ("radius_m".into(), renderer.radius().to_string()),
         ("seed".into(), settings.seed.to_string()),
     ];
-    output::write_exr_single(
+    exr::write_exr_single(
         &exr_path,
         (map.width, map.height),
         "w0",
@@ -159,8 +160,8 @@ pub(crate) fn run(args: WeightsArgs) -> CliResult<()> {
         &attributes,
     )
     .map_err(|e| format!("{}: {e}", exr_path.display()))?;
-    let canvas = weight_png(&map);
-    output::write_png_rgb8(&png_path, canvas.width, canvas.height, &canvas.rgb)
+    weight_png(&map)
+        .and_then(|c| c.write_png(&png_path))
         .map_err(|e| format!("{}: {e}", png_path.display()))?;
 
     say!(
@@ -205,7 +206,7 @@ fn check_mode_via_library(
 
 /// The PNG: w₀ on a log scale from 0.008 to 1 (viridis), black where no surface is seen, a red
 /// cross on x₀'s pixel, and the colour bar with its ticks.
-fn weight_png(map: &WeightMap) -> Canvas {
+fn weight_png(map: &WeightMap) -> CliResult<Canvas> {
     let colours: Vec<[u8; 3]> = map
         .w0
         .iter()
@@ -213,37 +214,26 @@ fn weight_png(map: &WeightMap) -> Canvas {
             if w.is_nan() {
                 NO_SURFACE
             } else {
-                viridis(log_position(w))
+                ColourMap::Viridis.colour(log_position(w))
             }
         })
         .collect();
     let legend = Legend {
         title: vec![
-            "w0 = 1 - w1".into(),
+            "w₀ = 1 − w₁".into(),
             "log scale".into(),
-            "+ marks x0".into(),
+            "+ marks x₀".into(),
         ],
         ticks: TICKS
             .iter()
             .map(|(v, l)| (log_position(*v), (*l).to_string()))
             .collect(),
     };
-    let layout = compose(map.width, map.height, &colours, &legend, viridis);
-    let (cx, cy) = layout.centre(map.x0_pixel.0, map.x0_pixel.1);
-    let arm = (3 * layout.scale as i64).max(6);
-    let half = layout.scale as i64 / 3;
-    let mut canvas = layout.canvas;
-    // A black outline first, so the red cross stays visible on the bright w₀ ≈ 1 pixels that
+    let mut layout = compose(map.width, map.height, &colours, &legend, ColourMap::Viridis)?;
+    // Outlined in black, so the red cross stays visible on the bright w₀ ≈ 1 pixels that
     // surround x₀.
-    for (colour, grow) in [(NO_SURFACE, 1), (MARK, 0)] {
-        for d in -arm - grow..=arm + grow {
-            for t in -half - grow..=half + grow {
-                canvas.set(cx + d, cy + t, colour);
-                canvas.set(cx + t, cy + d, colour);
-            }
-        }
-    }
-    canvas
+    layout.mark(map.x0_pixel, MARK, NO_SURFACE);
+    Ok(layout.canvas)
 }
 
 #[cfg(test)]

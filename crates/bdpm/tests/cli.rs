@@ -312,64 +312,28 @@ fn bad_input_gives_one_line_naming_file_and_field() {
     let base = BASE_SCENE;
     let mesh = |file: &str| format!("{base}\n[[shape]]\ntype = \"mesh\"\nfile = \"{file}\"\n");
     std::fs::write(dir.path("bad.gltf"), b"\x00\x9f garbage {{ not json").expect("write");
-    // (file name, scene text, extra arguments, what the error line must contain)
-    let cases: Vec<(&str, String, Vec<&str>, Vec<&str>)> = vec![
-        ("valid.toml", base.into(), vec![], vec![]),
-        (
-            "no-vfov.toml",
-            base.replace("vfov = 60\n", ""),
-            vec![],
-            vec!["camera.vfov", "missing"],
-        ),
-        (
-            "negative.toml",
-            base.replace("kd = 0.5", "kd = -0.1"),
-            vec![],
-            vec!["material.inside.kd", "-0.1"],
-        ),
-        (
-            "above-one.toml",
-            base.replace("kd = 0.5", "kd = 1.2"),
-            vec![],
-            vec!["material.inside.kd", "1.2"],
-        ),
-        (
-            "energy.toml",
-            base.replace("kd = 0.5", "kd = 0.6\ngr = 0.5\ndelta = 10"),
-            vec![],
-            vec!["material.inside", "kd + gr"],
-        ),
-        (
-            "mode.toml",
-            base.replace("mode = \"path\"", "mode = \"fastest\""),
-            vec![],
-            vec!["render.mode", "fastest"],
-        ),
-        (
-            "flag.toml",
-            base.into(),
-            vec!["--mode", "fast"],
-            vec!["--mode", "fast"],
-        ),
-        (
-            "missing-mesh.toml",
-            mesh("missing.gltf"),
-            vec![],
-            vec!["missing.gltf", "shape[1].file"],
-        ),
-        (
-            "corrupt-mesh.toml",
-            mesh("bad.gltf"),
-            vec![],
-            vec!["bad.gltf", "shape[1].file"],
-        ),
-        (
-            "typo.toml",
-            base.replace("spp = 1", "sp = 1"),
-            vec![],
-            vec!["`sp`"],
-        ),
+    // Faults in the scene file: (file name, text of the base scene, its replacement, what the
+    // error line must contain).
+    #[rustfmt::skip]
+    let edits: [(&str, &str, &str, &[&str]); 6] = [
+        ("no-vfov.toml",    "vfov = 60\n",     "",                  &["camera.vfov", "missing"]),
+        ("negative.toml",   "kd = 0.5",        "kd = -0.1",         &["material.inside.kd", "-0.1"]),
+        ("above-one.toml",  "kd = 0.5",        "kd = 1.2",          &["material.inside.kd", "1.2"]),
+        ("energy.toml",     "kd = 0.5",        "kd = 0.6\ngr = 0.5\ndelta = 10", &["material.inside", "kd + gr"]),
+        ("mode.toml",       "mode = \"path\"", "mode = \"fastest\"", &["render.mode", "fastest"]),
+        ("typo.toml",       "spp = 1",         "sp = 1",            &["`sp`"]),
     ];
+    // (file name, scene text, extra arguments, what the error line must contain)
+    #[rustfmt::skip]
+    let mut cases: Vec<(&str, String, &[&str], &[&str])> = vec![
+        ("valid.toml",        base.into(),          &[],                 &[]),
+        ("flag.toml",         base.into(),          &["--mode", "fast"], &["--mode", "fast"]),
+        ("missing-mesh.toml", mesh("missing.gltf"), &[],                 &["missing.gltf", "shape[1].file"]),
+        ("corrupt-mesh.toml", mesh("bad.gltf"),     &[],                 &["bad.gltf", "shape[1].file"]),
+    ];
+    cases.extend(
+        edits.map(|(name, from, to, needles)| (name, base.replace(from, to), &[][..], needles)),
+    );
     for (name, scene_text, extra, needles) in cases {
         let path = dir.path(name);
         std::fs::write(&path, scene_text).expect("write scene");
@@ -377,7 +341,7 @@ fn bad_input_gives_one_line_naming_file_and_field() {
         let out = run(bdpm()
             .arg("render")
             .arg(&path)
-            .args(&extra)
+            .args(extra)
             .args(["--quiet", "-o"])
             .arg(&out_exr));
         if needles.is_empty() {
@@ -385,7 +349,7 @@ fn bad_input_gives_one_line_naming_file_and_field() {
             assert_success(&out);
             continue;
         }
-        let mut all = needles.clone();
+        let mut all = needles.to_vec();
         // A flag error names the flag; a glTF error names the glTF file and the scene field
         // that referenced it; every other error names the scene file.
         if !name.starts_with("flag") && !name.ends_with("mesh.toml") {
@@ -400,26 +364,32 @@ fn bad_input_gives_one_line_naming_file_and_field() {
     assert!(dir.hidden_files().is_empty(), "{:?}", dir.hidden_files());
 }
 
+/// A quiet render of the Cornell scene with `settings` and `more` to `out`, interrupted after
+/// `wait` seconds: its exit code and its output.
+fn interrupted_render(
+    wait: f64,
+    settings: &[&str],
+    more: &[&str],
+    out: &Path,
+) -> (Option<i32>, Output) {
+    let mut child = spawn_render(&[settings, more], out);
+    std::thread::sleep(Duration::from_secs_f64(wait));
+    let code = interrupt(&mut child);
+    (code, child.wait_with_output().expect("output"))
+}
+
 #[test]
 fn interrupted_render_writes_what_it_has() {
     let dir = TempDir::new("sigint");
     // Loading and one 32×32 pass take well under a second; if the signal still comes before
     // the first pass ends, the render (correctly) writes nothing, and the test waits longer.
     for wait in [1.5, 6.0] {
-        let mut child = bdpm()
-            .arg("render")
-            .arg(scene("cornell-lambert.toml"))
-            .args(["--resolution", "32x32", "--passes", "100000", "--spp", "1"])
-            .args(["--photons", "20000", "--mode", "bdd0", "--threads", "1"])
-            .args(["--quiet", "-o"])
-            .arg(dir.path("i.exr"))
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("start bdpm");
-        std::thread::sleep(Duration::from_secs_f64(wait));
-        let code = interrupt(&mut child);
-        let out = child.wait_with_output().expect("output");
+        let (code, out) = interrupted_render(
+            wait,
+            &["--resolution", "32x32", "--passes", "100000", "--spp", "1"],
+            &["--photons", "20000", "--mode", "bdd0", "--threads", "1"],
+            &dir.path("i.exr"),
+        );
         let stderr = text(&out.stderr);
         assert!(!stderr.contains("panicked"), "{stderr}");
         assert_eq!(code, Some(130), "stderr: {stderr}");
@@ -677,42 +647,50 @@ fn predict_compares_the_noise_model_with_a_render() {
     );
     assert!(number("/headroom/image_mean_floor_v") > 0.0);
 
-    let mut other = settings.to_vec();
-    other[7] = "4";
-    let out = run(bdpm()
-        .arg("predict")
-        .arg(scene("cornell-lambert.toml"))
-        .args(&other)
-        .arg("--measured")
-        .arg(&rendered)
-        .arg("-o")
-        .arg(dir.path("q.exr")));
-    assert_one_line_error(&out, &["r.exr", "spp 8"]);
-    let mut other = settings.to_vec();
-    other[3] = "16x16";
-    let out = run(bdpm()
-        .arg("predict")
-        .arg(scene("cornell-lambert.toml"))
-        .args(&other)
-        .arg("--measured")
-        .arg(&rendered)
-        .arg("-o")
-        .arg(dir.path("q.exr")));
-    assert_one_line_error(&out, &["r.exr", "32x32", "16x16"]);
+    // A render with other settings is refused, naming them: (setting changed, value,
+    // what the error line must contain).
+    for (i, value, needles) in [
+        (7, "4", &["r.exr", "spp 8"][..]),
+        (3, "16x16", &["r.exr", "32x32", "16x16"]),
+    ] {
+        let mut other = settings.to_vec();
+        other[i] = value;
+        let out = run(bdpm()
+            .arg("predict")
+            .arg(scene("cornell-lambert.toml"))
+            .args(&other)
+            .arg("--measured")
+            .arg(&rendered)
+            .arg("-o")
+            .arg(dir.path("q.exr")));
+        assert_one_line_error(&out, needles);
+    }
 }
 
-/// A render of the Cornell box that runs until interrupted (one thread, 100000 passes).
-fn endless_render(out: &Path) -> std::process::Child {
+/// A quiet render of the Cornell scene with the arguments `args` to `out`, its standard
+/// output and error piped.
+fn spawn_render(args: &[&[&str]], out: &Path) -> std::process::Child {
     bdpm()
         .arg("render")
         .arg(scene("cornell-lambert.toml"))
-        .args(["--resolution", "16x16", "--passes", "100000", "--spp", "1"])
-        .args(["--mode", "path", "--threads", "1", "--quiet", "-o"])
+        .args(args.concat())
+        .args(["--quiet", "-o"])
         .arg(out)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .expect("start bdpm")
+}
+
+/// A render of the Cornell box that runs until interrupted (one thread, 100000 passes).
+fn endless_render(out: &Path) -> std::process::Child {
+    spawn_render(
+        &[
+            &["--resolution", "16x16", "--passes", "100000", "--spp", "1"],
+            &["--mode", "path", "--threads", "1"],
+        ],
+        out,
+    )
 }
 
 /// Sends SIGINT and waits (at most 60 s) for the exit code.
@@ -1227,19 +1205,21 @@ fn resumed_render_equals_an_uninterrupted_one() {
 fn interrupted_render_resumes_after_the_passes_it_holds() {
     let dir = TempDir::new("resume-int");
     for wait in [1.5, 6.0] {
-        let mut child = bdpm()
-            .arg("render")
-            .arg(scene("cornell-lambert.toml"))
-            .args(["--resolution", "16x16", "--photons", "2000", "--spp", "1"])
-            .args(["--mode", "optimal", "--quiet", "--threads", "1"])
-            .args(["--passes", "100000", "--accumulate", "-o"])
-            .arg(dir.path("i.exr"))
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("start bdpm");
-        std::thread::sleep(Duration::from_secs_f64(wait));
-        assert_eq!(interrupt(&mut child), Some(130));
+        let (code, _) = interrupted_render(
+            wait,
+            &["--resolution", "16x16", "--photons", "2000", "--spp", "1"],
+            &[
+                "--mode",
+                "optimal",
+                "--threads",
+                "1",
+                "--passes",
+                "100000",
+                "--accumulate",
+            ],
+            &dir.path("i.exr"),
+        );
+        assert_eq!(code, Some(130));
         if !dir.path("i.accum.exr").is_file() {
             continue;
         }

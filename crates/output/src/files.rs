@@ -1,100 +1,28 @@
-//! Image and report files: EXR (mean, √V and standard-error layers, settings as header
-//! attributes), a tonemapped sRGB PNG preview, and atomic writes for all of them.
+//! Output files and their atomic writing: temporary files beside the target renamed into
+//! place, output sets committed EXR last, and the lock that keeps two renders off one output.
 use std::fs;
 use std::io::{self, Write as _};
 use std::path::{Path, PathBuf};
 use std::time::SystemTime;
 
-use bdpm_integrator::Film;
-use exr::prelude::{
-    AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, Layer, LayerAttributes,
-    SmallVec, Text, WritableImage, read_all_flat_layers_from_file,
-};
-use glam::DVec3;
-
-use crate::colormap::{Legend, compose, linear_ticks, viridis};
-
-/// The first layer of an EXR file read back: its size, every channel as f64 (any sample
-/// type) and its text attributes (`bdpm.` prefix removed). The one EXR reader of the driver.
-pub(crate) struct ExrLayer {
-    /// Width, pixels.
-    pub(crate) width: u32,
-    /// Height, pixels.
-    pub(crate) height: u32,
-    channels: Vec<(String, Vec<f64>)>,
-    /// Text header attributes as (key without `bdpm.`, value).
-    pub(crate) attributes: Vec<(String, String)>,
-}
-
-impl ExrLayer {
-    /// Reads the first layer of `path`; errors name the file.
-    pub(crate) fn read(path: &Path) -> Result<ExrLayer, String> {
-        let image = read_all_flat_layers_from_file(path)
-            .map_err(|e| format!("{}: cannot read EXR: {e}", path.display()))?;
-        let layer = image
-            .layer_data
-            .first()
-            .ok_or_else(|| format!("{}: EXR has no layer", path.display()))?;
-        let channels = layer
-            .channel_data
-            .list
-            .iter()
-            .map(|c| {
-                let values = match &c.sample_data {
-                    FlatSamples::F16(v) => v.iter().map(|x| x.to_f64()).collect(),
-                    FlatSamples::F32(v) => v.iter().map(|x| *x as f64).collect(),
-                    FlatSamples::U32(v) => v.iter().map(|x| *x as f64).collect(),
-                };
-                (c.name.to_string(), values)
-            })
-            .collect();
-        let attributes = layer
-            .attributes
-            .other
-            .iter()
-            .filter_map(|(k, v)| match v {
-                AttributeValue::Text(t) => Some((
-                    k.to_string().trim_start_matches("bdpm.").to_string(),
-                    t.to_string(),
-                )),
-                _ => None,
-            })
-            .collect();
-        Ok(ExrLayer {
-            width: layer.size.width() as u32,
-            height: layer.size.height() as u32,
-            channels,
-            attributes,
-        })
-    }
-
-    /// The channel called `name` (e.g. `R`, `noise.G`), if present.
-    pub(crate) fn channel(&self, name: &str) -> Option<&[f64]> {
-        self.channels
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, v)| v.as_slice())
-    }
-}
-
 /// The files of one render, with the same stem.
 #[derive(Clone, Debug)]
-pub(crate) struct Outputs {
-    pub(crate) exr: PathBuf,
-    pub(crate) png: PathBuf,
+pub struct Outputs {
+    /// OUT.exr: the image and its layers; written last, the commit point of the set.
+    pub exr: PathBuf,
+    /// OUT.png: the tonemapped preview.
+    pub png: PathBuf,
     /// OUT-noise.png: the false-colour noise map.
-    pub(crate) noise_png: PathBuf,
-    pub(crate) json: PathBuf,
+    pub noise_png: PathBuf,
+    /// OUT.json: the run report.
+    pub json: PathBuf,
 }
 
 impl Outputs {
     /// OUT.exr, OUT.png, OUT-noise.png and OUT.json for a requested OUT(.exr).
-    pub(crate) fn beside(exr: &Path) -> Outputs {
+    pub fn beside(exr: &Path) -> Outputs {
         let exr = exr.with_extension("exr");
-        let stem = exr
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
+        let stem = stem_of(&exr, "");
         Outputs {
             png: exr.with_extension("png"),
             noise_png: exr.with_file_name(format!("{stem}-noise.png")),
@@ -104,9 +32,18 @@ impl Outputs {
     }
 
     /// Every path, in the order the render writes them.
-    pub(crate) fn all(&self) -> [&Path; 4] {
+    pub fn all(&self) -> [&Path; 4] {
         [&self.exr, &self.png, &self.noise_png, &self.json]
     }
+}
+
+/// The file name of `path` without its extension, as text (`fallback` if it has none): the
+/// stem that names a command's default outputs.
+pub fn stem_of(path: &Path, fallback: &str) -> String {
+    path.file_stem().map_or_else(
+        || fallback.to_string(),
+        |s| s.to_string_lossy().into_owned(),
+    )
 }
 
 /// Suffix of every temporary file the driver writes. A render removes stale ones of its own
@@ -154,19 +91,19 @@ fn ensure_parent(path: &Path) -> io::Result<()> {
 
 /// A finished file waiting under a temporary name beside its target: [`Staged::commit`]
 /// renames it into place; dropping it removes it, leaving the target untouched.
-pub(crate) struct Staged {
+pub struct Staged {
     file: tempfile::NamedTempFile,
     target: PathBuf,
 }
 
 impl Staged {
     /// The final path.
-    pub(crate) fn target(&self) -> &Path {
+    pub fn target(&self) -> &Path {
         &self.target
     }
 
     /// Renames the file into place: the target is replaced whole.
-    pub(crate) fn commit(self) -> Result<(), String> {
+    pub fn commit(self) -> Result<(), String> {
         self.file
             .persist(&self.target)
             .map(drop)
@@ -176,7 +113,7 @@ impl Staged {
 
 /// Runs `write` on a new temporary file beside `path` and flushes it to disk, so that a full
 /// disk shows here and not after the rename.
-pub(crate) fn stage(
+pub fn stage(
     path: &Path,
     write: impl FnOnce(&mut fs::File) -> Result<(), String>,
 ) -> Result<Staged, String> {
@@ -193,7 +130,7 @@ pub(crate) fn stage(
 }
 
 /// [`stage`] for bytes already in memory.
-pub(crate) fn stage_bytes(path: &Path, bytes: &[u8]) -> Result<Staged, String> {
+pub fn stage_bytes(path: &Path, bytes: &[u8]) -> Result<Staged, String> {
     stage(path, |f| {
         f.write_all(bytes).map_err(|e| format!("cannot write: {e}"))
     })
@@ -201,7 +138,7 @@ pub(crate) fn stage_bytes(path: &Path, bytes: &[u8]) -> Result<Staged, String> {
 
 /// Runs `write` on a temporary file beside `path`, then renames it over `path`: an existing
 /// file is either left whole or replaced whole, never half-written.
-pub(crate) fn write_via_temp(
+pub fn write_via_temp(
     path: &Path,
     write: impl FnOnce(&mut fs::File) -> Result<(), String>,
 ) -> Result<(), String> {
@@ -210,7 +147,7 @@ pub(crate) fn write_via_temp(
 }
 
 /// Writes bytes atomically (temporary file, then rename).
-pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), String> {
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), String> {
     write_via_temp(path, |f| {
         f.write_all(bytes).map_err(|e| format!("cannot write: {e}"))
     })
@@ -240,7 +177,7 @@ fn check_output_name(path: &Path, what: &str) -> Result<(), String> {
 /// place, so that a second render to the same output stops at once with a clear message
 /// instead of interleaving its files with the first one's. The lock file is removed on drop;
 /// the kernel releases the lock itself if the process dies, so a stale lock file never blocks.
-pub(crate) struct OutputLock {
+pub struct OutputLock {
     file: fs::File,
     path: PathBuf,
 }
@@ -347,7 +284,7 @@ fn remove_stale_temps(outputs: &Outputs, started: SystemTime) {
 /// is created) and accepts a new file (a probe temporary file is created and removed), and no
 /// other render holds the output. Returns the lock, to be held until the files are in place;
 /// stale temporaries older than `started` are removed.
-pub(crate) fn claim(
+pub fn claim(
     requested: &Path,
     outputs: &Outputs,
     started: SystemTime,
@@ -385,7 +322,7 @@ pub(crate) fn claim(
 /// Renames staged files into place in order. The caller puts the EXR last: it is the commit
 /// point of the set, and its `bdpm.run_id` matches the report's `run_id` only once every file
 /// of the run is in place. If a rename fails, the files not yet renamed are removed.
-pub(crate) fn commit_all(staged: Vec<Staged>) -> Result<(), String> {
+pub fn commit_all(staged: Vec<Staged>) -> Result<(), String> {
     for s in staged {
         let target = s.target().to_path_buf();
         s.commit()
@@ -396,7 +333,7 @@ pub(crate) fn commit_all(staged: Vec<Staged>) -> Result<(), String> {
 
 /// An identifier for one run, written into the EXR header and the JSON report so that a
 /// reader can tell files of the same run from a mix: 64 random bits as hex.
-pub(crate) fn run_id() -> String {
+pub fn run_id() -> String {
     use std::hash::{BuildHasher as _, Hasher as _};
     let mut h = std::hash::RandomState::new().build_hasher();
     h.write_u32(std::process::id());
@@ -406,298 +343,6 @@ pub(crate) fn run_id() -> String {
             .map_or(0, |d| d.as_nanos()),
     );
     format!("{:016x}", h.finish())
-}
-
-fn channel(name: &str, values: impl Iterator<Item = f32>) -> AnyChannel<FlatSamples> {
-    AnyChannel::new(name, FlatSamples::F32(values.collect()))
-}
-
-/// Sample type of an EXR's colour and layer channels (`--exr-precision`); the accumulation
-/// file is always exact and does not use this.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub(crate) enum Precision {
-    /// 32-bit float (the default).
-    #[default]
-    Float,
-    /// 16-bit half float: half the size, about 3 significant digits, overflows above 65504.
-    Half,
-}
-
-/// An extra EXR layer: name, its three channel names and per-pixel values.
-pub(crate) type ExtraLayer<'a> = (&'a str, [&'a str; 3], Vec<DVec3>);
-
-/// Channel names of an RGB layer.
-pub(crate) const RGB: [&str; 3] = ["R", "G", "B"];
-
-fn rgb_channels(
-    prefix: &str,
-    names: [&str; 3],
-    data: &[DVec3],
-    precision: Precision,
-    out: &mut Vec<AnyChannel<FlatSamples>>,
-) {
-    for (c, name) in names.iter().enumerate() {
-        let full = if prefix.is_empty() {
-            name.to_string()
-        } else {
-            format!("{prefix}.{name}")
-        };
-        let values = data.iter().map(|v| v[c]);
-        let samples = match precision {
-            Precision::Float => FlatSamples::F32(values.map(|x| x as f32).collect()),
-            Precision::Half => FlatSamples::F16(values.map(exr::prelude::f16::from_f64).collect()),
-        };
-        out.push(AnyChannel::new(full.as_str(), samples));
-    }
-}
-
-/// Writes the film as a float32 EXR: default R, G, B = mean radiance (W·m⁻²·sr⁻¹); layer
-/// `noise` = √(per-pass variance) (the preprint's √V); layer `stderr` = standard error of the
-/// mean. `attributes` go into the header as text.
-pub(crate) fn write_exr(
-    path: &Path,
-    film: &Film,
-    attributes: &[(String, String)],
-) -> Result<(), String> {
-    let channels = film_channels(film, &[], Precision::Float);
-    write_channels(path, (film.width, film.height), channels, attributes)
-}
-
-/// The film's mean, `noise` and `stderr` RGB layers, then `extra`, at `precision`.
-fn film_channels(
-    film: &Film,
-    extra: &[ExtraLayer<'_>],
-    precision: Precision,
-) -> Vec<AnyChannel<FlatSamples>> {
-    let mean = film.mean();
-    let noise: Vec<DVec3> = film
-        .pass_variance()
-        .into_iter()
-        .map(|v| v.map(f64::sqrt))
-        .collect();
-    let stderr = film.standard_error();
-    let mut channels = Vec::new();
-    rgb_channels("", RGB, &mean, precision, &mut channels);
-    rgb_channels("noise", RGB, &noise, precision, &mut channels);
-    rgb_channels("stderr", RGB, &stderr, precision, &mut channels);
-    for (name, names, data) in extra {
-        rgb_channels(name, *names, data, precision, &mut channels);
-    }
-    channels
-}
-
-/// Stages the film's EXR (see [`write_exr`]) plus `extra` layers (e.g. the technique or
-/// first-hit layers) at `precision`, as a temporary file beside `path` (see [`stage`]).
-pub(crate) fn stage_exr_with_layers(
-    path: &Path,
-    film: &Film,
-    attributes: &[(String, String)],
-    extra: &[ExtraLayer<'_>],
-    precision: Precision,
-) -> Result<Staged, String> {
-    let channels = film_channels(film, extra, precision);
-    stage(path, |f| {
-        encode_channels(f, (film.width, film.height), channels, attributes)
-    })
-}
-
-/// Stages an EXR of arbitrary `channels` (any sample type) beside `path`, e.g. the
-/// accumulation file's u32 channels (see [`crate::accum`]).
-pub(crate) fn stage_exr_channels(
-    path: &Path,
-    size: (u32, u32),
-    channels: Vec<AnyChannel<FlatSamples>>,
-    attributes: &[(String, String)],
-) -> Result<Staged, String> {
-    stage(path, |f| encode_channels(f, size, channels, attributes))
-}
-
-/// Writes a float32 EXR with one channel, e.g. the weight map's `w0`.
-pub(crate) fn write_exr_single(
-    path: &Path,
-    size: (u32, u32),
-    name: &str,
-    values: &[f64],
-    attributes: &[(String, String)],
-) -> Result<(), String> {
-    let channels = vec![channel(name, values.iter().map(|v| *v as f32))];
-    write_channels(path, size, channels, attributes)
-}
-
-/// Writes a float32 EXR with several single-value channels (name, per-pixel values).
-pub(crate) fn write_exr_channels(
-    path: &Path,
-    size: (u32, u32),
-    named: &[(&str, &[f64])],
-    attributes: &[(String, String)],
-) -> Result<(), String> {
-    let channels = named
-        .iter()
-        .map(|(name, values)| channel(name, values.iter().map(|v| *v as f32)))
-        .collect();
-    write_channels(path, size, channels, attributes)
-}
-
-/// Writes `channels` as one EXR layer with `attributes` as `bdpm.*` text header attributes.
-fn write_channels(
-    path: &Path,
-    size: (u32, u32),
-    channels: Vec<AnyChannel<FlatSamples>>,
-    attributes: &[(String, String)],
-) -> Result<(), String> {
-    write_via_temp(path, |f| encode_channels(f, size, channels, attributes))
-}
-
-/// Encodes `channels` as one EXR layer into `file` (through the open handle: the file is
-/// never reopened by name).
-fn encode_channels(
-    file: &mut fs::File,
-    (width, height): (u32, u32),
-    channels: Vec<AnyChannel<FlatSamples>>,
-    attributes: &[(String, String)],
-) -> Result<(), String> {
-    let mut attrs = LayerAttributes::named("bdpm");
-    for (k, v) in attributes {
-        attrs.other.insert(
-            Text::from(format!("bdpm.{k}").as_str()),
-            AttributeValue::Text(Text::from(v.as_str())),
-        );
-    }
-    let layer = Layer::new(
-        (width as usize, height as usize),
-        attrs,
-        Encoding::FAST_LOSSLESS,
-        AnyChannels::sort(SmallVec::from_vec(channels)),
-    );
-    let image = Image::from_layer(layer);
-    let mut writer = io::BufWriter::new(file);
-    image
-        .write()
-        .to_buffered(&mut writer)
-        .map_err(|e| format!("cannot write EXR: {e}"))?;
-    writer.flush().map_err(|e| format!("cannot write EXR: {e}"))
-}
-
-/// Linear → sRGB transfer function, in [0, 1].
-fn srgb(x: f64) -> f64 {
-    let x = x.clamp(0.0, 1.0);
-    if x <= 0.003_130_8 {
-        12.92 * x
-    } else {
-        1.055 * x.powf(1.0 / 2.4) - 0.055
-    }
-}
-
-/// Exposure that maps the 99th-percentile luminance to 1: robust to a few hot pixels such as
-/// the Cornell ceiling spot, and deterministic.
-fn auto_exposure(mean: &[DVec3]) -> f64 {
-    let mut lum: Vec<f64> = mean
-        .iter()
-        .map(|c| 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z)
-        .filter(|l| l.is_finite() && *l > 0.0)
-        .collect();
-    if lum.is_empty() {
-        return 1.0;
-    }
-    lum.sort_by(f64::total_cmp);
-    let p = lum[((lum.len() - 1) as f64 * 0.99) as usize];
-    if p > 0.0 { 1.0 / p } else { 1.0 }
-}
-
-/// Encodes an 8-bit RGB PNG in memory, so that an encoder error cannot leave a half-written
-/// temporary file, and a write error is reported (not lost in a drop).
-pub(crate) fn encode_png_rgb8(width: u32, height: u32, rgb: &[u8]) -> Result<Vec<u8>, String> {
-    let mut bytes = Vec::new();
-    {
-        let mut enc = png::Encoder::new(&mut bytes, width, height);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        let mut w = enc
-            .write_header()
-            .map_err(|e| format!("cannot write PNG: {e}"))?;
-        w.write_image_data(rgb)
-            .map_err(|e| format!("cannot write PNG: {e}"))?;
-        w.finish().map_err(|e| format!("cannot write PNG: {e}"))?;
-    }
-    Ok(bytes)
-}
-
-/// Writes an 8-bit RGB image atomically.
-pub(crate) fn write_png_rgb8(
-    path: &Path,
-    width: u32,
-    height: u32,
-    rgb: &[u8],
-) -> Result<(), String> {
-    write_atomic(path, &encode_png_rgb8(width, height, rgb)?)
-}
-
-/// The tonemapped preview of the mean as PNG bytes: auto exposure, clamp, sRGB.
-pub(crate) fn encode_png(film: &Film) -> Result<Vec<u8>, String> {
-    let mean = film.mean();
-    let k = auto_exposure(&mean);
-    let rgb: Vec<u8> = mean
-        .iter()
-        .flat_map(|c| [c.x, c.y, c.z])
-        .map(|v| (srgb(v * k) * 255.0 + 0.5) as u8)
-        .collect();
-    encode_png_rgb8(film.width, film.height, &rgb)
-}
-
-/// Writes the tonemapped preview of the mean atomically (see [`encode_png`]).
-pub(crate) fn write_png(path: &Path, film: &Film) -> Result<(), String> {
-    write_atomic(path, &encode_png(film)?)
-}
-
-/// Rec. 709 luminance of a linear RGB value.
-pub(crate) fn luminance(c: DVec3) -> f64 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
-}
-
-/// The 99th percentile of the finite positive values (0 if there are none): the top of a
-/// colour scale that a few hot pixels cannot stretch.
-pub(crate) fn robust_max(values: &[f64]) -> f64 {
-    let mut v: Vec<f64> = values
-        .iter()
-        .copied()
-        .filter(|x| x.is_finite() && *x > 0.0)
-        .collect();
-    if v.is_empty() {
-        return 0.0;
-    }
-    v.sort_by(f64::total_cmp);
-    v[((v.len() - 1) as f64 * 0.99).round() as usize]
-}
-
-/// The noise map as PNG bytes: `noise` (√V of the pixel luminance per pass, W·m⁻²·sr⁻¹) in viridis
-/// on a linear scale from 0 to its 99th percentile (brighter pixels clamp to the top colour),
-/// with the colour bar and its scale drawn on the image. With fewer than two passes V is
-/// unknown; the map is then flat and the legend says so.
-pub(crate) fn encode_noise_png(
-    (width, height): (u32, u32),
-    noise: &[f64],
-    passes: u32,
-) -> Result<Vec<u8>, String> {
-    let max = robust_max(noise);
-    let colours: Vec<[u8; 3]> = noise
-        .iter()
-        .map(|v| viridis(if max > 0.0 { v / max } else { 0.0 }))
-        .collect();
-    let mut title = vec![
-        "noise sqrt V".to_string(),
-        "W m-2 sr-1".into(),
-        "linear, max p99".into(),
-    ];
-    if passes < 2 {
-        title.push(format!("{passes} pass: V unknown"));
-    }
-    let legend = Legend {
-        title,
-        ticks: linear_ticks(max),
-    };
-    let layout = compose(width, height, &colours, &legend, viridis);
-    let c = &layout.canvas;
-    encode_png_rgb8(c.width, c.height, &c.rgb)
 }
 
 #[cfg(test)]

@@ -6,77 +6,96 @@ use bdpm_integrator::{Film, MemoryEstimate, RenderSettings, Renderer, WeightStat
 use bdpm_load::LoadReport;
 use serde::Serialize;
 
-use crate::output::Outputs;
+use crate::files::Outputs;
+use crate::stats::{image_mean, standard_error_of_mean};
 
 /// Everything the report is made from.
-pub(crate) struct RunFacts<'a> {
-    pub(crate) scene_path: &'a Path,
-    pub(crate) settings: &'a RenderSettings,
-    pub(crate) renderer: &'a Renderer<'a>,
-    pub(crate) load: &'a LoadReport,
-    pub(crate) film: &'a Film,
-    pub(crate) threads: usize,
-    pub(crate) samples: u64,
+pub struct RunFacts<'a> {
+    /// The scene file as given.
+    pub scene_path: &'a Path,
+    /// The settings the render ran with.
+    pub settings: &'a RenderSettings,
+    /// The prepared renderer (radius in use, preparatory stages).
+    pub renderer: &'a Renderer<'a>,
+    /// Facts from loading the scene.
+    pub load: &'a LoadReport,
+    /// The film of every pass the outputs hold.
+    pub film: &'a Film,
+    /// Worker threads.
+    pub threads: usize,
+    /// Camera samples of every pass held, replayed ones included.
+    pub samples: u64,
     /// Camera samples of the passes rendered in this run (not replayed), for the rate.
-    pub(crate) rendered_samples: u64,
-    pub(crate) load_seconds: f64,
-    pub(crate) prepare_seconds: f64,
-    pub(crate) render_seconds: f64,
-    pub(crate) pass_stages: &'a [(&'static str, f64)],
-    pub(crate) outputs: &'a Outputs,
-    pub(crate) interrupted: bool,
-    pub(crate) pass_means: &'a [[f64; 3]],
-    pub(crate) weights: &'a WeightStats,
-    pub(crate) photon_map_bytes: u64,
-    pub(crate) photons_stored: u64,
+    pub rendered_samples: u64,
+    /// Loading the scene, s.
+    pub load_seconds: f64,
+    /// Preparing the renderer (cache, pixel table), s.
+    pub prepare_seconds: f64,
+    /// Rendering the passes of this run, s.
+    pub render_seconds: f64,
+    /// Per-pass stages summed over this run's passes: (name, s).
+    pub pass_stages: &'a [(&'static str, f64)],
+    /// The files of the run.
+    pub outputs: &'a Outputs,
+    /// Whether an interrupt stopped the render.
+    pub interrupted: bool,
+    /// Image mean of every pass held, per channel, W·m⁻²·sr⁻¹.
+    pub pass_means: &'a [[f64; 3]],
+    /// Weight evaluations of this run's passes.
+    pub weights: &'a WeightStats,
+    /// The largest photon map of a pass, bytes.
+    pub photon_map_bytes: u64,
+    /// Photons stored over every pass held.
+    pub photons_stored: u64,
     /// This run's identifier, also in the EXR header as `bdpm.run_id`.
-    pub(crate) run_id: &'a str,
+    pub run_id: &'a str,
     /// Whether the merge radius was given (scene file or `--radius`).
-    pub(crate) radius_given: bool,
+    pub radius_given: bool,
     /// The warnings printed on stdout, one line each.
-    pub(crate) warnings: &'a [String],
+    pub warnings: &'a [String],
     /// The memory estimate made before the render, and what it was compared with.
-    pub(crate) memory: MemoryFacts<'a>,
+    pub memory: MemoryFacts<'a>,
     /// Which passes the outputs hold, where they came from and why the render stopped.
-    pub(crate) plan: &'a PassPlan,
+    pub plan: &'a PassPlan,
 }
 
 /// Which passes a run's outputs hold and why it stopped (partial renders, merge, resume and
 /// budgets; docs/distributed.md).
 #[derive(Serialize, Clone, Debug)]
-pub(crate) struct PassPlan {
+pub struct PassPlan {
     /// Every pass the outputs hold, as ranges of global pass indices (e.g. `0-3,6-9`).
-    pub(crate) passes_held: String,
+    pub passes_held: String,
     /// First pass rendered by this run (`None` when it rendered none, e.g. `bdpm merge`).
-    pub(crate) first_pass_rendered: Option<u32>,
+    pub first_pass_rendered: Option<u32>,
     /// Passes rendered by this run.
-    pub(crate) passes_rendered: u32,
+    pub passes_rendered: u32,
     /// Passes replayed from accumulation files (`--resume`, `bdpm merge`).
-    pub(crate) passes_replayed: u32,
+    pub passes_replayed: u32,
     /// The accumulation files replayed.
-    pub(crate) replayed_from: Vec<String>,
+    pub replayed_from: Vec<String>,
     /// `completed`, `interrupted`, `time_budget` or `target_noise`.
-    pub(crate) stop_reason: &'static str,
+    pub stop_reason: &'static str,
     /// `--time-budget`, seconds of rendering.
-    pub(crate) time_budget_seconds: Option<f64>,
+    pub time_budget_seconds: Option<f64>,
     /// `--target-noise`: the mean relative standard error to stop below.
-    pub(crate) target_noise: Option<f64>,
+    pub target_noise: Option<f64>,
     /// Mean over pixels with a non-zero mean of the luminance's standard error of the mean
     /// divided by its mean (dimensionless; `None` with fewer than two passes).
-    pub(crate) mean_relative_standard_error: Option<f64>,
+    pub mean_relative_standard_error: Option<f64>,
     /// The accumulation file written beside the EXR, if any.
-    pub(crate) accumulation_file: Option<String>,
+    pub accumulation_file: Option<String>,
 }
 
 /// The memory estimate and its limit.
-pub(crate) struct MemoryFacts<'a> {
-    pub(crate) estimate: &'a MemoryEstimate,
+pub struct MemoryFacts<'a> {
+    /// The estimate, made before anything large was allocated.
+    pub estimate: &'a MemoryEstimate,
     /// The limit compared with, bytes (`None`: unknown, not checked).
-    pub(crate) limit: Option<u64>,
+    pub limit: Option<u64>,
     /// `--max-memory` or `available memory`.
-    pub(crate) limit_source: &'static str,
+    pub limit_source: &'static str,
     /// Peak resident memory of the process when the report was made, bytes.
-    pub(crate) peak_resident: Option<u64>,
+    pub peak_resident: Option<u64>,
 }
 
 /// The memory estimate in the report: estimated and measured peak, bytes.
@@ -183,7 +202,7 @@ struct Timing {
 
 /// The run report written as OUT.json.
 #[derive(Serialize)]
-pub(crate) struct RunReport {
+pub struct RunReport {
     version: &'static str,
     /// Equal to the EXR's `bdpm.run_id` when the two files come from the same run.
     run_id: String,
@@ -215,26 +234,6 @@ pub(crate) struct RunReport {
     memory: MemoryOut,
 }
 
-fn mean_of(v: &[glam::DVec3]) -> [f64; 3] {
-    let s: glam::DVec3 = v.iter().copied().sum();
-    (s / v.len().max(1) as f64).to_array()
-}
-
-/// Standard error of the mean of `samples` (per channel); 0 with fewer than two.
-fn standard_error_of_mean(samples: &[[f64; 3]]) -> [f64; 3] {
-    let n = samples.len() as f64;
-    if samples.len() < 2 {
-        return [0.0; 3];
-    }
-    let mut out = [0.0; 3];
-    for (c, o) in out.iter_mut().enumerate() {
-        let mean = samples.iter().map(|s| s[c]).sum::<f64>() / n;
-        let var = samples.iter().map(|s| (s[c] - mean).powi(2)).sum::<f64>() / (n - 1.0);
-        *o = (var / n).sqrt();
-    }
-    out
-}
-
 /// The settings as asked for, with the merge radius and the weight clamp in force (the
 /// footprint noise model always clamps).
 fn settings_out(
@@ -264,7 +263,8 @@ fn settings_out(
 }
 
 impl RunReport {
-    pub(crate) fn new(f: RunFacts<'_>) -> RunReport {
+    /// The report of a run.
+    pub fn new(f: RunFacts<'_>) -> RunReport {
         let noise: Vec<glam::DVec3> = f
             .film
             .pass_variance()
@@ -338,11 +338,11 @@ impl RunReport {
                 stored_total: f.photons_stored,
                 largest_map_bytes: f.photon_map_bytes,
             },
-            mean_radiance: mean_of(&f.film.mean()),
+            mean_radiance: image_mean(&f.film.mean()),
             mean_radiance_standard_error: standard_error_of_mean(f.pass_means),
             pass_image_means: f.pass_means.to_vec(),
             plan: f.plan.clone(),
-            mean_noise_sqrt_v: mean_of(&noise),
+            mean_noise_sqrt_v: image_mean(&noise),
             outputs: f.outputs.all().map(|p| p.display().to_string()),
             warnings: f.warnings.to_vec(),
             memory: MemoryOut {
@@ -365,13 +365,14 @@ impl RunReport {
         }
     }
 
-    pub(crate) fn to_json(&self) -> String {
+    /// The report as pretty-printed JSON.
+    pub fn to_json(&self) -> String {
         serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
     }
 }
 
 /// The settings as EXR header attributes (`bdpm.mode`, `bdpm.seed`, …).
-pub(crate) fn header_attributes(
+pub fn header_attributes(
     s: &RenderSettings,
     r: &Renderer<'_>,
     radius_given: bool,

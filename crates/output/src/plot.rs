@@ -8,7 +8,8 @@ use std::sync::Once;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::output::{write_atomic, write_png_rgb8};
+use crate::files::write_atomic;
+use crate::preview::write_png_rgb8;
 
 /// Pixel size of every plot.
 const SIZE: (u32, u32) = (960, 640);
@@ -28,37 +29,47 @@ const PALETTE: [RGBColor; 10] = [
 ];
 
 /// The colour of series number `i`.
-pub(crate) fn colour(i: usize) -> RGBColor {
+pub fn colour(i: usize) -> RGBColor {
     PALETTE[i % PALETTE.len()]
 }
 
 /// One line of a plot: a name for the legend and its (x, y) points.
 #[derive(Clone, Debug)]
-pub(crate) struct Series {
-    pub(crate) name: String,
-    pub(crate) points: Vec<(f64, f64)>,
+pub struct Series {
+    /// The name in the legend.
+    pub name: String,
+    /// The points, (x, y) in the plot's units; non-positive ones are left out on log axes.
+    pub points: Vec<(f64, f64)>,
 }
 
 /// A log-log line plot.
 #[derive(Clone, Debug)]
-pub(crate) struct LogLogPlot {
-    pub(crate) title: String,
-    pub(crate) x_label: String,
-    pub(crate) y_label: String,
-    pub(crate) series: Vec<Series>,
+pub struct LogLogPlot {
+    /// The caption above the plot.
+    pub title: String,
+    /// The x axis's description, unit included.
+    pub x_label: String,
+    /// The y axis's description, unit included.
+    pub y_label: String,
+    /// The lines, coloured in order.
+    pub series: Vec<Series>,
     /// A labelled horizontal dashed line (e.g. the reference's own error).
-    pub(crate) floor: Option<(String, f64)>,
+    pub floor: Option<(String, f64)>,
 }
 
 /// A bar chart with one bar per named value.
 #[derive(Clone, Debug)]
-pub(crate) struct BarPlot {
-    pub(crate) title: String,
-    pub(crate) y_label: String,
-    pub(crate) bars: Vec<(String, f64)>,
+pub struct BarPlot {
+    /// The caption above the chart.
+    pub title: String,
+    /// The y axis's description, unit included.
+    pub y_label: String,
+    /// The bars: name under the bar and its height.
+    pub bars: Vec<(String, f64)>,
 }
 
-fn register_font() {
+/// Registers DejaVu Sans as plotters' "sans-serif" (once), for text in bitmaps.
+pub(crate) fn register_font() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         // DejaVu Sans is a valid TrueType font; a failure here would only lose the PNG text.
@@ -101,12 +112,12 @@ fn write_both(
 }
 
 /// Writes `stem.png` and `stem.svg` of a log-log line plot.
-pub(crate) fn write_loglog(stem: &Path, plot: &LogLogPlot) -> Result<(), String> {
+pub fn write_loglog(stem: &Path, plot: &LogLogPlot) -> Result<(), String> {
     write_both(stem, |r| draw_loglog(r, plot), |r| draw_loglog(r, plot))
 }
 
 /// Writes `stem.png` and `stem.svg` of a bar chart.
-pub(crate) fn write_bars(stem: &Path, plot: &BarPlot) -> Result<(), String> {
+pub fn write_bars(stem: &Path, plot: &BarPlot) -> Result<(), String> {
     write_both(stem, |r| draw_bars(r, plot), |r| draw_bars(r, plot))
 }
 

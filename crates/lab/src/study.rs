@@ -10,27 +10,26 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use bdpm_integrator::{Film, Mode, Renderer};
+use bdpm_integrator::{Film, Renderer};
+use bdpm_output::cli::{
+    CliResult, Overrides, load_average, prepare, process_cpu_seconds, progress_bar, thread_pool,
+};
+use bdpm_output::files::{stem_of, write_atomic};
+use bdpm_output::plot;
+use bdpm_output::preview::write_png;
+use bdpm_output::stats::{PixelStats, luminance};
 use clap::Args;
-use glam::DVec3;
-use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::common::{CliResult, Overrides, prepare, thread_pool};
-use crate::output::{write_atomic, write_png};
+use crate::reference;
 
-#[path = "plot.rs"]
-mod plot;
-#[path = "study_reference.rs"]
-pub(crate) mod reference;
-
-/// The modes a study compares by default: every BDPM weight mode.
-const DEFAULT_MODES: &[&str] = bdpm_mis::Heuristic::ALL_NAMES;
-
+// The field docs are clap's help text, printed in a terminal: `<scene>` there is a
+// placeholder, not an HTML tag.
+#[allow(rustdoc::invalid_html_tags)]
 /// Arguments of this subcommand. The shared `--mode` is hidden: a study takes `--modes`
 /// (and still refuses `--mode` with a message saying so).
 #[derive(Args, Debug)]
 #[command(mut_arg("mode", |a| a.hide(true)))]
-pub(crate) struct StudyArgs {
+pub struct StudyArgs {
     /// Scene file (TOML).
     scene: PathBuf,
     /// Render settings (--passes, --photons, --spp, --resolution, …) for every mode.
@@ -64,11 +63,6 @@ pub(crate) struct StudyArgs {
     /// Do not draw progress bars.
     #[arg(long)]
     quiet: bool,
-}
-
-/// Luminance of an RGB radiance (Rec. 709 weights, as the PNG preview's exposure uses).
-pub(crate) fn luminance(c: DVec3) -> f64 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
 }
 
 /// Root-mean-square difference of two equally long images.
@@ -115,54 +109,6 @@ pub(crate) fn interpolate_loglog(points: &[(f64, f64)], t: f64) -> Option<f64> {
 /// (W·m⁻²·sr⁻¹)², `seconds_per_pass` in s.
 pub(crate) fn efficiency(mean_v: f64, seconds_per_pass: f64) -> f64 {
     1.0 / (mean_v * seconds_per_pass)
-}
-
-/// Per-pixel sum and sum of squares of the luminance of the pass estimates.
-#[derive(Clone, Debug)]
-pub(crate) struct LumFilm {
-    sum: Vec<f64>,
-    sum_sq: Vec<f64>,
-    passes: u32,
-}
-
-impl LumFilm {
-    pub(crate) fn new(pixels: usize) -> LumFilm {
-        LumFilm {
-            sum: vec![0.0; pixels],
-            sum_sq: vec![0.0; pixels],
-            passes: 0,
-        }
-    }
-
-    pub(crate) fn add(&mut self, estimates: &[DVec3]) {
-        for ((s, q), e) in self.sum.iter_mut().zip(&mut self.sum_sq).zip(estimates) {
-            let l = luminance(*e);
-            *s += l;
-            *q += l * l;
-        }
-        self.passes += 1;
-    }
-
-    /// Running mean per pixel.
-    pub(crate) fn mean(&self) -> Vec<f64> {
-        let k = self.passes.max(1) as f64;
-        self.sum.iter().map(|s| s / k).collect()
-    }
-
-    /// Unbiased per-pass variance V per pixel; `None` before two passes.
-    pub(crate) fn variance(&self) -> Option<Vec<f64>> {
-        if self.passes < 2 {
-            return None;
-        }
-        let k = self.passes as f64;
-        Some(
-            self.sum
-                .iter()
-                .zip(&self.sum_sq)
-                .map(|(s, q)| ((q - s * s / k) / (k - 1.0)).max(0.0))
-                .collect(),
-        )
-    }
 }
 
 /// The record of one pass of one mode.
@@ -224,7 +170,7 @@ struct ModeState<'a> {
     renderer: Renderer<'a>,
     stages: Vec<(String, f64)>,
     film: Film,
-    lum: LumFilm,
+    lum: PixelStats,
     points: Vec<PassPoint>,
 }
 
@@ -385,47 +331,6 @@ fn markdown(
     s
 }
 
-/// CPU time of this process so far (user + system, all threads), s; `None` where
-/// /proc/self/stat is not available. Its resolution is the kernel's USER_HZ tick (10 ms).
-fn process_cpu_seconds() -> Option<f64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // Fields after the command name, which is in parentheses and may contain spaces:
-    // state is field 3, utime field 14, stime field 15 (proc(5)).
-    let rest = &stat[stat.rfind(')')? + 1..];
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    let utime: f64 = f.get(11)?.parse().ok()?;
-    let stime: f64 = f.get(12)?.parse().ok()?;
-    Some((utime + stime) / 100.0)
-}
-
-/// The first three fields of /proc/loadavg, or "unknown".
-fn load_average() -> String {
-    std::fs::read_to_string("/proc/loadavg")
-        .ok()
-        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
-        .unwrap_or_else(|| "unknown".into())
-}
-
-fn bar_for(name: &str, len: Option<u64>, quiet: bool) -> ProgressBar {
-    if quiet {
-        return ProgressBar::hidden();
-    }
-    let bar = match len {
-        Some(n) => ProgressBar::new(n),
-        None => ProgressBar::no_length(),
-    };
-    let template = if len.is_some() {
-        "{prefix:>16} [{elapsed_precise}] {bar:32} {percent:>3}% {msg}"
-    } else {
-        "{prefix:>16} [{elapsed_precise}] {spinner} {msg}"
-    };
-    bar.set_style(
-        ProgressStyle::with_template(template).unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    bar.set_prefix(name.to_string());
-    bar
-}
-
 /// Runs the subcommand.
 pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
     if args.overrides.mode.is_some() {
@@ -438,30 +343,11 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
             "--time-budget must be a positive number of seconds, not {b}"
         ));
     }
-    let names: Vec<String> = if args.modes.is_empty() {
-        DEFAULT_MODES.iter().map(|s| s.to_string()).collect()
-    } else {
-        args.modes.iter().map(|s| s.trim().to_string()).collect()
-    };
-    let modes: Vec<Mode> = names
-        .iter()
-        .map(|n| {
-            Mode::parse(n).ok_or_else(|| {
-                format!(
-                    "--modes: unknown mode '{n}'; expected some of {}",
-                    Mode::names().join(", ")
-                )
-            })
-        })
-        .collect::<CliResult<_>>()?;
+    let (names, modes) = crate::parse_modes(&args.modes)?;
     let loaded = prepare(&args.scene, &args.overrides)?;
     let (scene, settings) = (loaded.scene, loaded.settings);
     let pool = thread_pool(args.overrides.threads)?;
-    let stem = args
-        .scene
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "scene".into());
+    let stem = stem_of(&args.scene, "scene");
     let dir = args
         .output
         .clone()
@@ -552,20 +438,23 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
             renderer,
             stages,
             film: Film::new(w, h),
-            lum: LumFilm::new(w as usize * h as usize),
+            lum: PixelStats::new(w as usize * h as usize),
             points: Vec::new(),
         });
     }
-    let bar = bar_for(
-        "study",
-        args.time_budget.is_none().then(|| {
-            states
-                .iter()
-                .map(|m| m.passes as u64 * m.renderer.work_per_pass())
-                .sum()
-        }),
-        args.quiet,
-    );
+    let len = args.time_budget.is_none().then(|| {
+        states
+            .iter()
+            .map(|m| m.passes as u64 * m.renderer.work_per_pass())
+            .sum()
+    });
+    let template = if len.is_some() {
+        "{prefix:>16} [{elapsed_precise}] {bar:32} {percent:>3}% {msg}"
+    } else {
+        "{prefix:>16} [{elapsed_precise}] {spinner} {msg}"
+    };
+    let bar = progress_bar(args.quiet, len, template);
+    bar.set_prefix("study");
     let done = |m: &ModeState<'_>| match args.time_budget {
         Some(budget) => (if use_cpu { m.cpu } else { m.wall }) >= budget,
         None => m.points.len() as u32 >= m.passes,
@@ -579,7 +468,7 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
             m.wall += t.elapsed().as_secs_f64();
             m.cpu += cpu_now() - c;
             m.film.add_pass(&out.estimates, out.dropped);
-            m.lum.add(&out.estimates);
+            m.lum.add_pass(&out.estimates);
             let e = rmse(&m.lum.mean(), &ref_lum);
             let var = m.lum.variance();
             let sqrt_v = var.as_ref().map_or(f64::NAN, |v| {
@@ -706,10 +595,7 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
     );
     let md = markdown(&header, &refs, &runs, &baseline, &args.clock, &all_files);
     let md_path = dir.join("study.md");
-    write_atomic(&md_path, md.as_bytes()).map_err(|e| format!("{}: {e}", md_path.display()))?;
-    println!("{md}");
-    println!("wrote {}", md_path.display());
-    Ok(())
+    crate::publish(&md_path, &md)
 }
 
 #[cfg(test)]
@@ -722,11 +608,6 @@ mod tests {
         // Differences 3 and 4: √((9 + 16)/2).
         assert!((rmse(&[3.0, 0.0], &[0.0, 4.0]) - 12.5f64.sqrt()).abs() < 1e-12);
         assert_eq!(rmse(&[], &[]), 0.0);
-    }
-
-    #[test]
-    fn luminance_of_white_is_one() {
-        assert!((luminance(DVec3::ONE) - 1.0).abs() < 1e-12);
     }
 
     #[test]
@@ -750,17 +631,6 @@ mod tests {
         assert!((efficiency(0.5, 4.0) - 0.5).abs() < 1e-12);
         // Half the variance at twice the time: equally efficient.
         assert_eq!(efficiency(1.0, 2.0), efficiency(0.5, 4.0));
-    }
-
-    #[test]
-    fn lum_film_mean_and_variance() {
-        let mut f = LumFilm::new(1);
-        assert!(f.variance().is_none());
-        for v in [1.0, 2.0, 3.0, 6.0, 3.0] {
-            f.add(&[DVec3::splat(v)]);
-        }
-        assert!((f.mean()[0] - 3.0).abs() < 1e-12);
-        assert!((f.variance().expect("5 passes")[0] - 3.5).abs() < 1e-12);
     }
 
     #[test]
@@ -799,11 +669,5 @@ mod tests {
         let text = csv(&runs);
         assert!(text.starts_with("mode,pass,wall_time_s,rmse,rel_rmse,mean_sqrt_v,"));
         assert_eq!(text.lines().count(), 5);
-    }
-
-    #[test]
-    fn fnv_hash_is_stable() {
-        assert_eq!(reference::fnv1a(b""), 0xcbf2_9ce4_8422_2325);
-        assert_eq!(reference::fnv1a(b"a"), 0xaf63_dc4c_8601_ec8c);
     }
 }

@@ -15,46 +15,54 @@ use std::path::{Path, PathBuf};
 use exr::prelude::{AnyChannel, FlatSamples};
 use glam::DVec3;
 
-use crate::common::Overrides;
-use crate::output::{self, ExrLayer, Staged};
-use crate::study::reference::fnv1a;
+use crate::cli::Overrides;
+use crate::exr::{ExrLayer, stage_exr_channels};
+use crate::files::Staged;
+
+/// 64-bit FNV-1a: a stable hash (unlike `DefaultHasher`, whose output may change between Rust
+/// releases), for the identity of a render and for naming cached references.
+pub fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ *b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
 
 /// The value of `bdpm.accum.format`: bumped when the layout changes.
-pub(crate) const FORMAT: &str = "bdpm-accumulation-1";
+pub const FORMAT: &str = "bdpm-accumulation-1";
 
 /// One pass as stored: its global index and what the film and the report need of it.
 #[derive(Clone, Debug)]
-pub(crate) struct PassRecord {
+pub struct PassRecord {
     /// Global pass index (the key of its random streams).
-    pub(crate) index: u32,
+    pub index: u32,
     /// Per-pixel pass estimates, row-major, W·m⁻²·sr⁻¹.
-    pub(crate) estimates: Vec<DVec3>,
+    pub estimates: Vec<DVec3>,
     /// Non-finite samples the pass dropped.
-    pub(crate) dropped: u64,
+    pub dropped: u64,
     /// Camera samples the pass traced.
-    pub(crate) samples: u64,
+    pub samples: u64,
     /// Photons the pass stored.
-    pub(crate) photons_stored: u64,
+    pub photons_stored: u64,
 }
 
 /// What makes two partial renders parts of the same render.
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) struct Identity {
+pub struct Identity {
     /// The scene file, absolute where it could be resolved.
-    pub(crate) scene: PathBuf,
+    pub scene: PathBuf,
     /// FNV-1a of the scene file's bytes, hex.
-    pub(crate) scene_hash: String,
+    pub scene_hash: String,
     /// FNV-1a of the settings (pass count excluded), hex; covers seed, resolution, mode, ….
-    pub(crate) settings_hash: String,
+    pub settings_hash: String,
     /// Master seed (also inside the settings hash; kept readable for error messages).
-    pub(crate) seed: u64,
+    pub seed: u64,
     /// The command-line overrides that produced the settings, as arguments.
-    pub(crate) overrides: Vec<String>,
+    pub overrides: Vec<String>,
 }
 
 impl Identity {
     /// The identity of a render of `scene` with `settings` made with `overrides`.
-    pub(crate) fn of(
+    pub fn of(
         scene: &Path,
         settings: &bdpm_integrator::RenderSettings,
         overrides: &Overrides,
@@ -66,12 +74,12 @@ impl Identity {
             scene_hash: format!("{:016x}", fnv1a(&bytes)),
             settings_hash: settings_hash(settings),
             seed: settings.seed,
-            overrides: overrides_to_args(overrides),
+            overrides: overrides.to_args(),
         })
     }
 
     /// `None` when `other` is a part of the same render; else what differs, in words.
-    pub(crate) fn mismatch(&self, other: &Identity) -> Option<String> {
+    pub fn mismatch(&self, other: &Identity) -> Option<String> {
         if self.scene_hash != other.scene_hash {
             Some(format!(
                 "its scene file differs (hash {} against {})",
@@ -95,67 +103,19 @@ impl Identity {
 
 /// FNV-1a of the settings' debug form with the pass count zeroed: a part's pass count is not
 /// part of what it renders (each pass depends on (seed, pass index, …) only).
-pub(crate) fn settings_hash(settings: &bdpm_integrator::RenderSettings) -> String {
+pub fn settings_hash(settings: &bdpm_integrator::RenderSettings) -> String {
     let mut s = settings.clone();
     s.passes = 0;
     format!("{:016x}", fnv1a(format!("{s:?}").as_bytes()))
 }
 
-/// The overrides that shape the image as command-line arguments (`--threads` does not).
-pub(crate) fn overrides_to_args(o: &Overrides) -> Vec<String> {
-    let mut v = Vec::new();
-    let mut push = |k: &str, val: String| {
-        v.push(k.to_string());
-        v.push(val);
-    };
-    if let Some(m) = &o.mode {
-        push("--mode", m.clone());
-    }
-    if let Some((w, h)) = o.resolution {
-        push("--resolution", format!("{w}x{h}"));
-    }
-    if let Some(n) = o.photons {
-        push("--photons", n.to_string());
-    }
-    if let Some(n) = o.spp {
-        push("--spp", n.to_string());
-    }
-    if let Some(r) = o.radius {
-        // `{:?}` of an f64 round-trips exactly.
-        push("--radius", format!("{r:?}"));
-    }
-    if let Some(s) = o.seed {
-        push("--seed", s.to_string());
-    }
-    if let Some(m) = &o.noise_model {
-        push("--noise-model", m.clone());
-    }
-    if o.no_jitter {
-        v.push("--no-jitter".into());
-    }
-    v
-}
-
-/// Parses arguments made by [`overrides_to_args`] back into overrides.
-pub(crate) fn overrides_from_args(args: &[String]) -> Result<Overrides, String> {
-    use clap::Parser;
-    #[derive(Parser)]
-    struct Only {
-        #[command(flatten)]
-        o: Overrides,
-    }
-    Only::try_parse_from(std::iter::once("bdpm".to_string()).chain(args.iter().cloned()))
-        .map(|p| p.o)
-        .map_err(|e| format!("bad stored overrides {args:?}: {}", e.kind()))
-}
-
-/// The accumulation file beside the EXR `exr`: `OUT.accum.exr`.
-pub(crate) fn path_beside(exr: &Path) -> PathBuf {
+/// The accumulation file beside the render's EXR `exr`: `OUT.accum.exr`.
+pub fn path_beside(exr: &Path) -> PathBuf {
     exr.with_extension("accum.exr")
 }
 
 /// Pass indices as ranges, e.g. `0-3,6,8-9`.
-pub(crate) fn ranges(passes: &[u32]) -> String {
+pub fn ranges(passes: &[u32]) -> String {
     let mut out: Vec<String> = Vec::new();
     let mut i = 0;
     while i < passes.len() {
@@ -179,7 +139,7 @@ fn list<T: ToString>(values: impl Iterator<Item = T>) -> String {
 
 /// Stages the accumulation file at `path`: the passes (in the order given, which the callers
 /// keep ascending) and the identity, plus `extra` header attributes.
-pub(crate) fn stage(
+pub fn stage(
     path: &Path,
     size: (u32, u32),
     identity: &Identity,
@@ -229,23 +189,23 @@ pub(crate) fn stage(
             list(passes.iter().map(|p| p.photons_stored)),
         ),
     ]);
-    output::stage_exr_channels(path, size, channels, &attrs)
+    stage_exr_channels(path, size, channels, &attrs)
 }
 
 /// A partial render read back.
-pub(crate) struct Accumulation {
+pub struct Accumulation {
     /// The file it came from.
-    pub(crate) path: PathBuf,
+    pub path: PathBuf,
     /// Image size, pixels.
-    pub(crate) size: (u32, u32),
+    pub size: (u32, u32),
     /// Which render it is part of.
-    pub(crate) identity: Identity,
+    pub identity: Identity,
     /// Its passes, ascending by index.
-    pub(crate) passes: Vec<PassRecord>,
+    pub passes: Vec<PassRecord>,
 }
 
 /// Reads an accumulation file; every error is one line naming the file.
-pub(crate) fn read(path: &Path) -> Result<Accumulation, String> {
+pub fn read(path: &Path) -> Result<Accumulation, String> {
     let layer = ExrLayer::read(path)?;
     let bad = |what: &str| format!("{}: not a bdpm accumulation file ({what})", path.display());
     let attr = |k: &str| {
@@ -332,16 +292,16 @@ pub(crate) fn read(path: &Path) -> Result<Accumulation, String> {
     })
 }
 
-/// Checks that `parts` are parts of one render with disjoint pass sets, and returns all their
-/// passes sorted by index (so the result does not depend on the order of the parts). Errors
-/// are one line naming the offending file.
-pub(crate) fn combine(parts: Vec<Accumulation>) -> Result<(Identity, Vec<PassRecord>), String> {
-    let first = parts.first().ok_or("no parts to merge")?;
-    // The reference identity is the part holding the lowest pass: canonical, not argument order.
+/// Checks that `parts` are parts of one render with disjoint pass sets, and returns them as
+/// one (all their passes sorted by index, named after the part holding the lowest pass) with
+/// the parts' files in pass order: neither depends on the order of the parts. Errors are one
+/// line naming the offending file.
+pub fn combine(parts: Vec<Accumulation>) -> Result<(Accumulation, Vec<PathBuf>), String> {
+    let first_pass = |p: &Accumulation| p.passes.first().map_or(u32::MAX, |r| r.index);
     let reference = parts
         .iter()
-        .min_by_key(|p| p.passes.first().map_or(u32::MAX, |r| r.index))
-        .unwrap_or(first);
+        .min_by_key(|p| first_pass(p))
+        .ok_or("no parts to merge")?;
     for p in &parts {
         if let Some(why) = reference.identity.mismatch(&p.identity) {
             return Err(format!(
@@ -364,15 +324,13 @@ pub(crate) fn combine(parts: Vec<Accumulation>) -> Result<(Identity, Vec<PassRec
     }
     let mut owner: std::collections::BTreeMap<u32, &Path> = Default::default();
     for p in &parts {
-        let mut shared = Vec::new();
-        let mut other = None;
-        for r in &p.passes {
-            if let Some(o) = owner.get(&r.index) {
-                shared.push(r.index);
-                other = Some(*o);
-            }
-        }
-        if let Some(o) = other {
+        let shared: Vec<u32> = p
+            .passes
+            .iter()
+            .map(|r| r.index)
+            .filter(|i| owner.contains_key(i))
+            .collect();
+        if let Some(o) = shared.last().and_then(|i| owner.get(i)) {
             return Err(format!(
                 "{}: passes {} are also in {}",
                 p.path.display(),
@@ -380,14 +338,27 @@ pub(crate) fn combine(parts: Vec<Accumulation>) -> Result<(Identity, Vec<PassRec
                 o.display()
             ));
         }
-        for r in &p.passes {
-            owner.insert(r.index, &p.path);
-        }
+        owner.extend(p.passes.iter().map(|r| (r.index, p.path.as_path())));
     }
-    let identity = reference.identity.clone();
+    let (path, size, identity) = (
+        reference.path.clone(),
+        reference.size,
+        reference.identity.clone(),
+    );
+    let mut sources: Vec<(u32, PathBuf)> = parts
+        .iter()
+        .map(|p| (first_pass(p), p.path.clone()))
+        .collect();
+    sources.sort();
     let mut passes: Vec<PassRecord> = parts.into_iter().flat_map(|p| p.passes).collect();
     passes.sort_by_key(|p| p.index);
-    Ok((identity, passes))
+    let merged = Accumulation {
+        path,
+        size,
+        identity,
+        passes,
+    };
+    Ok((merged, sources.into_iter().map(|(_, p)| p).collect()))
 }
 
 #[cfg(test)]
@@ -395,24 +366,14 @@ mod tests {
     use super::*;
 
     #[test]
-    fn ranges_compress_runs() {
-        assert_eq!(ranges(&[0, 1, 2, 3, 6, 8, 9]), "0-3,6,8-9");
-        assert_eq!(ranges(&[]), "");
+    fn fnv_hash_is_stable() {
+        assert_eq!(fnv1a(b""), 0xcbf2_9ce4_8422_2325);
+        assert_eq!(fnv1a(b"a"), 0xaf63_dc4c_8601_ec8c);
     }
 
     #[test]
-    fn overrides_round_trip() {
-        let o = Overrides {
-            mode: Some("optimal".into()),
-            resolution: Some((16, 8)),
-            photons: Some(100),
-            radius: Some(0.1),
-            seed: Some(7),
-            no_jitter: true,
-            ..Default::default()
-        };
-        let back = overrides_from_args(&overrides_to_args(&o)).unwrap();
-        assert_eq!(overrides_to_args(&back), overrides_to_args(&o));
-        assert_eq!(back.radius, Some(0.1));
+    fn ranges_compress_runs() {
+        assert_eq!(ranges(&[0, 1, 2, 3, 6, 8, 9]), "0-3,6,8-9");
+        assert_eq!(ranges(&[]), "");
     }
 }

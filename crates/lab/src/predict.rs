@@ -21,9 +21,10 @@ use bdpm_mis::Heuristic;
 use clap::Args;
 use serde::Serialize;
 
-use crate::colormap::{Legend, compose, diverging};
-use crate::common::{CliResult, Overrides, prepare, say, thread_pool};
-use crate::output;
+use bdpm_output::cli::{CliResult, Overrides, prepare, thread_pool};
+use bdpm_output::colormap::{Canvas, ColourMap, Legend, compose, format_value};
+use bdpm_output::files::stem_of;
+use bdpm_output::{exr, files, say};
 
 /// Side of the pixel blocks over which V is also compared (summed over the block's pixels):
 /// blocks average out most of the measured V's own sampling error.
@@ -39,7 +40,7 @@ const NOT_COMPARED: [u8; 3] = [0, 0, 0];
 
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]
-pub(crate) struct PredictArgs {
+pub struct PredictArgs {
     /// Scene file (TOML).
     scene: PathBuf,
     #[command(flatten)]
@@ -78,7 +79,7 @@ impl Measured {
 }
 
 fn read_measured(path: &Path) -> CliResult<Measured> {
-    let layer = output::ExrLayer::read(path)?;
+    let layer = exr::ExrLayer::read(path)?;
     let find = |name: &str| -> CliResult<&[f64]> {
         layer.channel(name).ok_or_else(|| {
             format!(
@@ -92,6 +93,8 @@ fn read_measured(path: &Path) -> CliResult<Measured> {
         .iter()
         .zip(g)
         .zip(b)
+        // Not `stats::luminance` of the squares: this order of the products is what the
+        // outputs were made with, and it keeps their bits.
         .map(|((r, g), b)| 0.2126 * r * r + 0.7152 * g * g + 0.0722 * b * b)
         .collect();
     Ok(Measured {
@@ -290,10 +293,7 @@ fn block_sums(predicted: &[f64], measured: &[f64], width: u32, height: u32) -> V
 
 /// Default output: beside the measured render, `<stem>-predict.exr`.
 fn default_output(measured: &Path) -> PathBuf {
-    let stem = measured
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "render".into());
+    let stem = stem_of(measured, "render");
     measured.with_file_name(format!("{stem}-predict.exr"))
 }
 
@@ -494,26 +494,26 @@ pub(crate) fn run(args: PredictArgs) -> CliResult<()> {
         layers.push(("floor_V", &f.total));
         layers.push(("headroom", h));
     }
-    output::write_exr_channels(
+    exr::write_exr_channels(
         &exr_path,
         (settings.width, settings.height),
         &layers,
         &attributes,
     )
     .map_err(|e| format!("{}: {e}", exr_path.display()))?;
-    let canvas = ratio_png(p, &ratio, LOG2_RANGE, "predicted / measured V");
-    output::write_png_rgb8(&png_path, canvas.width, canvas.height, &canvas.rgb)
+    ratio_png(p, &ratio, LOG2_RANGE, "predicted / measured V")
+        .and_then(|c| c.write_png(&png_path))
         .map_err(|e| format!("{}: {e}", png_path.display()))?;
     let mut written = vec![exr_path.clone(), png_path, json_path.clone()];
     if let Some(h) = &headroom_ratio {
         let path = headroom_png_path(&exr_path);
-        let canvas = ratio_png(p, h, HEADROOM_LOG2_RANGE, "predicted V / floor");
-        output::write_png_rgb8(&path, canvas.width, canvas.height, &canvas.rgb)
+        ratio_png(p, h, HEADROOM_LOG2_RANGE, "predicted V / floor")
+            .and_then(|c| c.write_png(&path))
             .map_err(|e| format!("{}: {e}", path.display()))?;
         written.push(path);
     }
     let json = serde_json::to_string_pretty(&report).map_err(|e| format!("JSON: {e}"))?;
-    output::write_atomic(&json_path, json.as_bytes())
+    files::write_atomic(&json_path, json.as_bytes())
         .map_err(|e| format!("{}: {e}", json_path.display()))?;
 
     print_summary(&report);
@@ -581,19 +581,19 @@ fn print_summary(r: &Report<'_>) {
 
 /// OUT-headroom.png beside OUT.exr.
 fn headroom_png_path(exr: &Path) -> PathBuf {
-    let stem = exr.file_stem().unwrap_or_default().to_string_lossy();
+    let stem = stem_of(exr, "");
     exr.with_file_name(format!("{stem}-headroom.png"))
 }
 
 /// A ratio map: log₂(ratio) from −`range` (blue) through 0 (white) to +`range` (red), black
 /// where nothing is compared, with the colour bar titled `title`.
-fn ratio_png(p: &Prediction, ratio: &[f64], range: f64, title: &str) -> crate::colormap::Canvas {
+fn ratio_png(p: &Prediction, ratio: &[f64], range: f64, title: &str) -> CliResult<Canvas> {
     let position = |r: f64| (r.log2() / range + 1.0) * 0.5;
     let colours: Vec<[u8; 3]> = ratio
         .iter()
         .map(|&r| {
             if r.is_finite() && r > 0.0 {
-                diverging(position(r))
+                ColourMap::Diverging.colour(position(r))
             } else {
                 NOT_COMPARED
             }
@@ -603,7 +603,7 @@ fn ratio_png(p: &Prediction, ratio: &[f64], range: f64, title: &str) -> crate::c
         .iter()
         .map(|&k| {
             let r = (k * range).exp2();
-            (position(r), crate::colormap::format_value(r))
+            (position(r), format_value(r))
         })
         .collect();
     let legend = Legend {
@@ -614,7 +614,7 @@ fn ratio_png(p: &Prediction, ratio: &[f64], range: f64, title: &str) -> crate::c
         ],
         ticks,
     };
-    compose(p.width, p.height, &colours, &legend, diverging).canvas
+    Ok(compose(p.width, p.height, &colours, &legend, ColourMap::Diverging)?.canvas)
 }
 
 #[cfg(test)]

@@ -5,11 +5,12 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use bdpm_integrator::{Film, Mode, RenderSettings, Renderer};
+use bdpm_output::accum::fnv1a;
+use bdpm_output::cli::progress_bar;
+use bdpm_output::exr::{ExrLayer, write_exr};
+use bdpm_output::files::stem_of;
 use bdpm_scene::Scene;
 use glam::DVec3;
-use indicatif::{ProgressBar, ProgressStyle};
-
-use crate::output::{ExrLayer, write_exr};
 
 /// Seed offset of the reference render, so that its random streams are independent of the
 /// study's (the streams are keyed by the seed).
@@ -28,14 +29,6 @@ pub(crate) struct Reference {
     pub(crate) path: PathBuf,
     /// How it was made ("read from …", "rendered …", "cached …").
     pub(crate) origin: String,
-}
-
-/// 64-bit FNV-1a: a stable hash (unlike `DefaultHasher`, whose output may change between Rust
-/// releases) for naming cached references.
-pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
-        (h ^ *b as u64).wrapping_mul(0x0000_0100_0000_01b3)
-    })
 }
 
 /// The settings of the reference render for a study with `study` settings.
@@ -59,10 +52,7 @@ pub(crate) fn cache_path(scene_path: &Path, settings: &RenderSettings) -> Result
         .map_err(|e| format!("{}: cannot read: {e}", scene_path.display()))?;
     let mut key = bytes;
     key.extend_from_slice(format!("{settings:?}").as_bytes());
-    let stem = scene_path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "scene".into());
+    let stem = stem_of(scene_path, "scene");
     Ok(PathBuf::from("out").join(format!(
         "reference-{stem}-{}x{}-{:016x}.exr",
         settings.width,
@@ -127,19 +117,12 @@ pub(crate) fn cached_or_render(
     let renderer = pool
         .install(|| Renderer::new(scene, settings))
         .map_err(|e| format!("reference: {e}"))?;
-    let bar = if quiet {
-        ProgressBar::hidden()
-    } else {
-        let bar = ProgressBar::new(settings.passes as u64 * renderer.work_per_pass());
-        bar.set_style(
-            ProgressStyle::with_template(
-                "{prefix:>16} [{elapsed_precise}] {bar:32} {percent:>3}% (eta {eta})",
-            )
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-        );
-        bar.set_prefix("reference");
-        bar
-    };
+    let bar = progress_bar(
+        quiet,
+        Some(settings.passes as u64 * renderer.work_per_pass()),
+        "{prefix:>16} [{elapsed_precise}] {bar:32} {percent:>3}% (eta {eta})",
+    );
+    bar.set_prefix("reference");
     let start = Instant::now();
     let mut film = Film::new(settings.width, settings.height);
     for pass in 0..settings.passes {

@@ -8,13 +8,15 @@ use std::process::ExitCode;
 
 use clap::Args;
 
-use crate::common::{CliResult, say};
-use crate::output::luminance;
-use crate::study::reference::read_exr;
+use bdpm_output::cli::CliResult;
+use bdpm_output::say;
+use bdpm_output::stats::luminance;
+
+use crate::reference::read_exr;
 
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]
-pub(crate) struct CompareArgs {
+pub struct CompareArgs {
     /// First EXR (as written by `bdpm render`).
     a: PathBuf,
     /// Second EXR, of the same size.

@@ -13,15 +13,17 @@ use std::time::Instant;
 use bdpm_integrator::{Mode, Renderer};
 use clap::Args;
 
-use crate::common::{CliResult, Overrides, parse_resolution, prepare, thread_pool};
-use crate::output::write_atomic;
+use bdpm_output::cli::{
+    CliResult, Overrides, cpu_model, load_average, parse_resolution, prepare, thread_pool,
+};
+use bdpm_output::files::stem_of;
 
-/// The modes a benchmark times by default: every BDPM weight mode.
-const DEFAULT_MODES: &[&str] = bdpm_mis::Heuristic::ALL_NAMES;
-
+// The field docs are clap's help text, printed in a terminal: `<scene>` there is a
+// placeholder, not an HTML tag.
+#[allow(rustdoc::invalid_html_tags)]
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]
-pub(crate) struct BenchArgs {
+pub struct BenchArgs {
     /// Scene file (TOML).
     scene: PathBuf,
     /// Modes to time, comma-separated (default: every BDPM mode).
@@ -81,27 +83,6 @@ struct Cell {
     pass_s: f64,
     /// Preparatory stages: (name, median s).
     prep: Vec<(String, f64)>,
-}
-
-/// One line of /proc/loadavg (its first three fields), or "unknown".
-fn load_average() -> String {
-    std::fs::read_to_string("/proc/loadavg")
-        .ok()
-        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
-        .unwrap_or_else(|| "unknown".into())
-}
-
-/// The CPU model from /proc/cpuinfo, or "unknown".
-fn cpu_model() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split_once(':'))
-                .map(|(_, v)| v.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown".into())
 }
 
 fn rate(count: f64, seconds: f64) -> f64 {
@@ -200,11 +181,7 @@ pub(crate) fn run(args: BenchArgs) -> CliResult<()> {
     if threads_list.contains(&0) {
         return Err("--threads-list: thread counts must be at least 1".into());
     }
-    let names: Vec<String> = if args.modes.is_empty() {
-        DEFAULT_MODES.iter().map(|s| s.to_string()).collect()
-    } else {
-        args.modes.iter().map(|s| s.trim().to_string()).collect()
-    };
+    let (names, modes) = crate::parse_modes(&args.modes)?;
     let overrides = Overrides {
         resolution: args.resolution,
         photons: args.photons,
@@ -214,17 +191,6 @@ pub(crate) fn run(args: BenchArgs) -> CliResult<()> {
     };
     let loaded = prepare(&args.scene, &overrides)?;
     let (scene, base) = (loaded.scene, loaded.settings);
-    let modes: Vec<Mode> = names
-        .iter()
-        .map(|n| {
-            Mode::parse(n).ok_or_else(|| {
-                format!(
-                    "--modes: unknown mode '{n}'; expected some of {}",
-                    Mode::names().join(", ")
-                )
-            })
-        })
-        .collect::<CliResult<_>>()?;
 
     let load_before = load_average();
     let started = Instant::now();
@@ -322,18 +288,11 @@ pub(crate) fn run(args: BenchArgs) -> CliResult<()> {
             }
         }
     }
-    let stem = args
-        .scene
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "scene".into());
+    let stem = stem_of(&args.scene, "scene");
     let path = args
         .output
         .unwrap_or_else(|| PathBuf::from("out").join(format!("bench-{stem}.md")));
-    write_atomic(&path, md.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
-    println!("{md}");
-    println!("wrote {}", path.display());
-    Ok(())
+    crate::publish(&path, &md)
 }
 
 #[cfg(test)]

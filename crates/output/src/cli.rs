@@ -1,0 +1,411 @@
+//! What every subcommand shares: the setting overrides (the one place where command-line
+//! flags change the scene file's settings, and where they are written back as arguments for
+//! the accumulation file), loading a scene with them, the flag parsers, the thread pool, the
+//! progress bar and the facts about the machine that reports record.
+use std::path::{Path, PathBuf};
+
+use bdpm_integrator::{Mode, NoiseModel, RenderSettings};
+use bdpm_load::{LoadReport, load_scene};
+use bdpm_scene::Scene;
+use clap::Args;
+
+use crate::files::stem_of;
+use indicatif::{ProgressBar, ProgressStyle};
+
+/// `println!` that ignores a closed standard output (as in `bdpm render … | head`) instead of
+/// panicking: the render's files are what matter, and they are written before any message.
+#[macro_export]
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+
+/// An error for the user: one line, no backtrace.
+pub type CliResult<T> = Result<T, String>;
+
+/// Settings that override the scene file's `[render]` table.
+#[derive(Args, Debug, Clone, Default)]
+pub struct Overrides {
+    /// Integrator and weight mode: path, light, bdd0, bdd1, threshold, algebraic-direct, algebraic,
+    /// optimal, optimal-split, optimal-path, balance, power, camis.
+    #[arg(long)]
+    pub mode: Option<String>,
+    /// Number of passes.
+    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u32>)]
+    pub passes: Option<u32>,
+    /// Image size as WxH, e.g. 256x256.
+    #[arg(long, value_parser = parse_resolution)]
+    pub resolution: Option<(u32, u32)>,
+    /// Photons emitted per pass (N_F).
+    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u64>)]
+    pub photons: Option<u64>,
+    /// Camera samples per pixel per pass (N_B).
+    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u32>)]
+    pub spp: Option<u32>,
+    /// Merge radius, metres.
+    #[arg(long, allow_negative_numbers = true, value_parser = number)]
+    pub radius: Option<f64>,
+    /// Master seed of all random streams.
+    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u64>)]
+    pub seed: Option<u64>,
+    /// Send all camera samples of a pixel through its centre (the layout the preprint's noise
+    /// model assumes) instead of jittering them over the pixel.
+    #[arg(long)]
+    pub no_jitter: bool,
+    /// Noise model of the model-based weights (algebraic-direct, algebraic, optimal,
+    /// optimal-split, optimal-path): footprint
+    /// (N_eff per pixel from the overlap of the samples' merge disks) or pinhole (the preprint's
+    /// N_B; its weights assume every sample of a pixel shares x0).
+    #[arg(long)]
+    pub noise_model: Option<String>,
+    /// Worker threads (default: all cores; at most 8 per core, and at least 64 allowed).
+    #[arg(long, allow_negative_numbers = true, value_parser = whole::<usize>)]
+    pub threads: Option<usize>,
+}
+
+/// A whole number for a flag, with a message that says so: the parser's own ("invalid digit
+/// found in string") does not tell a user that `-1` or `2.5` is the problem.
+pub fn whole<T: std::str::FromStr>(s: &str) -> Result<T, String> {
+    s.trim().parse().map_err(|_| {
+        format!(
+            "'{s}' is not a whole number in range (0 to {})",
+            if size_of::<T>() == 4 {
+                u32::MAX as u64
+            } else {
+                u64::MAX
+            }
+        )
+    })
+}
+
+/// A real number for a flag, kept in f64 so that messages quote it as typed.
+pub fn number(s: &str) -> Result<f64, String> {
+    s.trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number"))
+}
+
+/// Image size `WxH` for a flag, each side 1 to 16384 pixels.
+pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("'{s}' is not WxH"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad width in '{s}'"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad height in '{s}'"))?;
+    if w == 0 || h == 0 || w > 16384 || h > 16384 {
+        return Err(format!(
+            "resolution '{s}' must be between 1x1 and 16384x16384"
+        ));
+    }
+    Ok((w, h))
+}
+
+/// Applies command-line overrides to the settings loaded from the scene file.
+pub fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> CliResult<()> {
+    if let Some(name) = &o.mode {
+        settings.mode = Mode::parse(name).ok_or_else(|| {
+            format!(
+                "--mode: unknown mode '{name}'; expected one of {}",
+                Mode::names().join(", ")
+            )
+        })?;
+    }
+    if let Some(p) = o.passes {
+        if p == 0 {
+            return Err("--passes must be at least 1".into());
+        }
+        settings.passes = p;
+    }
+    if let Some((w, h)) = o.resolution {
+        settings.width = w;
+        settings.height = h;
+    }
+    if let Some(n) = o.photons {
+        if n == 0 {
+            return Err("--photons must be at least 1".into());
+        }
+        settings.photons = n;
+    }
+    if let Some(n) = o.spp {
+        if n == 0 {
+            return Err("--spp must be at least 1".into());
+        }
+        settings.spp = n;
+    }
+    if let Some(r) = o.radius {
+        if !(r.is_finite() && r > 0.0 && r <= f32::MAX as f64) {
+            let r = if (1e-4..1e7).contains(&r.abs()) {
+                format!("{r}")
+            } else {
+                format!("{r:e}")
+            };
+            return Err(format!(
+                "--radius must be a positive number of metres below 3.4e38, not {r}"
+            ));
+        }
+        let r = bdpm_integrator::check_radius(r as f32).map_err(|e| format!("--radius: {e}"))?;
+        settings.radius = Some(r);
+    }
+    if o.no_jitter {
+        settings.pixel_jitter = false;
+    }
+    if let Some(name) = &o.noise_model {
+        settings.noise_model = NoiseModel::parse(name).ok_or_else(|| {
+            format!(
+                "--noise-model: unknown model '{name}'; expected one of {}",
+                NoiseModel::ALL_NAMES.join(", ")
+            )
+        })?;
+    }
+    if let Some(s) = o.seed {
+        settings.seed = s;
+    }
+    Ok(())
+}
+
+/// The worker threads of a command: `threads` of them (`--threads`), or one per core.
+pub fn thread_pool(threads: Option<usize>) -> CliResult<rayon::ThreadPool> {
+    let mut b = rayon::ThreadPoolBuilder::new();
+    if let Some(t) = threads {
+        if t == 0 {
+            return Err("--threads must be at least 1".into());
+        }
+        // Thousands of threads on a few cores only queue for them (10000 spent minutes
+        // starting up); the cap leaves room to oversubscribe for tests of determinism.
+        let cores = std::thread::available_parallelism().map_or(1, usize::from);
+        let max = (8 * cores).max(64);
+        if t > max {
+            return Err(format!(
+                "--threads {t} is more than this machine can use: at most {max} (8 per core, {cores} cores)"
+            ));
+        }
+        b = b.num_threads(t);
+    }
+    b.build()
+        .map_err(|e| format!("cannot start worker threads: {e}"))
+}
+
+/// The render's EXR when neither `-o` nor the scene file names one: `out/<scene>.exr`.
+pub fn default_output(scene: &Path) -> PathBuf {
+    PathBuf::from("out").join(format!("{}.exr", stem_of(scene, "render")))
+}
+
+/// A scene loaded from `path` with `overrides` applied (the camera resized to match).
+pub struct Prepared {
+    /// The scene, camera at the final resolution.
+    pub scene: Scene,
+    /// The final settings.
+    pub settings: RenderSettings,
+    /// The scene file's `output`, if any.
+    pub output: Option<PathBuf>,
+    /// Facts from loading.
+    pub report: LoadReport,
+}
+
+/// Loads a scene file and applies the overrides.
+pub fn prepare(path: &Path, overrides: &Overrides) -> CliResult<Prepared> {
+    let loaded = load_scene(path).map_err(|e| e.to_string())?;
+    let mut scene = loaded.scene;
+    let mut settings = loaded.settings;
+    apply_overrides(&mut settings, overrides)?;
+    if (scene.camera.width, scene.camera.height) != (settings.width, settings.height) {
+        scene.camera = scene
+            .camera
+            .with_resolution(settings.width, settings.height)
+            .map_err(|e| format!("--resolution: {e}"))?;
+    }
+    Ok(Prepared {
+        scene,
+        settings,
+        output: loaded.output,
+        report: loaded.report,
+    })
+}
+
+impl Overrides {
+    /// The overrides that shape the image as command-line arguments (`--threads` does not).
+    pub fn to_args(&self) -> Vec<String> {
+        let o = self;
+        let mut v = Vec::new();
+        let mut push = |k: &str, val: String| {
+            v.push(k.to_string());
+            v.push(val);
+        };
+        if let Some(m) = &o.mode {
+            push("--mode", m.clone());
+        }
+        if let Some((w, h)) = o.resolution {
+            push("--resolution", format!("{w}x{h}"));
+        }
+        if let Some(n) = o.photons {
+            push("--photons", n.to_string());
+        }
+        if let Some(n) = o.spp {
+            push("--spp", n.to_string());
+        }
+        if let Some(r) = o.radius {
+            // `{:?}` of an f64 round-trips exactly.
+            push("--radius", format!("{r:?}"));
+        }
+        if let Some(s) = o.seed {
+            push("--seed", s.to_string());
+        }
+        if let Some(m) = &o.noise_model {
+            push("--noise-model", m.clone());
+        }
+        if o.no_jitter {
+            v.push("--no-jitter".into());
+        }
+        v
+    }
+
+    /// Parses arguments made by [`Overrides::to_args`] back into overrides.
+    pub fn from_args(args: &[String]) -> Result<Overrides, String> {
+        use clap::Parser;
+        #[derive(Parser)]
+        struct Only {
+            #[command(flatten)]
+            o: Overrides,
+        }
+        Only::try_parse_from(std::iter::once("bdpm".to_string()).chain(args.iter().cloned()))
+            .map(|p| p.o)
+            .map_err(|e| format!("bad stored overrides {args:?}: {}", e.kind()))
+    }
+}
+
+/// A positive finite number for a flag.
+pub fn positive(s: &str) -> Result<f64, String> {
+    let v = number(s)?;
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("'{s}' is not a positive number"))
+    }
+}
+
+/// A byte count with an optional binary suffix (K, M, G, T; `B` or `iB` may follow).
+pub fn parse_bytes(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let t = t
+        .strip_suffix("iB")
+        .or_else(|| t.strip_suffix('B'))
+        .unwrap_or(t);
+    let (digits, shift) = match t.chars().last().map(|c| c.to_ascii_uppercase()) {
+        Some('K') => (&t[..t.len() - 1], 10),
+        Some('M') => (&t[..t.len() - 1], 20),
+        Some('G') => (&t[..t.len() - 1], 30),
+        Some('T') => (&t[..t.len() - 1], 40),
+        _ => (t, 0),
+    };
+    let bad = || format!("'{s}' is not a size such as 8G, 512M or 1000000");
+    let value: f64 = digits.trim().parse().map_err(|_| bad())?;
+    let bytes = value * (1u64 << shift) as f64;
+    if !(bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64) {
+        return Err(bad());
+    }
+    Ok(bytes as u64)
+}
+
+/// MemAvailable of /proc/meminfo, bytes (`None` where there is no such file).
+pub fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// The process's peak resident memory so far (VmHWM of /proc/self/status), bytes.
+pub fn peak_resident_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = text.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// One line of /proc/loadavg (its first three fields), or "unknown".
+pub fn load_average() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
+        .unwrap_or_else(|| "unknown".into())
+}
+
+/// The CPU model from /proc/cpuinfo, or "unknown".
+pub fn cpu_model() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, v)| v.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown".into())
+}
+
+/// CPU time of this process so far (user + system, all threads), s; `None` where
+/// /proc/self/stat is not available. Its resolution is the kernel's USER_HZ tick (10 ms).
+pub fn process_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the command name, which is in parentheses and may contain spaces:
+    // state is field 3, utime field 14, stime field 15 (proc(5)).
+    let rest = &stat[stat.rfind(')')? + 1..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let utime: f64 = f.get(11)?.parse().ok()?;
+    let stime: f64 = f.get(12)?.parse().ok()?;
+    Some((utime + stime) / 100.0)
+}
+
+/// A progress bar on stderr drawn with `template` (indicatif's syntax), `len` units long
+/// (`None`: a spinner with no end), or a hidden one when `quiet`.
+pub fn progress_bar(quiet: bool, len: Option<u64>, template: &str) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    let bar = match len {
+        Some(n) => ProgressBar::new(n),
+        None => ProgressBar::no_length(),
+    };
+    bar.set_style(
+        ProgressStyle::with_template(template).unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn overrides_round_trip() {
+        let o = Overrides {
+            mode: Some("optimal".into()),
+            resolution: Some((16, 8)),
+            photons: Some(100),
+            radius: Some(0.1),
+            seed: Some(7),
+            no_jitter: true,
+            ..Default::default()
+        };
+        let back = Overrides::from_args(&o.to_args()).unwrap();
+        assert_eq!(back.to_args(), o.to_args());
+        assert_eq!(back.radius, Some(0.1));
+    }
+
+    #[test]
+    fn byte_counts_parse() {
+        assert_eq!(parse_bytes("8G"), Ok(8 << 30));
+        assert_eq!(parse_bytes("512MiB"), Ok(512 << 20));
+        assert_eq!(parse_bytes("1000"), Ok(1000));
+        assert!(parse_bytes("-1").is_err());
+        assert!(positive("0").is_err());
+    }
+}
