@@ -134,7 +134,7 @@ pub fn survival_at(bdf: &Bdf, incoming: &Outgoing) -> f32 {
 /// The BDF sample drawn at an arrival (before the roulette decision).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Scatter {
-    /// Unit world direction leaving the surface, on the side of [`PathVertex::normal`].
+    /// Unit world direction leaving the surface, on the side of the vertex normal ([`PathVertex::at`]`.n`).
     pub direction: Vec3,
     /// BDF value f(ω_in, ω_out), sr⁻¹.
     pub f: Vec3,
