@@ -24,8 +24,6 @@
 //! assert_eq!(near, [0, 1]);
 //! ```
 
-use std::sync::atomic::{AtomicU64, Ordering};
-
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -150,27 +148,34 @@ impl HashGrid {
         // cells span the whole i64 range and the ≤ 8-cell query overflows its arrays. The
         // loader rejects such radii; this keeps the grid sound for any positive radius.
         let inv_cell = (0.5 / radius).min(f32::MAX);
-        let n = points.len();
-        let buckets = n.max(1).next_power_of_two();
+        let buckets = points.len().max(1).next_power_of_two();
         let mask = buckets as u64 - 1;
+        // Hashing is the only per-point arithmetic worth spreading over threads; the counting
+        // passes are memory-bound and sequential keeps them stable and simple.
         let hashes: Vec<u64> = points
             .par_iter()
             .map(|&p| hash(cell_of(p, inv_cell)))
             .collect();
         let filter_bits = buckets * FILTER_BITS_PER_BUCKET;
         let filter_mask = filter_bits as u64 - 1;
-        // OR is commutative, so the filter is the same whatever order the threads set bits in.
-        let filter: Vec<AtomicU64> = (0..filter_bits.div_ceil(64))
-            .map(|_| AtomicU64::new(0))
-            .collect();
-        hashes.par_iter().for_each(|&h| {
+        let mut filter = vec![0u64; filter_bits.div_ceil(64)];
+        let mut starts = vec![0u32; buckets + 1];
+        let keys: Vec<u32> = hashes.iter().map(|&h| (h & mask) as u32).collect();
+        for (&k, &h) in keys.iter().zip(&hashes) {
+            starts[k as usize + 1] += 1;
             let bit = filter_bit(h, filter_mask);
-            filter[(bit >> 6) as usize].fetch_or(1 << (bit & 63), Ordering::Relaxed);
-        });
-        let filter: Vec<u64> = filter.into_iter().map(AtomicU64::into_inner).collect();
-        let keys: Vec<u32> = hashes.par_iter().map(|&h| (h & mask) as u32).collect();
-        drop(hashes);
-        let (starts, order) = sort_by_bucket(&keys, buckets);
+            filter[(bit >> 6) as usize] |= 1 << (bit & 63);
+        }
+        for b in 0..buckets {
+            starts[b + 1] += starts[b];
+        }
+        let mut next = starts.clone();
+        let mut order = vec![0u32; points.len()];
+        for (i, &k) in keys.iter().enumerate() {
+            let slot = &mut next[k as usize];
+            order[*slot as usize] = i as u32;
+            *slot += 1;
+        }
         (
             HashGrid {
                 inv_cell,
@@ -355,119 +360,6 @@ impl HashGrid {
     }
 }
 
-/// Points per work item of [`sort_by_bucket`]'s first pass: fixed, so that the work split
-/// (and with it every intermediate) is the same on any number of threads.
-const SORT_CHUNK: usize = 1 << 16;
-
-/// Most partitions of [`sort_by_bucket`]'s first pass: enough to share two to a few dozen
-/// threads evenly, few enough that each chunk's histogram stays in L1.
-const SORT_PARTITIONS: usize = 256;
-
-/// The stable counting sort of point indices by bucket `keys[i]` (< `buckets`, a power of
-/// two): returns `starts` (bucket b holds sorted positions `starts[b]..starts[b + 1]`) and
-/// `order` (`order[k]` = index of the k-th sorted point, ties in index order).
-///
-/// One serial counting sort with a table per bucket capped the photon stage's speed-up on
-/// more threads, and per-thread tables of `buckets` entries would not fit in cache. So it
-/// is two passes of a most-significant-digit radix sort, both in parallel and both stable:
-/// the indices are first split by the top bits of their key into ≤ 256 partitions (per
-/// fixed chunk of indices, in chunk order), then each partition, which holds a contiguous
-/// range of buckets, is counting-sorted on its own. The result equals the serial stable sort
-/// exactly (same `starts`, same `order`).
-fn sort_by_bucket(keys: &[u32], buckets: usize) -> (Vec<u32>, Vec<u32>) {
-    let n = keys.len();
-    let partitions = buckets.min(SORT_PARTITIONS);
-    // Buckets per partition; both are powers of two.
-    let per_part = buckets / partitions;
-    let shift = per_part.trailing_zeros();
-    // Pass 1: histogram of partitions per chunk, then each chunk's write offsets.
-    let hist: Vec<Vec<u32>> = keys
-        .par_chunks(SORT_CHUNK)
-        .map(|chunk| {
-            let mut h = vec![0u32; partitions];
-            for &k in chunk {
-                h[(k >> shift) as usize] += 1;
-            }
-            h
-        })
-        .collect();
-    let mut part_start = vec![0u32; partitions + 1];
-    for h in &hist {
-        for (p, &c) in h.iter().enumerate() {
-            part_start[p + 1] += c;
-        }
-    }
-    for p in 0..partitions {
-        part_start[p + 1] += part_start[p];
-    }
-    let mut offsets = Vec::with_capacity(hist.len());
-    let mut next = part_start[..partitions].to_vec();
-    for h in &hist {
-        offsets.push(next.clone());
-        for (o, &c) in next.iter_mut().zip(h) {
-            *o += c;
-        }
-    }
-    let mut split = vec![0u32; n];
-    {
-        let out = SharedSlice(split.as_mut_ptr());
-        keys.par_chunks(SORT_CHUNK)
-            .zip(offsets.into_par_iter())
-            .enumerate()
-            .for_each(|(c, (chunk, mut off))| {
-                let out = &out;
-                for (j, &k) in chunk.iter().enumerate() {
-                    let slot = &mut off[(k >> shift) as usize];
-                    // SAFETY: chunk c writes positions offsets[c][p].. for each partition p,
-                    // as many as it has keys of p: the ranges of all chunks and partitions
-                    // partition 0..n, so every write is in bounds and no two overlap.
-                    unsafe { *out.0.add(*slot as usize) = (c * SORT_CHUNK + j) as u32 };
-                    *slot += 1;
-                }
-            });
-    }
-    // Pass 2: each partition's indices (in index order) counting-sorted by their buckets.
-    let mut starts = vec![0u32; buckets + 1];
-    let mut order = vec![0u32; n];
-    let mut order_parts = Vec::with_capacity(partitions);
-    let mut rest = order.as_mut_slice();
-    for p in 0..partitions {
-        let (head, tail) = rest.split_at_mut((part_start[p + 1] - part_start[p]) as usize);
-        order_parts.push(head);
-        rest = tail;
-    }
-    starts[1..]
-        .par_chunks_mut(per_part)
-        .zip(order_parts.into_par_iter())
-        .enumerate()
-        .for_each(|(p, (part_starts, part_order))| {
-            let base = part_start[p];
-            let first = (p * per_part) as u32;
-            let ids = &split[base as usize..part_start[p + 1] as usize];
-            let mut count = vec![0u32; per_part + 1];
-            for &i in ids {
-                count[(keys[i as usize] - first) as usize + 1] += 1;
-            }
-            for b in 0..per_part {
-                count[b + 1] += count[b];
-            }
-            for (s, &c) in part_starts.iter_mut().zip(&count[1..]) {
-                *s = base + c;
-            }
-            for &i in ids {
-                let slot = &mut count[(keys[i as usize] - first) as usize];
-                part_order[*slot as usize] = i;
-                *slot += 1;
-            }
-        });
-    (starts, order)
-}
-
-/// A raw pointer to a slice that the threads of [`sort_by_bucket`] write disjoint parts of.
-struct SharedSlice(*mut u32);
-// SAFETY: only used for the disjoint writes described at its one use.
-unsafe impl Sync for SharedSlice {}
-
 /// A fixed-radius point grid that owns what a query needs: the points sorted into the grid and
 /// their indices in the caller's slice. Build once, query from any number of threads.
 #[derive(Clone, Debug, Default)]
@@ -575,37 +467,6 @@ mod tests {
                 .filter(|&i| (points[i] - x).length_squared() <= radius * radius)
                 .collect();
             assert_eq!(found, brute);
-        }
-    }
-
-    /// The parallel two-pass sort equals the serial stable counting sort, including on sizes
-    /// that leave partitions and chunks empty or ragged.
-    #[test]
-    fn parallel_bucket_sort_equals_serial_counting_sort() {
-        let mut rng = bdpm_geometry::Rng::new(9, bdpm_geometry::Domain::Other, [0; 3]);
-        for n in [0usize, 1, 3, 255, 256, 1000, 70_000, 300_001] {
-            let buckets = n.max(1).next_power_of_two();
-            let keys: Vec<u32> = (0..n)
-                .map(|_| {
-                    // Clustered keys, as cells of surface points are.
-                    let u = rng.uniform();
-                    ((u * u * buckets as f32) as usize).min(buckets - 1) as u32
-                })
-                .collect();
-            let mut starts = vec![0u32; buckets + 1];
-            for &k in &keys {
-                starts[k as usize + 1] += 1;
-            }
-            for b in 0..buckets {
-                starts[b + 1] += starts[b];
-            }
-            let mut next = starts.clone();
-            let mut order = vec![0u32; n];
-            for (i, &k) in keys.iter().enumerate() {
-                order[next[k as usize] as usize] = i as u32;
-                next[k as usize] += 1;
-            }
-            assert_eq!(sort_by_bucket(&keys, buckets), (starts, order), "n = {n}");
         }
     }
 }
