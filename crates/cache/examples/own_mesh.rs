@@ -82,8 +82,9 @@ fn main() {
     });
     let cache = RadianceCache::from_arrivals(&mesh, 1, 0.25, arrivals);
     let stats = cache.stats();
+    assert_eq!(stats.filled_fraction, 0.5);
     println!(
-        "{} cells per side, {} arrivals, {:.0} % of cell sides filled",
+        "{} cells per side, {} arrivals, {:.0} % of cell sides filled (every front side: the backs see no light)",
         stats.cells,
         stats.arrivals,
         stats.filled_fraction * 100.0
