@@ -90,7 +90,7 @@ impl Workload {
     fn bench_build(&self, bencher: Bencher, threads: usize) {
         let pool = thread_pool(threads);
         bencher
-            .counter(ItemsCount::new(self.map.photons.len()))
+            .counter(ItemsCount::new(self.map.photons().len()))
             .with_inputs(|| self.map.clone())
             .bench_local_values(|map| pool.install(|| map.with_radius(self.radius)));
     }

@@ -15,7 +15,11 @@
 //!   cosine-weighted scattering): one grazing scatter could double a cell. Both converge to
 //!   L_d as the bins shrink, and a Lambert cell's single bin is exact either way.
 //! - **Filling** uses a photon pass of its own random stream (`Domain::CachePhoton`), frozen
-//!   before rendering, so the weights never depend on the photons they weight.
+//!   before rendering, so the weights never depend on the photons they weight
+//!   ([`RadianceCache::build`]); or arrivals the caller traced ([`RadianceCache::from_arrivals`]).
+//! - **Scenes** are seen through two small traits: [`CacheSurfaces`] (triangles and Lambert
+//!   albedos) and, to trace the cache's own photons, [`PhotonScene`]. bdpm's `Scene`
+//!   implements both; another renderer implements them for its own scene type.
 //! - **Lambert-only scenes** get one bin per cell and no b (b = (kd/π)·L_d there, method.md §7).
 //!
 //! Values are luminances (the weights use luminance): L_d in W·m⁻²·sr⁻¹, b in W·m⁻²·sr⁻².
@@ -27,7 +31,7 @@ use std::f32::consts::PI;
 
 use bdpm_bdf::luminance;
 use bdpm_geometry::{Domain, Frame};
-use bdpm_photon::{TraceOptions, trace_photons};
+use bdpm_photon::{PhotonScene, TraceOptions, trace_photons};
 use bdpm_scene::Scene;
 use glam::{Vec2, Vec3};
 
@@ -43,6 +47,76 @@ pub struct CacheSettings {
     pub photons: u64,
     /// Master seed (the cache uses its own stream domain).
     pub seed: u64,
+}
+
+/// What the cache needs to know about the surfaces it covers: triangles (the cells subdivide
+/// each) and, for scenes whose materials are all Lambert, each triangle's albedo (b is then
+/// (k_d/π)·L_d and is not stored). A renderer with its own mesh implements this and fills a
+/// cache with [`RadianceCache::from_arrivals`]; one that also implements
+/// [`PhotonScene`] can let [`RadianceCache::build`] trace the cache's photons.
+///
+/// Triangle indices are the `prim` of lookups and arrivals: 0..[`Self::triangle_count`].
+pub trait CacheSurfaces: Sync {
+    /// Number of triangles.
+    fn triangle_count(&self) -> usize;
+    /// The vertices of triangle `prim`, m; their winding defines the side called front.
+    fn triangle(&self, prim: u32) -> [Vec3; 3];
+    /// The unit geometric normal of triangle `prim` on its front side.
+    fn normal(&self, prim: u32) -> Vec3;
+    /// The area of triangle `prim`, m²; a triangle of area 0 gets one cell and no values.
+    fn area(&self, prim: u32) -> f32;
+    /// True when every material is pure Lambert: the cache then keeps one bin per cell side
+    /// and derives b from [`Self::lambert_albedo`].
+    fn lambert_only(&self) -> bool;
+    /// Luminance of the Lambert albedo k_d of triangle `prim`'s material (dimensionless, in
+    /// [0, 1]); read only when [`Self::lambert_only`].
+    fn lambert_albedo(&self, prim: u32) -> f32;
+}
+
+/// bdpm's own scene: its triangle mesh and materials.
+impl CacheSurfaces for Scene {
+    fn triangle_count(&self) -> usize {
+        self.geometry.triangle_count()
+    }
+    fn triangle(&self, prim: u32) -> [Vec3; 3] {
+        self.geometry.vertices(prim)
+    }
+    fn normal(&self, prim: u32) -> Vec3 {
+        self.geometry.normal(prim)
+    }
+    fn area(&self, prim: u32) -> f32 {
+        self.geometry.area(prim)
+    }
+    fn lambert_only(&self) -> bool {
+        self.all_lambert()
+    }
+    fn lambert_albedo(&self, prim: u32) -> f32 {
+        luminance(self.bdf(self.geometry.material(prim)).kd())
+    }
+}
+
+/// One scattering of secondary light at a surface, as the cache accumulates it: a photon
+/// that has already scattered at least once arrives at `position` and leaves along
+/// `direction` carrying `energy`. [`RadianceCache::build`] makes these from its own photon
+/// pass; [`RadianceCache::from_arrivals`] takes them from the caller.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CacheArrival {
+    /// Triangle hit ([`CacheSurfaces`] index).
+    pub prim: u32,
+    /// Hit point on the triangle, m.
+    pub position: Vec3,
+    /// Unit geometric normal on the side the light arrived from (and leaves to): it picks the
+    /// cell side.
+    pub normal: Vec3,
+    /// Unit world direction the light leaves along (an unbiased sample of the scattering, e.g.
+    /// a BDF sample); arrivals leaving below `normal` are skipped.
+    pub direction: Vec3,
+    /// Luminance of the scattered power, W: arriving power × f·cos/pdf, with the pass's
+    /// 1/N_F already included (the cache divides only by cell area and bin solid angle).
+    pub energy: f32,
+    /// Luminance of the BDF value f(incoming, `direction`), sr⁻¹ (b's integrand is f·L_d;
+    /// unused by Lambert-only caches).
+    pub f: f32,
 }
 
 /// Size and cost facts about a built cache, for the run report.
@@ -214,28 +288,85 @@ fn projected_solid_angles(grid: u32) -> Vec<f64> {
 impl RadianceCache {
     /// Traces the cache's photon pass on `scene` and accumulates L_d (and b unless the scene
     /// is Lambert-only) per cell and bin.
-    pub fn build(scene: &Scene, settings: &CacheSettings) -> RadianceCache {
-        let lambert = scene.all_lambert();
+    pub fn build<S: PhotonScene + CacheSurfaces + ?Sized>(
+        scene: &S,
+        settings: &CacheSettings,
+    ) -> RadianceCache {
+        let mut cache = RadianceCache::empty(scene, settings.bins, settings.cell_size);
+        let options = TraceOptions {
+            photons: settings.photons.max(1),
+            seed: settings.seed,
+            domain: Domain::CachePhoton,
+            pass: 0,
+            light_visibility: false,
+            max_depth: 1024,
+        };
+        // Records are made in parallel and come back in photon order, so the sequential
+        // accumulation in `fill` is bit-identical whatever the thread count.
+        let this = &cache;
+        let records: Vec<(u32, f32, f32)> = trace_photons(scene, &options, |arrival, out| {
+            // Only light that has scattered at least once is secondary (L_d, method.md §5).
+            if arrival.vertex.depth == 0 {
+                return;
+            }
+            let Some(sc) = arrival.scatter else { return };
+            let vx = &arrival.vertex;
+            let record = this.record(&CacheArrival {
+                prim: vx.at.prim,
+                position: vx.at.p,
+                normal: vx.at.n,
+                direction: sc.direction,
+                energy: luminance(arrival.power * sc.weight),
+                f: luminance(sc.f),
+            });
+            out.extend(record);
+        });
+        cache.fill(&records);
+        cache
+    }
+
+    /// A cache over `surfaces` filled from arrivals the caller traced itself (e.g. with its
+    /// own photon tracer), accumulated in the order given. `bins` and `cell_size` (m) are as in
+    /// [`CacheSettings`]. Each arrival is one scattering of secondary light (light that has
+    /// already scattered at least once, method.md §5); arrivals that leave below their normal
+    /// or name an unknown or degenerate triangle are skipped.
+    pub fn from_arrivals<S: CacheSurfaces + ?Sized>(
+        surfaces: &S,
+        bins: u32,
+        cell_size: f32,
+        arrivals: impl IntoIterator<Item = CacheArrival>,
+    ) -> RadianceCache {
+        let mut cache = RadianceCache::empty(surfaces, bins, cell_size);
+        let records: Vec<(u32, f32, f32)> = arrivals
+            .into_iter()
+            .filter_map(|a| cache.record(&a))
+            .collect();
+        cache.fill(&records);
+        cache
+    }
+
+    /// The cells and bins of `surfaces`, all zero.
+    fn empty<S: CacheSurfaces + ?Sized>(surfaces: &S, bins: u32, cell_size: f32) -> RadianceCache {
+        let lambert = surfaces.lambert_only();
         let grid = if lambert {
             1
         } else {
-            (settings.bins.max(1) as f32).sqrt().round().max(1.0) as u32
+            (bins.max(1) as f32).sqrt().round().max(1.0) as u32
         };
         let side_bins = (grid * grid) as usize;
-        let g = &scene.geometry;
-        let n_tris = g.triangle_count();
+        let n_tris = surfaces.triangle_count();
         let mut first_cell = Vec::with_capacity(n_tris);
         let mut subdivision = Vec::with_capacity(n_tris);
         let mut tri = Vec::with_capacity(n_tris);
         let mut cells = 0u32;
         for prim in 0..n_tris as u32 {
-            let v = g.vertices(prim);
+            let v = surfaces.triangle(prim);
             let longest = (v[1] - v[0])
                 .length()
                 .max((v[2] - v[1]).length())
                 .max((v[0] - v[2]).length());
-            let n = if g.area(prim) > 0.0 {
-                ((longest / settings.cell_size.max(1e-9)).ceil() as u32).clamp(1, 256)
+            let n = if surfaces.area(prim) > 0.0 {
+                ((longest / cell_size.max(1e-9)).ceil() as u32).clamp(1, 256)
             } else {
                 1
             };
@@ -243,15 +374,15 @@ impl RadianceCache {
             subdivision.push(n as u16);
             // The one place the Lambert b is derived: L_d's cells hold the rest.
             let b_per_ld = if lambert {
-                luminance(scene.bdf(g.material(prim)).kd()) / PI
+                surfaces.lambert_albedo(prim) / PI
             } else {
                 0.0
             };
-            tri.push(CellTriangle::new(v, g.normal(prim), b_per_ld));
+            tri.push(CellTriangle::new(v, surfaces.normal(prim), b_per_ld));
             cells += n * n;
         }
         let slots = cells as usize * 2 * side_bins;
-        let mut cache = RadianceCache {
+        RadianceCache {
             first_cell,
             subdivision,
             tri,
@@ -268,45 +399,25 @@ impl RadianceCache {
                 filled_fraction: 0.0,
                 bytes: 0,
             },
-        };
-        cache.fill(scene, settings);
-        cache
+        }
     }
 
-    fn fill(&mut self, scene: &Scene, settings: &CacheSettings) {
-        let options = TraceOptions {
-            photons: settings.photons.max(1),
-            seed: settings.seed,
-            domain: Domain::CachePhoton,
-            pass: 0,
-            light_visibility: false,
-            max_depth: 1024,
-        };
-        // Records are made in parallel and come back in photon order, so the sequential
-        // accumulation below is bit-identical whatever the thread count.
-        let this = &*self;
-        let records: Vec<(u32, f32, f32)> = trace_photons(scene, &options, |arrival, out| {
-            // Only light that has scattered at least once is secondary (L_d, method.md §5).
-            if arrival.vertex.depth == 0 {
-                return;
-            }
-            let Some(sc) = arrival.scatter else { return };
-            let vx = &arrival.vertex;
-            if sc.direction.dot(vx.at.n) <= 0.0 {
-                return;
-            }
-            let Some(cell_side) = this.cell_side(vx.at.prim, vx.at.p, vx.at.n) else {
-                return;
-            };
-            let local = Frame::from_normal(vx.at.n).to_local(sc.direction);
-            let slot = (cell_side * this.side_bins + this.bin(local)) as u32;
-            let e_s = luminance(arrival.power * sc.weight);
-            out.push((slot, e_s, e_s * luminance(sc.f)));
-        });
+    /// The (slot, L_d energy, b energy) record of one arrival, or None if it adds nothing.
+    fn record(&self, a: &CacheArrival) -> Option<(u32, f32, f32)> {
+        if a.direction.dot(a.normal) <= 0.0 {
+            return None;
+        }
+        let cell_side = self.cell_side(a.prim, a.position, a.normal)?;
+        let local = Frame::from_normal(a.normal).to_local(a.direction);
+        let slot = (cell_side * self.side_bins + self.bin(local)) as u32;
+        Some((slot, a.energy, a.energy * a.f))
+    }
+
+    fn fill(&mut self, records: &[(u32, f32, f32)]) {
         let slots = self.values.len() / self.stride;
         let mut ld = vec![0f64; slots];
         let mut b = vec![0f64; if self.stride == 2 { slots } else { 0 }];
-        for &(slot, l, bb) in &records {
+        for &(slot, l, bb) in records {
             let slot = slot as usize;
             ld[slot] += l as f64;
             if !b.is_empty() {

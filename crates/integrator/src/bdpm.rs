@@ -429,7 +429,7 @@ impl<'a> Mix<'a> {
         if !(self.needs.photons_at_x0 && reads_inputs && isotropic) || per_visit {
             return Vec::new();
         }
-        map.photons
+        map.photons()
             .par_iter()
             .map(|ph| {
                 let prev = map.vertex(ph.prev);

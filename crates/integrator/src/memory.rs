@@ -120,7 +120,7 @@ pub fn estimate_memory(
                 },
                 radius,
             );
-            let stored = pilot.photons.len() as f64;
+            let stored = pilot.photons().len() as f64;
             stored_per_emitted = stored / PILOT_PHOTONS as f64;
             // Arrivals include the first hit from the light, which is not stored.
             let arrivals_per_emitted = stored_per_emitted + 1.0;

@@ -429,7 +429,7 @@ impl Renderer<'_> {
                 ("camera", t_camera.elapsed().as_secs_f64()),
             ],
             techniques: if record { Some(techniques) } else { None },
-            photons_stored: map.photons.len() as u64,
+            photons_stored: map.photons().len() as u64,
             photon_map_bytes: map.memory_bytes(),
             weights: weight_stats.into_inner().unwrap_or_else(|e| e.into_inner()),
         }

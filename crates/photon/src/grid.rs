@@ -1,20 +1,48 @@
-//! A hashed uniform grid for fixed-radius range queries (SmallVCM's `hashgrid.hxx` design):
-//! cells of edge 2r hashed into a power-of-two table, points sorted into buckets by a
-//! counting sort, each bucket a contiguous range of the sorted points.
+//! A hashed uniform grid for fixed-radius range queries over plain points (SmallVCM's
+//! `hashgrid.hxx` design): cells of edge 2r hashed into a power-of-two table, points sorted
+//! into buckets by a counting sort, each bucket a contiguous range of the sorted points.
+//!
+//! This module needs nothing from a scene: any renderer with its own points (photons, light
+//! vertices, particles) can use it alone. [`PointGrid`] is the simple form (build from
+//! `&[Vec3]` and a radius, call back the indices of the points within the radius);
+//! [`HashGrid`] is the staged form the photon map's gathers use, which reports candidate
+//! ranges of the sorted points and lets a caller overlap memory fetches of many queries.
+//!
+//! Invariant: a query reports every point within the build radius exactly once (and
+//! possibly farther points of cells sharing a bucket, which [`PointGrid`] filters out), in an
+//! order that depends only on the points and the radius, never on the thread count.
+//!
+//! ```
+//! use bdpm_photon::grid::PointGrid;
+//! use glam::Vec3;
+//!
+//! let points = [Vec3::ZERO, Vec3::new(0.05, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0)];
+//! let grid = PointGrid::new(&points, 0.1);
+//! let mut near = Vec::new();
+//! grid.for_each_near(Vec3::new(0.02, 0.0, 0.0), |i| near.push(i));
+//! near.sort();
+//! assert_eq!(near, [0, 1]);
+//! ```
 
 use glam::Vec3;
 use rayon::prelude::*;
 
 /// Bucket table over points sorted by bucket. Cells that hash to the same bucket share it; the
-/// caller's distance test removes the points of the other cells.
+/// caller's distance test removes the points of the other cells. The grid keeps no points:
+/// [`HashGrid::build`] returns the sorting permutation and the caller keeps the points in that
+/// order ([`PointGrid`] does this for you).
+///
+/// A query is staged so that many can be in flight at once: [`HashGrid::start`], any number
+/// of [`HashGrid::advance`] (each hints the CPU to fetch what the next reads), then
+/// [`HashGrid::visit`], which reports the candidate ranges of the sorted points.
 ///
 /// A bit filter of occupied cells sits in front of the table: most cells a query touches are
 /// empty (photons lie on surfaces, and a gather finds well under one photon at the preprint's
 /// radius), and one filter bit per touched cell spares most of the bucket table's random
-/// reads (and the points of the other cells sharing those buckets). It has no false negatives, so skipping a bucket whose cells it calls empty
-/// never loses a point, and the order in which points are reported is unchanged.
+/// reads (and the points of the other cells sharing those buckets). It has no false negatives,
+/// so skipping a bucket whose cells it calls empty never loses a point, and the order in which points are reported is unchanged.
 #[derive(Clone, Debug, Default)]
-pub(crate) struct HashGrid {
+pub struct HashGrid {
     /// 1 / cell edge, m⁻¹.
     inv_cell: f32,
     /// Bucket b holds sorted points `starts[b]..starts[b + 1]`; length = buckets + 1.
@@ -29,7 +57,7 @@ pub(crate) struct HashGrid {
 
 /// How far a [`GridQuery`] has got.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub(crate) enum Stage {
+enum Stage {
     /// Cells and buckets known; filter bits requested.
     #[default]
     Filter,
@@ -43,7 +71,7 @@ pub(crate) enum Stage {
 /// touches in a grid of cell 2r, their distinct buckets in visiting order, and what the stages
 /// so far have read.
 #[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct GridQuery {
+pub struct GridQuery {
     /// Distinct buckets, in visiting order: `buckets[..n]`.
     buckets: [u32; 8],
     /// Bucket bounds `starts[b]..starts[b + 1]`, read in [`Stage::Live`].
@@ -65,13 +93,13 @@ impl GridQuery {
     /// True once the bucket bounds have been read: [`HashGrid::visit`] reads nothing more of
     /// the grid.
     #[inline]
-    pub(crate) fn ready(&self) -> bool {
+    pub fn ready(&self) -> bool {
         self.stage == Stage::Bounds
     }
 
     /// True if the query is known to touch no point (no live bucket, normal path).
     #[inline]
-    pub(crate) fn empty(&self) -> bool {
+    pub fn empty(&self) -> bool {
         self.ready() && self.live == 0 && self.general.is_none()
     }
 }
@@ -111,10 +139,10 @@ impl HashGrid {
     /// Builds the grid for `points` with cell edge `2·radius` and returns it with the
     /// permutation that sorts the points by bucket (`order[k]` = index of the k-th sorted
     /// point). The sort is stable, so the result is deterministic.
-    pub(crate) fn build(points: &[Vec3], radius: f32) -> (HashGrid, Vec<u32>) {
+    pub fn build(points: &[Vec3], radius: f32) -> (HashGrid, Vec<u32>) {
         assert!(
             points.len() < u32::MAX as usize,
-            "photon map holds at most 2³² − 2 photons"
+            "a grid holds at most 2³² − 2 points"
         );
         // A subnormal radius (below ~1e-38 m) would make 1/(2r) infinite; then the touched
         // cells span the whole i64 range and the ≤ 8-cell query overflows its arrays. The
@@ -203,7 +231,7 @@ impl HashGrid {
     /// `q` is overwritten in place (a query is a few hundred bytes; callers keep theirs in
     /// fixed slots rather than moving them).
     #[inline]
-    pub(crate) fn start(&self, q: &mut GridQuery, x: Vec3, radius: f32) {
+    pub fn start(&self, q: &mut GridQuery, x: Vec3, radius: f32) {
         // The arrays need no reset: only their first `cells`/`n` entries are read, and
         // `ranges[k]` only once bucket k is live.
         q.live = 0;
@@ -256,7 +284,7 @@ impl HashGrid {
     /// read (and `hint(first point index)` is called for each non-empty bucket, so the caller
     /// can fetch its points). Results do not depend on how often this is called.
     #[inline]
-    pub(crate) fn advance(&self, q: &mut GridQuery, hint: impl Fn(usize)) {
+    pub fn advance(&self, q: &mut GridQuery, hint: impl Fn(usize)) {
         match q.stage {
             Stage::Filter => {
                 for c in 0..q.cells as usize {
@@ -298,7 +326,7 @@ impl HashGrid {
     /// touches, in a deterministic order (the same whatever stage `q` had reached). The ranges
     /// index the sorted points.
     #[inline]
-    pub(crate) fn visit(&self, q: &GridQuery, mut f: impl FnMut(std::ops::Range<usize>)) {
+    pub fn visit(&self, q: &GridQuery, mut f: impl FnMut(std::ops::Range<usize>)) {
         if let Some((x, radius)) = q.general {
             let (buckets, live, n) = self.buckets_near(x, radius);
             for k in 0..n {
@@ -326,9 +354,74 @@ impl HashGrid {
     }
 
     /// Heap bytes held.
-    pub(crate) fn memory_bytes(&self) -> u64 {
+    pub fn memory_bytes(&self) -> u64 {
         (self.starts.capacity() * size_of::<u32>() + self.filter.capacity() * size_of::<u64>())
             as u64
+    }
+}
+
+/// A fixed-radius point grid that owns what a query needs: the points sorted into the grid and
+/// their indices in the caller's slice. Build once, query from any number of threads.
+#[derive(Clone, Debug, Default)]
+pub struct PointGrid {
+    grid: HashGrid,
+    /// The caller's points in grid order, m.
+    sorted: Vec<Vec3>,
+    /// `order[k]`: index in the caller's slice of `sorted[k]`.
+    order: Vec<u32>,
+    radius: f32,
+}
+
+impl PointGrid {
+    /// Builds the grid of `points` (positions, m) for range queries of radius `radius` (m).
+    /// Deterministic: the same points and radius give the same grid on any thread count.
+    ///
+    /// # Panics
+    /// If `radius` is not positive and finite, or there are ≥ 2³² − 1 points.
+    pub fn new(points: &[Vec3], radius: f32) -> PointGrid {
+        assert!(
+            radius > 0.0 && radius.is_finite(),
+            "query radius must be positive and finite, got {radius}"
+        );
+        let (grid, order) = HashGrid::build(points, radius);
+        let sorted = order.iter().map(|&i| points[i as usize]).collect();
+        PointGrid {
+            grid,
+            sorted,
+            order,
+            radius,
+        }
+    }
+
+    /// The query radius r the grid was built for, m.
+    pub fn radius(&self) -> f32 {
+        self.radius
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.sorted.len()
+    }
+
+    /// True if the grid holds no point.
+    pub fn is_empty(&self) -> bool {
+        self.sorted.is_empty()
+    }
+
+    /// Calls `f(i)` for every point `points[i]` (of the slice given to [`Self::new`]) with
+    /// |x − points\[i\]|² ≤ r² (in f32), each once, in a deterministic order. Allocates
+    /// nothing; at most 8 cells of edge 2r are read, so the cost is the points in a (4r)³ box.
+    pub fn for_each_near(&self, x: Vec3, mut f: impl FnMut(usize)) {
+        let mut q = GridQuery::default();
+        self.grid.start(&mut q, x, self.radius);
+        let r2 = self.radius * self.radius;
+        self.grid.visit(&q, |range| {
+            for k in range {
+                if (self.sorted[k] - x).length_squared() <= r2 {
+                    f(self.order[k] as usize);
+                }
+            }
+        });
     }
 }
 
@@ -352,6 +445,28 @@ mod tests {
                 });
                 assert!(found, "radius {radius:e}: point {k} not found");
             }
+        }
+    }
+
+    /// The simple API reports exactly the points brute force finds, each once.
+    #[test]
+    fn point_grid_matches_brute_force() {
+        let mut rng = bdpm_geometry::Rng::new(5, bdpm_geometry::Domain::Other, [0; 3]);
+        let points: Vec<Vec3> = (0..5_000)
+            .map(|_| Vec3::from(rng.uniform3()) * 2.0 - 1.0)
+            .collect();
+        let radius = 0.07;
+        let grid = PointGrid::new(&points, radius);
+        assert_eq!(grid.len(), points.len());
+        for _ in 0..500 {
+            let x = Vec3::from(rng.uniform3()) * 2.2 - 1.1;
+            let mut found = Vec::new();
+            grid.for_each_near(x, |i| found.push(i));
+            found.sort_unstable();
+            let brute: Vec<usize> = (0..points.len())
+                .filter(|&i| (points[i] - x).length_squared() <= radius * radius)
+                .collect();
+            assert_eq!(found, brute);
         }
     }
 }

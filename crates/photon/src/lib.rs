@@ -10,7 +10,9 @@
 //!   lights it sees;
 //! - the [`PhotonMap`]: the stored [`Photon`]s (arrivals after ≥ 1 scattering, each with
 //!   the index of its previous vertex y_p) in a hashed uniform grid of cell 2r, for
-//!   allocation-free range queries ([`PhotonMap::for_each_near`]).
+//!   allocation-free range queries ([`PhotonMap::for_each_near`]);
+//! - the hashed grid itself ([`grid`]), which needs only plain positions: a renderer with
+//!   its own points can use [`grid::PointGrid`] alone.
 //!
 //! Units: positions and radii in m, powers in W per RGB channel (Φ/N_F already included),
 //! directions unit vectors pointing away from the surface, pdfs per steradian.
@@ -26,7 +28,10 @@
 //!
 //! Architecture invariant: this crate knows nothing of MIS weights, radiance caches, cameras
 //! or films. It records what the weights need (previous vertices, q, light visibility) but
-//! never evaluates a weight or a density estimate.
+//! never evaluates a weight or a density estimate. It sees a scene only through the
+//! [`PhotonScene`] trait (pick and read a light, intersect and shade, scatter, spawn, light
+//! visibility), which `bdpm_scene::Scene` implements; another renderer implements it for its
+//! own scene type, or uses [`grid::PointGrid`] over its own points with no scene at all.
 //!
 //! ```
 //! use bdpm_bdf::Bdf;
@@ -57,7 +62,7 @@
 //!
 //! let map = PhotonMap::trace(&scene, &TraceOptions::new(10_000, 1, 0), 0.05);
 //! assert_eq!(map.emitted(), 10_000);
-//! for p in &map.photons {
+//! for p in map.photons() {
 //!     // Stored photons have been scattered at least once; y_p is one scattering earlier.
 //!     assert!(map.vertex(p.vertex).depth >= 1);
 //!     assert_eq!(map.vertex(p.prev).depth + 1, map.vertex(p.vertex).depth);
@@ -69,11 +74,13 @@
 //! assert!(irradiance.is_finite());
 //! ```
 
-mod grid;
+pub mod grid;
 mod map;
+mod scene;
 mod trace;
 
 pub use map::{Photon, PhotonMap, PhotonQuery};
+pub use scene::PhotonScene;
 pub use trace::{
     Emission, MAX_SURVIVAL, PathVertex, PhotonArrival, Scatter, TraceOptions, emit,
     for_each_arrival, survival_at, survival_probability, trace_photons,

@@ -1,10 +1,10 @@
 //! The photon map: stored photons, the light-path vertices they refer to, and the grid.
 
-use bdpm_scene::Scene;
 use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::grid::{GridQuery, HashGrid};
+use crate::scene::PhotonScene;
 use crate::trace::{PathVertex, TraceOptions, trace_chunks};
 
 /// A stored photon: an arrival at a surface after ≥ 1 scattering (method.md §1). The first
@@ -16,10 +16,10 @@ pub struct Photon {
     pub position: Vec3,
     /// Power E_p, W per channel; already includes Φ/N_F.
     pub power: Vec3,
-    /// Index into [`PhotonMap::vertices`] of the previous vertex y_p (where it was scattered
+    /// Index into [`PhotonMap::vertices()`] of the previous vertex y_p (where it was scattered
     /// from); that vertex's depth is one less than this photon's.
     pub prev: u32,
-    /// Index into [`PhotonMap::vertices`] of this photon's own arrival vertex (its incoming
+    /// Index into [`PhotonMap::vertices()`] of this photon's own arrival vertex (its incoming
     /// direction, normal, material and depth).
     pub vertex: u32,
 }
@@ -90,19 +90,21 @@ enum Scan {
 
 /// The photons of one pass in a hashed uniform grid for fixed-radius gathers.
 ///
-/// `photons` is kept in grid (bucket) order; `vertices` in path order (each path's vertices
+/// [`Self::photons`] are kept in grid (bucket) order; [`Self::vertices`] in path order (each path's vertices
 /// consecutive, paths in photon-index order), so `Photon::prev` and `Photon::vertex` stay
 /// valid. Every field is a pure function of the scene, [`TraceOptions`] and the radius.
 #[derive(Clone, Debug)]
 pub struct PhotonMap {
-    /// Stored photons (depth ≥ 1 arrivals), sorted by grid bucket.
-    pub photons: Vec<Photon>,
+    /// Stored photons (depth ≥ 1 arrivals), sorted by grid bucket. Private with `positions`
+    /// and `grid`: they are derived together, and editing one alone would make queries wrong
+    /// without any error.
+    photons: Vec<Photon>,
     /// `photons[i].position` for every i, packed densely: the range test of a gather reads
     /// only these 12 bytes per candidate, so the candidates of a query share fewer cache lines
     /// and the array stays in the last-level cache for a million photons.
     positions: Vec<Vec3>,
     /// Every light-path vertex of the pass (depth 0 included), in path order.
-    pub vertices: Vec<PathVertex>,
+    vertices: Vec<PathVertex>,
     grid: HashGrid,
     radius: f32,
     emitted: u64,
@@ -114,7 +116,11 @@ impl PhotonMap {
     ///
     /// # Panics
     /// If `radius` is not positive and finite, or the pass stores ≥ 2³² − 1 photons or vertices.
-    pub fn trace(scene: &Scene, options: &TraceOptions, radius: f32) -> PhotonMap {
+    pub fn trace<S: PhotonScene + ?Sized>(
+        scene: &S,
+        options: &TraceOptions,
+        radius: f32,
+    ) -> PhotonMap {
         let chunks = trace_chunks(
             scene,
             options,
@@ -306,7 +312,7 @@ impl PhotonMap {
     }
 
     /// [`Self::finish_query`] that also passes each photon's index into
-    /// [`PhotonMap::photons`], so that a caller can keep per-photon data of its own in a
+    /// [`PhotonMap::photons()`], so that a caller can keep per-photon data of its own in a
     /// parallel array (photons of one grid cell are stored together, so such reads stay
     /// mostly sequential).
     #[inline]
@@ -319,6 +325,32 @@ impl PhotonMap {
             }
             Scan::No | Scan::Overflow => self.scan(q, |i| f(i, &self.photons[i])),
         }
+    }
+
+    /// The stored photons, in grid (bucket) order: the index a query reports
+    /// ([`Self::finish_query_indexed`]) is an index into this slice.
+    #[inline]
+    pub fn photons(&self) -> &[Photon] {
+        &self.photons
+    }
+
+    /// `photons()[i].position` for every i, m, packed densely (what the range test reads).
+    #[inline]
+    pub fn positions(&self) -> &[Vec3] {
+        &self.positions
+    }
+
+    /// Every light-path vertex of the pass (depth 0 included), in path order: the targets of
+    /// [`Photon::prev`] and [`Photon::vertex`].
+    #[inline]
+    pub fn vertices(&self) -> &[PathVertex] {
+        &self.vertices
+    }
+
+    /// Takes the map apart into its photons (grid order) and vertices, e.g. to rebuild it
+    /// with [`Self::from_parts`] after editing photons.
+    pub fn into_parts(self) -> (Vec<Photon>, Vec<PathVertex>) {
+        (self.photons, self.vertices)
     }
 
     /// The path vertex with index `i` (a [`Photon::prev`] or [`Photon::vertex`]).

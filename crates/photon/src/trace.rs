@@ -3,7 +3,9 @@
 use bdpm_bdf::{Bdf, Outgoing};
 use bdpm_geometry::sampling::uniform_sphere;
 use bdpm_geometry::{Domain, Rng};
-use bdpm_scene::{Scene, Shading, WeightVertex};
+use bdpm_scene::{Shading, WeightVertex};
+
+use crate::scene::PhotonScene;
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -90,15 +92,20 @@ pub struct Emission {
 }
 
 /// Emits one photon of a pass of `photons` (N_F) photons: `u_light` picks a light with
-/// probability proportional to its flux luminance ([`Scene::pick_light`]), `u_dir` an isotropic
-/// direction. Returns `None` only if the picked light has zero probability (cannot happen for
-/// `u_light` in [0, 1)) or `photons` is 0.
-pub fn emit(scene: &Scene, u_light: f32, u_dir: [f32; 2], photons: u64) -> Option<Emission> {
+/// probability [`PhotonScene::pick_light`] (bdpm's scene: proportional to flux luminance),
+/// `u_dir` an isotropic direction. Returns `None` only if the picked light has zero
+/// probability (cannot happen for `u_light` in [0, 1)) or `photons` is 0.
+pub fn emit<S: PhotonScene + ?Sized>(
+    scene: &S,
+    u_light: f32,
+    u_dir: [f32; 2],
+    photons: u64,
+) -> Option<Emission> {
     let (light, p) = scene.pick_light(u_light);
     if p.is_nan() || p <= 0.0 || photons == 0 {
         return None;
     }
-    let l = &scene.lights[light];
+    let l = scene.light(light);
     Some(Emission {
         light,
         light_probability: p,
@@ -127,7 +134,7 @@ pub fn survival_at(bdf: &Bdf, incoming: &Outgoing) -> f32 {
 /// The BDF sample drawn at an arrival (before the roulette decision).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Scatter {
-    /// Unit world direction leaving the surface, on the side of the vertex normal ([`WeightVertex::n`] of [`PathVertex::at`]).
+    /// Unit world direction leaving the surface, on the side of the vertex normal ([`PathVertex::at`]`.n`).
     pub direction: Vec3,
     /// BDF value f(ω_in, ω_out), sr⁻¹.
     pub f: Vec3,
@@ -164,8 +171,8 @@ pub struct PhotonArrival {
 /// Traces the pass described by `options` and calls `visit` for every arrival, in parallel and
 /// in no particular order (`visit` must synchronise itself). For deterministic accumulation use
 /// [`trace_photons`], which keeps the order.
-pub fn for_each_arrival(
-    scene: &Scene,
+pub fn for_each_arrival<S: PhotonScene + ?Sized>(
+    scene: &S,
     options: &TraceOptions,
     visit: impl Fn(&PhotonArrival) + Sync,
 ) {
@@ -178,8 +185,8 @@ pub fn for_each_arrival(
 ///
 /// `visit` sees every arrival, depth 0 included (filter on `arrival.vertex.depth >= 1` for
 /// stored photons), and may push any number of records of its own type.
-pub fn trace_photons<R: Send>(
-    scene: &Scene,
+pub fn trace_photons<R: Send, S: PhotonScene + ?Sized>(
+    scene: &S,
     options: &TraceOptions,
     visit: impl Fn(&PhotonArrival, &mut Vec<R>) + Sync,
 ) -> Vec<R> {
@@ -194,8 +201,8 @@ pub fn trace_photons<R: Send>(
 /// The parallel driver: one accumulator per fixed chunk of photon indices, returned in chunk
 /// order. `new(chunk)` makes a chunk's accumulator; `visit` is called for each arrival of the
 /// chunk's photons, sequentially and in path order.
-pub(crate) fn trace_chunks<A: Send>(
-    scene: &Scene,
+pub(crate) fn trace_chunks<A: Send, S: PhotonScene + ?Sized>(
+    scene: &S,
     options: &TraceOptions,
     new: impl Fn(u64) -> A + Sync,
     visit: impl Fn(&mut A, &PhotonArrival) + Sync,
@@ -215,8 +222,8 @@ pub(crate) fn trace_chunks<A: Send>(
 }
 
 /// The random walk of photon `index` of the pass.
-fn trace_one(
-    scene: &Scene,
+fn trace_one<S: PhotonScene + ?Sized>(
+    scene: &S,
     options: &TraceOptions,
     index: u64,
     visit: &mut impl FnMut(&PhotonArrival),
@@ -239,12 +246,13 @@ fn trace_one(
     let mut power = e.power;
     let mut previous: Option<PathVertex> = None;
     let mut depth: u32 = 0;
-    while let Some(hit) = scene.geometry.intersect(origin, dir, f32::INFINITY) {
+    while let Some(sh) = scene.intersect(origin, dir) {
         let incoming = -dir;
-        let sh = scene.shade(&hit, incoming);
-        let bdf = scene.bdf(sh.material);
-        let in_local = bdf.outgoing(sh.frame.to_local(incoming));
-        let survival = survival_at(bdf, &in_local);
+        // The random numbers are drawn in a fixed order whatever happens, so that a visitor's
+        // view of one arrival never shifts the stream of another.
+        let u_rr = rng.uniform();
+        let u_bdf = rng.uniform3();
+        let (survival, sample) = scene.scatter(&sh, incoming, u_bdf);
         let mut vertex = PathVertex {
             // The visibility bits are filled below once it is known whether the path goes on.
             at: WeightVertex::at(&sh, 0),
@@ -253,21 +261,9 @@ fn trace_one(
             depth: depth as u16,
             survival,
         };
-        // The random numbers are drawn in a fixed order whatever happens, so that a visitor's
-        // view of one arrival never shifts the stream of another.
-        let u_rr = rng.uniform();
-        let u_bdf = rng.uniform3();
-        let scatter = bdf.sample_at(&in_local, u_bdf).and_then(|s| {
-            let direction = sh.frame.to_world(s.wi);
-            // The shading normal may disagree with the geometric one; a direction that would
-            // pass through the surface carries no light (no transmission in our models).
-            (sh.ng.dot(direction) > 0.0).then_some(Scatter {
-                direction,
-                f: s.f,
-                pdf: s.pdf,
-                weight: s.weight,
-            })
-        });
+        // The shading normal may disagree with the geometric one; a direction that would pass
+        // through the surface carries no light (no transmission in our models).
+        let scatter = sample.filter(|s| sh.ng.dot(s.direction) > 0.0);
         let continued = scatter.is_some() && u_rr < survival && depth < max_depth;
         // Only a vertex the path leaves is some photon's previous vertex, the one place the
         // weights read light visibility: a path's last vertex would waste its shadow rays.

@@ -42,7 +42,7 @@ fn synthetic(positions: &[Vec3]) -> Vec<Photon> {
 /// Checks `for_each_near` against brute force at `queries` and returns the total hits.
 fn check_against_brute_force(photons: &[Photon], queries: &[Vec3], radius: f32) -> usize {
     let map = PhotonMap::from_parts(photons.to_vec(), vec![dummy_vertex()], 1, radius);
-    assert_eq!(map.photons.len(), photons.len());
+    assert_eq!(map.photons().len(), photons.len());
     let r2 = radius * radius;
     let mut total = 0;
     for &x in queries {
@@ -112,11 +112,11 @@ fn traced_map_queries_match_brute_force() {
     let map = PhotonMap::trace(&scene, &TraceOptions::new(20_000, 4, 1), 0.03);
     let mut rng = Rng::new(3, Domain::Other, [0; 3]);
     for _ in 0..100 {
-        let x = map.photons[(rng.uniform() * map.photons.len() as f32) as usize].position;
+        let x = map.photons()[(rng.uniform() * map.photons().len() as f32) as usize].position;
         let mut got: Vec<(u32, u32)> = Vec::new();
         map.for_each_near(x, |p| got.push((p.vertex, p.prev)));
         let mut want: Vec<(u32, u32)> = map
-            .photons
+            .photons()
             .iter()
             .filter(|p| (p.position - x).length_squared() <= 0.03 * 0.03)
             .map(|p| (p.vertex, p.prev))
@@ -127,11 +127,11 @@ fn traced_map_queries_match_brute_force() {
         assert_eq!(got, want);
     }
     // The grid holds every photon once (each has a unique arrival vertex).
-    let mut ids: Vec<u32> = map.photons.iter().map(|p| p.vertex).collect();
+    let mut ids: Vec<u32> = map.photons().iter().map(|p| p.vertex).collect();
     ids.sort_unstable();
     ids.dedup();
-    assert_eq!(ids.len(), map.photons.len());
-    assert!(map.memory_bytes() >= (map.photons.len() * 32 + map.vertices.len() * 56) as u64);
+    assert_eq!(ids.len(), map.photons().len());
+    assert!(map.memory_bytes() >= (map.photons().len() * 32 + map.vertices().len() * 56) as u64);
 }
 
 /// A box with an opaque shelf at y = 0.5 over x ∈ [0, 0.7] (full depth), a light above and a
@@ -162,12 +162,12 @@ fn shelf_scene(kd: f32) -> bdpm_scene::Scene {
 
 fn bits(map: &PhotonMap) -> Vec<u32> {
     let mut out = Vec::new();
-    for p in &map.photons {
+    for p in map.photons() {
         out.extend(p.position.to_array().map(f32::to_bits));
         out.extend(p.power.to_array().map(f32::to_bits));
         out.extend([p.prev, p.vertex]);
     }
-    for v in &map.vertices {
+    for v in map.vertices() {
         for w in [v.at.p, v.at.n, v.incoming] {
             out.extend(w.to_array().map(f32::to_bits));
         }
@@ -196,7 +196,7 @@ fn map_is_identical_on_one_and_two_threads() {
         pool.install(|| PhotonMap::trace(&scene, &options, 0.02))
     };
     let (a, b) = (run(1), run(2));
-    assert!(a.photons.len() > 10_000);
+    assert!(a.photons().len() > 10_000);
     assert_eq!(bits(&a), bits(&b));
     // Another pass is a different stream.
     options.pass = 4;
@@ -210,8 +210,8 @@ fn photons_point_back_to_their_previous_vertex() {
     let mut options = TraceOptions::new(20_000, 5, 0);
     options.light_visibility = true;
     let map = PhotonMap::trace(&scene, &options, 0.02);
-    assert!(!map.photons.is_empty());
-    for p in &map.photons {
+    assert!(!map.photons().is_empty());
+    for p in map.photons() {
         let v = map.vertex(p.vertex);
         let y = map.vertex(p.prev);
         assert_eq!(v.at.p, p.position);
@@ -231,7 +231,7 @@ fn photons_point_back_to_their_previous_vertex() {
         assert!(v.at.n.dot(v.incoming) > 0.0);
         assert!(y.at.n.dot(-v.incoming) > 0.0);
     }
-    for v in &map.vertices {
+    for v in map.vertices() {
         let frame = bdpm_geometry::Frame::from_normal(v.at.n);
         let q = survival_probability(scene.bdf(v.at.material), frame.to_local(v.incoming));
         assert_eq!(q.to_bits(), v.survival.to_bits());
@@ -253,7 +253,7 @@ fn light_visibility_bits_match_analytic_shadows() {
     let map = PhotonMap::trace(&scene, &options, 0.02);
     let (mut checked, mut set, mut shelf_back) = (0, 0, 0);
     // Visibility is recorded where the weights read it: at each photon's previous vertex.
-    for v in map.photons.iter().map(|p| map.vertex(p.prev)) {
+    for v in map.photons().iter().map(|p| map.vertex(p.prev)) {
         for (l, light) in scene.lights.iter().enumerate() {
             let to = light.position - v.at.p;
             // A vertex on the shelf itself sees only the lights on its own side; that is the
@@ -287,7 +287,7 @@ fn light_visibility_bits_match_analytic_shadows() {
 
     // Without the option no bits are set.
     let plain = PhotonMap::trace(&scene, &TraceOptions::new(2_000, 8, 0), 0.02);
-    assert!(plain.vertices.iter().all(|v| v.at.lights == 0));
+    assert!(plain.vertices().iter().all(|v| v.at.lights == 0));
 }
 
 /// In a closed box every path ends by absorption at its last vertex, which is nobody's previous
@@ -299,7 +299,7 @@ fn light_visibility_is_recorded_only_where_paths_continue() {
     options.light_visibility = true;
     let map = PhotonMap::trace(&scene, &options, 0.02);
     let last: Vec<_> = map
-        .vertices
+        .vertices()
         .windows(2)
         .filter(|w| w[1].depth == 0)
         .map(|w| w[0])
@@ -307,14 +307,14 @@ fn light_visibility_is_recorded_only_where_paths_continue() {
     assert!(last.len() > 1_000, "{}", last.len());
     assert!(last.iter().all(|v| v.at.lights == 0));
     let prev_lit = map
-        .photons
+        .photons()
         .iter()
         .filter(|p| map.vertex(p.prev).at.lights != 0)
         .count();
     assert!(
-        prev_lit > map.photons.len() / 2,
+        prev_lit > map.photons().len() / 2,
         "{prev_lit} of {}",
-        map.photons.len()
+        map.photons().len()
     );
 }
 
@@ -324,12 +324,12 @@ fn depth_cap_ends_non_absorbing_paths() {
     let mut options = TraceOptions::new(5_000, 1, 0);
     options.max_depth = 3;
     let map = PhotonMap::trace(&scene, &options, 0.05);
-    let max = map.vertices.iter().map(|v| v.depth).max().unwrap();
+    let max = map.vertices().iter().map(|v| v.depth).max().unwrap();
     assert_eq!(max, 3);
     // White walls: roulette alone (q = 0.95) ends paths; powers are Φ/(N·0.95^depth).
     options.max_depth = 1024;
     let map = PhotonMap::trace(&scene, &options, 0.05);
-    for p in &map.photons {
+    for p in map.photons() {
         let d = map.vertex(p.vertex).depth as i32;
         let want = 1.0 / (5_000.0 * 0.95f32.powi(d));
         assert!((p.power.x - want).abs() < 1e-4 * want);

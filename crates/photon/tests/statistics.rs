@@ -121,9 +121,9 @@ fn stored_power_equals_analytic_indirect_power() {
     let map = PhotonMap::trace(&scene, &TraceOptions::new(n, 3, 7), 0.01);
 
     // Per-path sums: paths are runs of vertices starting at depth 0.
-    let mut path_of = Vec::with_capacity(map.vertices.len());
+    let mut path_of = Vec::with_capacity(map.vertices().len());
     let mut paths = 0usize;
-    for v in &map.vertices {
+    for v in map.vertices() {
         if v.depth == 0 {
             paths += 1;
         }
@@ -131,7 +131,7 @@ fn stored_power_equals_analytic_indirect_power() {
     }
     assert_eq!(paths as u64, n);
     let mut per_path = vec![DVec3::ZERO; paths];
-    for p in &map.photons {
+    for p in map.photons() {
         per_path[path_of[p.vertex as usize]] += p.power.as_dvec3();
     }
     let total: DVec3 = per_path.iter().sum();

@@ -1,0 +1,93 @@
+//! What photon tracing needs from a scene, as a trait: a renderer with its own scene type
+//! implements [`PhotonScene`] and gets bdpm's photon walk, photon map and radiance-cache pass.
+
+use bdpm_scene::{PointLight, Scene, Shading};
+use glam::Vec3;
+
+use crate::trace::{Scatter, survival_at};
+
+/// The scene queries of the photon random walk (method.md §1). Every method must be a pure
+/// function of its arguments (the walk's determinism rests on it) and callable from many
+/// threads at once.
+///
+/// Units: positions in m, flux in W per RGB channel, directions unit vectors, pdfs per
+/// steradian. Surfaces are two-sided and there is no transmission.
+///
+/// Use [`Shading`] for a surface point (position, geometric normal and shading frame facing
+/// the arrival side, material and triangle indices): the photon records
+/// ([`PathVertex`](crate::PathVertex)) store those fields for the MIS weights.
+pub trait PhotonScene: Sync {
+    /// Chooses the light that emits a photon, for `u` uniform in [0, 1): its index and the
+    /// probability p_l with which it was chosen (bdpm picks in proportion to flux
+    /// luminance). A probability ≤ 0 (or NaN) means no photon is emitted.
+    fn pick_light(&self, u: f32) -> (usize, f32);
+
+    /// Light `index` (a point light: position, m; flux, W per channel).
+    fn light(&self, index: usize) -> PointLight;
+
+    /// The first surface hit by the ray from `origin` along the unit direction `dir` (no
+    /// distance limit), shaded to face back along the ray (towards −`dir`).
+    fn intersect(&self, origin: Vec3, dir: Vec3) -> Option<Shading>;
+
+    /// At the surface point `sh`, for light arriving from the unit world direction
+    /// `incoming` (pointing away from the surface): the Russian-roulette survival
+    /// probability q (dimensionless; it must depend only on the point and `incoming`, as the
+    /// weights of method.md §8 recompute it, see [`crate::survival_probability`]) and a BDF
+    /// sample drawn with the uniform numbers `u`, the direction in world space. `None` if
+    /// sampling failed. The tracer drops samples below the geometric normal itself.
+    fn scatter(&self, sh: &Shading, incoming: Vec3, u: [f32; 3]) -> (f32, Option<Scatter>);
+
+    /// The origin of a ray leaving `sh` along `dir`, pushed off the surface so that it does
+    /// not hit it again, m.
+    fn spawn(&self, sh: &Shading, dir: Vec3) -> Vec3;
+
+    /// Bit l set iff light l (l < 32) is visible from `sh` on the side of its normal; asked
+    /// only when [`TraceOptions::light_visibility`](crate::TraceOptions::light_visibility) is
+    /// on (the MIS weights read it at photons' previous vertices).
+    fn visible_light_mask(&self, sh: &Shading) -> u32;
+}
+
+/// bdpm's own scene: flux-proportional light choice, its BVH, its BDFs (shading-frame
+/// sampling, q = [`survival_at`]) and [`Scene::visible_light_mask`].
+impl PhotonScene for Scene {
+    #[inline]
+    fn pick_light(&self, u: f32) -> (usize, f32) {
+        Scene::pick_light(self, u)
+    }
+
+    #[inline]
+    fn light(&self, index: usize) -> PointLight {
+        self.lights[index]
+    }
+
+    #[inline]
+    fn intersect(&self, origin: Vec3, dir: Vec3) -> Option<Shading> {
+        self.geometry
+            .intersect(origin, dir, f32::INFINITY)
+            .map(|hit| self.shade(&hit, -dir))
+    }
+
+    #[inline]
+    fn scatter(&self, sh: &Shading, incoming: Vec3, u: [f32; 3]) -> (f32, Option<Scatter>) {
+        let bdf = self.bdf(sh.material);
+        let in_local = bdf.outgoing(sh.frame.to_local(incoming));
+        let survival = survival_at(bdf, &in_local);
+        let scatter = bdf.sample_at(&in_local, u).map(|s| Scatter {
+            direction: sh.frame.to_world(s.wi),
+            f: s.f,
+            pdf: s.pdf,
+            weight: s.weight,
+        });
+        (survival, scatter)
+    }
+
+    #[inline]
+    fn spawn(&self, sh: &Shading, dir: Vec3) -> Vec3 {
+        Scene::spawn(self, sh, dir)
+    }
+
+    #[inline]
+    fn visible_light_mask(&self, sh: &Shading) -> u32 {
+        Scene::visible_light_mask(self, sh)
+    }
+}
