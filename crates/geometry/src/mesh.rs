@@ -153,6 +153,39 @@ struct Tri {
     area: f32,
     material: u32,
     smooth: bool,
+    /// Least barycentric weight of each vertex in a reported hit (see [`inset`]).
+    inset: [f32; 3],
+}
+
+/// Largest inset weight: three of them sum to less than one, so every triangle keeps a
+/// non-empty inset region (a very small triangle's hits all move near its centroid).
+const MAX_INSET: f32 = 0.3;
+
+/// Barycentrics (b1, b2) moved at least `m[i]` of the way from each edge towards the opposite
+/// vertex i (b0 = 1 − b1 − b2): a hit point then lies at least one spawn offset inside its
+/// triangle, never on the seam with a neighbouring surface.
+///
+/// Why: the spawn offset moves a ray's origin off its own surface only. A hit within rounding
+/// of a seam (on the floor where it meets a wall, say) lies on the wall's plane or just beyond
+/// it, so a ray leaving it towards the wall met the wall at t ≤ 0, which the triangle test
+/// rejects, and escaped from the box (about 1 in 10³ of the rays leaving points within
+/// 10⁻⁴ m of the Cornell box's seams; tests/seams.rs). Held one offset away from every edge,
+/// and then one offset off its surface, the origin is about an offset inside both planes of a
+/// right-angled seam, and the wall is met at t > 0, well inside its own edges.
+#[inline]
+fn inset(b1: f32, b2: f32, m: [f32; 3]) -> (f32, f32) {
+    let mut b1 = b1.max(m[1]);
+    let mut b2 = b2.max(m[2]);
+    let excess = m[0] - (1.0 - b1 - b2);
+    if excess > 0.0 {
+        // Take the excess from b1 and b2 in proportion to how far each lies above its own
+        // least weight, so neither drops below it.
+        let (s1, s2) = (b1 - m[1], b2 - m[2]);
+        let k = excess / (s1 + s2);
+        b1 -= s1 * k;
+        b2 -= s2 * k;
+    }
+    (b1, b2)
 }
 
 /// A surface point found by a ray.
@@ -160,13 +193,16 @@ struct Tri {
 pub struct Hit {
     /// Ray parameter (distance along a unit direction), metres.
     pub t: f32,
-    /// Position, metres (interpolated from the vertices, not `o + t·d`, for precision).
+    /// Position, metres (interpolated from the vertices, not `o + t·d`, for precision). It lies
+    /// at least [`Geometry::spawn_offset`] inside the triangle's edges (a hit nearer an edge is
+    /// moved that far along the surface), so that a ray leaving it never starts on or beyond
+    /// the plane of a neighbouring surface.
     pub p: Vec3,
     /// Unit geometric normal of the triangle (front side by winding).
     pub ng: Vec3,
     /// Unit shading normal (interpolated vertex normals, on the same side as `ng`), or `ng`.
     pub ns: Vec3,
-    /// Barycentric coordinates (b1, b2) of the hit; v0's weight is 1 − b1 − b2.
+    /// Barycentric coordinates (b1, b2) of `p`; v0's weight is 1 − b1 − b2.
     pub uv: Vec2,
     /// Index of the triangle in the original mesh (degenerate triangles keep their index).
     pub prim: u32,
@@ -508,6 +544,15 @@ impl Geometry {
                     smooth = true;
                 }
             }
+            // Vertex i's height over the opposite edge is 2·area / |edge|, so a weight of
+            // offset / height holds the point one offset from that edge.
+            let offset = magnitude * RELATIVE_OFFSET;
+            let inset = if valid {
+                [(v[1], v[2]), (v[2], v[0]), (v[0], v[1])]
+                    .map(|(a, b)| (offset * (b - a).length() / (2.0 * area)).min(MAX_INSET))
+            } else {
+                [0.0; 3]
+            };
             tris.push(Tri {
                 v,
                 n,
@@ -515,6 +560,7 @@ impl Geometry {
                 area: if valid { area } else { 0.0 },
                 material: mesh.materials[i],
                 smooth,
+                inset,
             });
         }
         let live: Vec<u32> = (0..tris.len() as u32)
@@ -613,7 +659,7 @@ impl Geometry {
         let bary = self.rt[leaf].barycentric(origin, dir);
         let prim = self.leaf_to_prim[leaf];
         let tri = &self.tris[prim as usize];
-        let (b1, b2) = (bary.x, bary.y);
+        let (b1, b2) = inset(bary.x, bary.y, tri.inset);
         let b0 = 1.0 - b1 - b2;
         let p = tri.v[0] * b0 + tri.v[1] * b1 + tri.v[2] * b2;
         let ns = if tri.smooth {
