@@ -652,11 +652,13 @@ impl Geometry {
     #[inline]
     pub fn intersect(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
         let ray = make_ray(origin, dir, tmax);
-        let (leaf, t) = match &self.accel {
+        let (leaf, t, bary) = match &self.accel {
             Accel::Bvh4(bvh) => self.closest_bvh4(bvh, &ray)?,
-            Accel::Cwbvh(bvh) => self.closest_cwbvh(bvh, &ray)?,
+            Accel::Cwbvh(bvh) => {
+                let (leaf, t) = self.closest_cwbvh(bvh, &ray)?;
+                (leaf, t, self.rt[leaf].barycentric(origin, dir))
+            }
         };
-        let bary = self.rt[leaf].barycentric(origin, dir);
         let prim = self.leaf_to_prim[leaf];
         let tri = &self.tris[prim as usize];
         let (b1, b2) = inset(bary.x, bary.y, tri.inset);
@@ -697,7 +699,7 @@ impl Geometry {
                 let mut occluded = false;
                 let boxray = BoxRay::new(ray.origin, ray.direction);
                 bvh.traverse(&boxray, ray.tmax, false, |packet, _| {
-                    let t = bvh.tris[packet].intersect(&boxray, ray.tmax);
+                    let (t, _, _) = bvh.tris[packet].intersect(&boxray, ray.tmax);
                     occluded = t.cmplt(Vec4::splat(ray.tmax)).any();
                     occluded
                 });
@@ -721,20 +723,22 @@ impl Geometry {
         }
     }
 
-    /// The closest hit on the 4-wide BVH: (leaf triangle slot, t).
+    /// The closest hit on the 4-wide BVH: (leaf triangle slot, t, barycentrics). The
+    /// barycentrics are the test's own, which are `LeafTri::barycentric`'s bits (the same
+    /// operations), so they need not be computed again.
     #[inline(always)]
-    fn closest_bvh4(&self, bvh: &Bvh4, ray: &Ray) -> Option<(usize, f32)> {
+    fn closest_bvh4(&self, bvh: &Bvh4, ray: &Ray) -> Option<(usize, f32, Vec2)> {
         let mut best = None;
         let boxray = BoxRay::new(ray.origin, ray.direction);
         bvh.traverse(&boxray, ray.tmax, true, |packet, tmax| {
-            let t = bvh.tris[packet].intersect(&boxray, *tmax);
+            let (t, u, v) = bvh.tris[packet].intersect(&boxray, *tmax);
             let nearest = t.min_element();
             if nearest < *tmax {
                 // The first lane at the nearest distance, as the scalar test in lane order
                 // (which replaces a hit only by a strictly nearer one) would pick.
                 let lane = t.cmpeq(Vec4::splat(nearest)).bitmask().trailing_zeros() as usize;
                 *tmax = nearest;
-                best = Some((4 * packet + lane, nearest));
+                best = Some((4 * packet + lane, nearest, Vec2::new(u[lane], v[lane])));
             }
             false
         });

@@ -104,9 +104,10 @@ impl Tri4 {
     /// operations in the same order on each lane (glam's `Vec3A` cross product is
     /// `a.y·b.z − a.z·b.y, …` and its dot product `(x + y) + z`, without fused multiply-adds on
     /// the x86_64 baseline), so each lane's distance has the same bits as the scalar test's.
-    /// Returns `t` in units of |d| per lane, or +∞ for a miss.
+    /// Returns per lane `t` in units of |d| (+∞ for a miss) and the barycentrics (u, v) of
+    /// the point where the ray meets the lane's plane.
     #[inline(always)]
-    pub(crate) fn intersect(&self, ray: &BoxRay, tmax: f32) -> Vec4 {
+    pub(crate) fn intersect(&self, ray: &BoxRay, tmax: f32) -> (Vec4, Vec4, Vec4) {
         let p = cross(&ray.d, &self.e2);
         let det = dot(&self.e1, &p);
         let inv = Vec4::ONE / det;
@@ -126,7 +127,7 @@ impl Tri4 {
             & (u + v).cmple(Vec4::ONE)
             & t.cmpgt(Vec4::ZERO)
             & t.cmplt(Vec4::splat(tmax));
-        Vec4::select(inside, t, Vec4::INFINITY)
+        (Vec4::select(inside, t, Vec4::INFINITY), u, v)
     }
 }
 
