@@ -5,6 +5,11 @@
 //! something. The box is closed but for its front (the plane z = 0), so a ray that misses must
 //! have left through the front opening: one that misses and crosses z = 0 outside the opening
 //! (or never crosses it) escaped through a wall.
+//!
+//! Before the fix 694 of 1.9 M such rays escaped: a hit within rounding of a seam lay on the
+//! neighbouring wall's plane (or just beyond it), the spawn offset moved it off its own surface
+//! only, and the ray met the wall at t ≤ 0, which the triangle test rejects. Hit points are
+//! now held one spawn offset inside their triangle's edges (`Hit::p`).
 
 use bdpm_geometry::sampling::uniform_sphere;
 use bdpm_geometry::{Domain, Rng};
