@@ -337,8 +337,8 @@ fn emit(
     };
     // Pull up the children of the largest inner child until there are four: large boxes are
     // the ones most rays enter, so splitting them tightens the test most. A child small enough
-    // to be a leaf is kept whole: splitting it would leave lanes of two packets empty, and
-    // the extra memory cost more than the tighter boxes saved on the 130k-triangle mesh.
+    // to be a leaf is kept whole: splitting it leaves lanes of two packets empty, and was no
+    // faster on the 130k-triangle mesh (docs/performance.md, round two).
     while kids.len() < 4 {
         let best = kids
             .iter()
