@@ -5,7 +5,7 @@
 //!   by `Geometry::spawn_offset` along the normal, directions uniform on the normal's hemisphere.
 //! - `occluded`: shadow segments, 65,536 per iteration, from such points to other sampled
 //!   surface points (each also pushed off its surface).
-//! - `bvh_build`: `Geometry::new` (validation and CWBVH build) of the large mesh, in
+//! - `bvh_build`: `Geometry::new` (validation and 4-wide BVH build) of the large mesh, in
 //!   triangles per second.
 //! - `coincident_20k`: `Geometry::new` of 20,000 identical quads and of 20,000 quads stacked
 //!   1 µm apart (the BVH build must stay O(n log n) on coincident input).
