@@ -1,4 +1,5 @@
-//! The BVH build: a top-down binned-SAH binary BVH, collapsed into obvhs's compressed wide BVH.
+//! The BVH build: a top-down binned-SAH binary BVH, collapsed into a 4-wide BVH (`crate::wide`,
+//! the default) or into obvhs's compressed wide BVH (`Kernel::Cwbvh`).
 //!
 //! Why not obvhs's own builder (PLOC): PLOC merges mutual nearest neighbours, and among
 //! coincident or nearly coincident triangles every neighbour is (nearly) as near as every other,
