@@ -5,7 +5,7 @@
 //!   by `Geometry::spawn_offset` along the normal, directions uniform on the normal's hemisphere.
 //! - `occluded`: shadow segments, 65,536 per iteration, from such points to other sampled
 //!   surface points (each also pushed off its surface).
-//! - `bvh_build`: `Geometry::new` (validation and CWBVH build) of the large mesh, in
+//! - `bvh_build`: `Geometry::new` (validation and 4-wide BVH build) of the large mesh, in
 //!   triangles per second.
 //! - `coincident_20k`: `Geometry::new` of 20,000 identical quads and of 20,000 quads stacked
 //!   1 µm apart (the BVH build must stay O(n log n) on coincident input).
@@ -18,6 +18,10 @@
 //! benchmark runs on a rayon pool of 1 and of 2 threads (the argument). Inputs are fixed-seed
 //! and made before timing.
 //!
+//! Each ray benchmark runs on every [`Kernel`]: `bvh4` (the default, 4-wide BVH with f32
+//! boxes) and `cwbvh` (obvhs's compressed 8-wide BVH, which it replaced), on the same queries;
+//! the CWBVH runs on 1 thread only.
+//!
 //! Run: `cargo bench -p bdpm-suite --bench rays` (append e.g. `-- --sample-count 5` for a
 //! quick look, or a filter such as `-- sphere`).
 
@@ -25,7 +29,7 @@ use std::f32::consts::PI;
 use std::sync::LazyLock;
 
 use bdpm_geometry::sampling::uniform_sphere;
-use bdpm_geometry::{Domain, Geometry, Rng, TriangleMesh};
+use bdpm_geometry::{Domain, Geometry, Kernel, Rng, TriangleMesh};
 use bdpm_load::load_scene;
 use bdpm_suite::{scene_path, thread_pool};
 use divan::Bencher;
@@ -65,6 +69,19 @@ struct Workload {
     geometry: Geometry,
     rays: Vec<Ray>,
     segments: Vec<Segment>,
+}
+
+/// The same triangles (flat, with their materials) as `geometry`, built for `kernel`. Surface
+/// sampling does not depend on the kernel, so [`Workload::new`] draws the same queries on it.
+fn with_kernel(geometry: &Geometry, kernel: Kernel) -> Geometry {
+    let mut mesh = TriangleMesh::default();
+    for prim in 0..geometry.triangle_count() as u32 {
+        let base = mesh.positions.len() as u32;
+        mesh.positions.extend(geometry.vertices(prim));
+        mesh.indices.push([base, base + 1, base + 2]);
+        mesh.materials.push(geometry.material(prim));
+    }
+    Geometry::with_kernel(mesh, kernel).expect("valid mesh")
 }
 
 impl Workload {
@@ -189,6 +206,13 @@ static CORNELL: LazyLock<Workload> = LazyLock::new(|| {
     Workload::new(loaded.scene.geometry, Some(eye), 0)
 });
 
+static CORNELL_CWBVH: LazyLock<Workload> = LazyLock::new(|| {
+    let loaded = load_scene(&scene_path("cornell-lambert.toml")).unwrap_or_else(|e| panic!("{e}"));
+    let eye = loaded.scene.camera.position;
+    let geometry = with_kernel(&loaded.scene.geometry, Kernel::Cwbvh);
+    Workload::new(geometry, Some(eye), 0)
+});
+
 static SPHERE_MESH: LazyLock<TriangleMesh> = LazyLock::new(|| {
     let mesh = sphere_on_floor();
     assert!(mesh.triangle_count() >= 100_000);
@@ -198,6 +222,11 @@ static SPHERE_MESH: LazyLock<TriangleMesh> = LazyLock::new(|| {
 static SPHERE: LazyLock<Workload> = LazyLock::new(|| {
     let geometry = Geometry::new(SPHERE_MESH.clone()).expect("valid mesh");
     assert_eq!(geometry.degenerate_count(), 0);
+    Workload::new(geometry, None, 1)
+});
+
+static SPHERE_CWBVH: LazyLock<Workload> = LazyLock::new(|| {
+    let geometry = Geometry::with_kernel(SPHERE_MESH.clone(), Kernel::Cwbvh).expect("valid mesh");
     Workload::new(geometry, None, 1)
 });
 
@@ -214,6 +243,16 @@ mod cornell_lambert {
     fn occluded(bencher: Bencher, threads: usize) {
         CORNELL.bench_occluded(bencher, threads);
     }
+
+    #[divan::bench(args = [1], sample_count = 20)]
+    fn intersect_cwbvh(bencher: Bencher, threads: usize) {
+        CORNELL_CWBVH.bench_intersect(bencher, threads);
+    }
+
+    #[divan::bench(args = [1], sample_count = 20)]
+    fn occluded_cwbvh(bencher: Bencher, threads: usize) {
+        CORNELL_CWBVH.bench_occluded(bencher, threads);
+    }
 }
 
 /// The UV sphere of 130,560 triangles on a floor quad.
@@ -228,6 +267,16 @@ mod sphere_130k {
     #[divan::bench(args = THREADS, sample_count = 20)]
     fn occluded(bencher: Bencher, threads: usize) {
         SPHERE.bench_occluded(bencher, threads);
+    }
+
+    #[divan::bench(args = [1], sample_count = 20)]
+    fn intersect_cwbvh(bencher: Bencher, threads: usize) {
+        SPHERE_CWBVH.bench_intersect(bencher, threads);
+    }
+
+    #[divan::bench(args = [1], sample_count = 20)]
+    fn occluded_cwbvh(bencher: Bencher, threads: usize) {
+        SPHERE_CWBVH.bench_occluded(bencher, threads);
     }
 
     /// `Geometry::new` of the mesh, counted in triangles; the mesh is cloned outside the timer.

@@ -1,4 +1,5 @@
-//! The BVH build: a top-down binned-SAH binary BVH, collapsed into obvhs's compressed wide BVH.
+//! The BVH build: a top-down binned-SAH binary BVH, collapsed into a 4-wide BVH (`crate::wide`,
+//! the default) or into obvhs's compressed wide BVH (`Kernel::Cwbvh`).
 //!
 //! Why not obvhs's own builder (PLOC): PLOC merges mutual nearest neighbours, and among
 //! coincident or nearly coincident triangles every neighbour is (nearly) as near as every other,
@@ -42,6 +43,21 @@ pub(crate) fn build(tris: &[[Vec3; 3]]) -> CwBvh {
         bvh
     } else {
         collapse(&binary(tris, 0))
+    }
+}
+
+/// Builds the 4-wide BVH over `tris` from the same binary tree as [`build`]; its `order`
+/// indexes `tris`. As there, a tree deeper than the traversal accepts is rebuilt with median
+/// splits, whose binary depth ⌈log₂ n⌉ ≤ 32 bounds the wide tree's.
+pub(crate) fn build4(tris: &[[Vec3; 3]]) -> crate::wide::Bvh4 {
+    let n = tris.len().max(1);
+    let log2 = usize::BITS - (n - 1).leading_zeros();
+    let sah_depth = 64usize.saturating_sub(log2 as usize);
+    let bvh = crate::wide::collapse(&binary(tris, sah_depth), tris);
+    if bvh.depth() <= crate::wide::MAX_DEPTH {
+        bvh
+    } else {
+        crate::wide::collapse(&binary(tris, 0), tris)
     }
 }
 

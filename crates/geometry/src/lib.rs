@@ -3,8 +3,9 @@
 //! This crate owns what every higher layer needs of space and chance:
 //! - [`TriangleMesh`]: an indexed triangle soup with optional vertex normals and one opaque
 //!   material index per triangle;
-//! - [`Geometry`]: the mesh with a compressed-wide BVH (obvhs CWBVH) for closest-hit and
-//!   occlusion queries, per-triangle areas and area-weighted surface sampling;
+//! - [`Geometry`]: the mesh with a BVH for closest-hit and occlusion queries (a 4-wide BVH with
+//!   f32 boxes by default, obvhs's compressed CWBVH as the [`Kernel`] it replaced), per-triangle
+//!   areas and area-weighted surface sampling;
 //! - [`Frame`] and the [`sampling`] warps (cosine hemisphere, uniform sphere);
 //! - [`Rng`]: deterministic random streams keyed by (seed, domain, indices), so that every
 //!   sample is a pure function of its keys whatever the thread count.
@@ -32,8 +33,9 @@ mod mesh;
 mod prefetch;
 mod rng;
 pub mod sampling;
+mod wide;
 
 pub use frame::Frame;
-pub use mesh::{Geometry, GeometryError, Hit, MAX_COORDINATE, SurfaceSample, TriangleMesh};
+pub use mesh::{Geometry, GeometryError, Hit, Kernel, MAX_COORDINATE, SurfaceSample, TriangleMesh};
 pub use prefetch::prefetch;
 pub use rng::{Domain, Rng};

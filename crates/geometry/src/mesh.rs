@@ -7,6 +7,7 @@ use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::ray::{Ray, RayHit};
 
 use crate::sampling::uniform_triangle;
+use crate::wide::{BoxRay, Bvh4, PADDING};
 
 /// An indexed triangle soup: positions (m), optional per-vertex normals, and one opaque material
 /// index per triangle.
@@ -152,6 +153,39 @@ struct Tri {
     area: f32,
     material: u32,
     smooth: bool,
+    /// Least barycentric weight of each vertex in a reported hit (see [`inset`]).
+    inset: [f32; 3],
+}
+
+/// Largest inset weight: three of them sum to less than one, so every triangle keeps a
+/// non-empty inset region (a very small triangle's hits all move near its centroid).
+const MAX_INSET: f32 = 0.3;
+
+/// Barycentrics (b1, b2) moved at least `m[i]` of the way from each edge towards the opposite
+/// vertex i (b0 = 1 − b1 − b2): a hit point then lies at least one spawn offset inside its
+/// triangle, never on the seam with a neighbouring surface.
+///
+/// Why: the spawn offset moves a ray's origin off its own surface only. A hit within rounding
+/// of a seam (on the floor where it meets a wall, say) lies on the wall's plane or just beyond
+/// it, so a ray leaving it towards the wall met the wall at t ≤ 0, which the triangle test
+/// rejects, and escaped from the box (about 1 in 10³ of the rays leaving points within
+/// 10⁻⁴ m of the Cornell box's seams; tests/seams.rs). Held one offset away from every edge,
+/// and then one offset off its surface, the origin is about an offset inside both planes of a
+/// right-angled seam, and the wall is met at t > 0, well inside its own edges.
+#[inline]
+fn inset(b1: f32, b2: f32, m: [f32; 3]) -> (f32, f32) {
+    let mut b1 = b1.max(m[1]);
+    let mut b2 = b2.max(m[2]);
+    let excess = m[0] - (1.0 - b1 - b2);
+    if excess > 0.0 {
+        // Take the excess from b1 and b2 in proportion to how far each lies above its own
+        // least weight, so neither drops below it.
+        let (s1, s2) = (b1 - m[1], b2 - m[2]);
+        let k = excess / (s1 + s2);
+        b1 -= s1 * k;
+        b2 -= s2 * k;
+    }
+    (b1, b2)
 }
 
 /// A surface point found by a ray.
@@ -159,13 +193,16 @@ struct Tri {
 pub struct Hit {
     /// Ray parameter (distance along a unit direction), metres.
     pub t: f32,
-    /// Position, metres (interpolated from the vertices, not `o + t·d`, for precision).
+    /// Position, metres (interpolated from the vertices, not `o + t·d`, for precision). It lies
+    /// at least [`Geometry::spawn_offset`] inside the triangle's edges (a hit nearer an edge is
+    /// moved that far along the surface), so that a ray leaving it never starts on or beyond
+    /// the plane of a neighbouring surface.
     pub p: Vec3,
     /// Unit geometric normal of the triangle (front side by winding).
     pub ng: Vec3,
     /// Unit shading normal (interpolated vertex normals, on the same side as `ng`), or `ng`.
     pub ns: Vec3,
-    /// Barycentric coordinates (b1, b2) of the hit; v0's weight is 1 − b1 − b2.
+    /// Barycentric coordinates (b1, b2) of `p`; v0's weight is 1 − b1 − b2.
     pub uv: Vec2,
     /// Index of the triangle in the original mesh (degenerate triangles keep their index).
     pub prim: u32,
@@ -186,6 +223,25 @@ pub struct SurfaceSample {
     pub pdf_area: f32,
 }
 
+/// The BVH and traversal behind [`Geometry::intersect`] and [`Geometry::occluded`]. Both find
+/// the same closest hits with the same triangle test; they differ in speed only (and, for a
+/// ray meeting two triangles at exactly the same distance, possibly in which one is reported).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Kernel {
+    /// A 4-wide BVH with uncompressed f32 boxes in SoA layout, ordered traversal.
+    #[default]
+    Bvh4,
+    /// obvhs's compressed 8-wide BVH (quantised boxes) with our box and triangle tests; kept
+    /// for the benchmark that compares the two.
+    Cwbvh,
+}
+
+/// The acceleration structure of one [`Kernel`].
+enum Accel {
+    Bvh4(Bvh4),
+    Cwbvh(CwBvh),
+}
+
 /// A mesh with its BVH: closest-hit and occlusion queries, areas and surface sampling.
 ///
 /// Triangles whose area is zero (or below 1e-20 m²) are kept out of the BVH and counted in
@@ -196,7 +252,7 @@ pub struct Geometry {
     rt: Vec<LeafTri>,
     /// Leaf index → original triangle index.
     leaf_to_prim: Vec<u32>,
-    bvh: CwBvh,
+    accel: Accel,
     area_cdf: Vec<f64>,
     total_area: f64,
     degenerate: usize,
@@ -413,8 +469,13 @@ fn local_origin(mesh: &TriangleMesh) -> Vec3 {
 }
 
 impl Geometry {
-    /// Validates the mesh and builds the BVH.
+    /// Validates the mesh and builds the BVH of the default [`Kernel`].
     pub fn new(mesh: TriangleMesh) -> Result<Geometry, GeometryError> {
+        Geometry::with_kernel(mesh, Kernel::default())
+    }
+
+    /// Validates the mesh and builds the BVH of `kernel`.
+    pub fn with_kernel(mesh: TriangleMesh, kernel: Kernel) -> Result<Geometry, GeometryError> {
         if mesh.materials.len() != mesh.indices.len() {
             return Err(GeometryError::MaterialCount {
                 triangles: mesh.indices.len(),
@@ -483,6 +544,15 @@ impl Geometry {
                     smooth = true;
                 }
             }
+            // Vertex i's height over the opposite edge is 2·area / |edge|, so a weight of
+            // offset / height holds the point one offset from that edge.
+            let offset = magnitude * RELATIVE_OFFSET;
+            let inset = if valid {
+                [(v[1], v[2]), (v[2], v[0]), (v[0], v[1])]
+                    .map(|(a, b)| (offset * (b - a).length() / (2.0 * area)).min(MAX_INSET))
+            } else {
+                [0.0; 3]
+            };
             tris.push(Tri {
                 v,
                 n,
@@ -490,6 +560,7 @@ impl Geometry {
                 area: if valid { area } else { 0.0 },
                 material: mesh.materials[i],
                 smooth,
+                inset,
             });
         }
         let live: Vec<u32> = (0..tris.len() as u32)
@@ -513,16 +584,26 @@ impl Geometry {
             .collect();
         let duplicates = tris.len() - degenerate - live.len();
         let live_vertices: Vec<[Vec3; 3]> = live.iter().map(|&i| tris[i as usize].v).collect();
-        let bvh = crate::build::build(&live_vertices);
-        let leaf_to_prim: Vec<u32> = bvh
-            .primitive_indices
+        let (accel, order) = match kernel {
+            Kernel::Bvh4 => {
+                let mut bvh = crate::build::build4(&live_vertices);
+                let order = std::mem::take(&mut bvh.order);
+                (Accel::Bvh4(bvh), order)
+            }
+            Kernel::Cwbvh => {
+                let bvh = crate::build::build(&live_vertices);
+                let order = bvh.primitive_indices.clone();
+                (Accel::Cwbvh(bvh), order)
+            }
+        };
+        // Padding lanes of the 4-wide leaves never report a hit; they map to triangle 0.
+        let leaf_to_prim: Vec<u32> = order
             .iter()
-            .map(|&j| live[j as usize])
+            .map(|&j| if j == PADDING { 0 } else { live[j as usize] })
             .collect();
-        let rt = bvh
-            .primitive_indices
+        let rt = leaf_to_prim
             .iter()
-            .map(|&j| LeafTri::new(tris[live[j as usize] as usize].v))
+            .map(|&prim| LeafTri::new(tris[prim as usize].v))
             .collect();
         let mut area_cdf = Vec::with_capacity(tris.len());
         let mut acc = 0.0f64;
@@ -534,7 +615,7 @@ impl Geometry {
             tris,
             rt,
             leaf_to_prim,
-            bvh,
+            accel,
             area_cdf,
             total_area: acc,
             degenerate,
@@ -571,35 +652,16 @@ impl Geometry {
     #[inline]
     pub fn intersect(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
         let ray = make_ray(origin, dir, tmax);
-        let mut hit = RayHit::none();
-        // obvhs's traversal macro rather than `CwBvh::ray_traverse`: the same traversal, with
-        // the triangle test inlined in it instead of called through a closure per triangle.
-        let mut traverse_ray = ray;
-        let mut state = self.bvh.new_traversal(ray.direction);
-        let mut node;
-        obvhs::traverse!(
-            self.bvh,
-            node,
-            state,
-            node_hits(node, &traverse_ray, state.oct_inv4),
-            {
-                let t = self.rt[state.primitive_id as usize].intersect(&traverse_ray);
-                if t < traverse_ray.tmax {
-                    hit.primitive_id = state.primitive_id;
-                    hit.t = t;
-                    traverse_ray.tmax = t;
-                }
+        let (leaf, t, bary) = match &self.accel {
+            Accel::Bvh4(bvh) => self.closest_bvh4(bvh, &ray)?,
+            Accel::Cwbvh(bvh) => {
+                let (leaf, t) = self.closest_cwbvh(bvh, &ray)?;
+                (leaf, t, self.rt[leaf].barycentric(origin, dir))
             }
-        );
-        let found = hit.t < ray.tmax;
-        if !found {
-            return None;
-        }
-        let leaf = hit.primitive_id as usize;
-        let bary = self.rt[leaf].barycentric(origin, dir);
+        };
         let prim = self.leaf_to_prim[leaf];
         let tri = &self.tris[prim as usize];
-        let (b1, b2) = (bary.x, bary.y);
+        let (b1, b2) = inset(bary.x, bary.y, tri.inset);
         let b0 = 1.0 - b1 - b2;
         let p = tri.v[0] * b0 + tri.v[1] * b1 + tri.v[2] * b2;
         let ns = if tri.smooth {
@@ -615,7 +677,7 @@ impl Geometry {
             tri.ng
         };
         Some(Hit {
-            t: hit.t,
+            t,
             p,
             ng: tri.ng,
             ns,
@@ -632,25 +694,81 @@ impl Geometry {
         let d = to - from;
         // Stop just short of `to` so that a light on a surface is not shadowed by that surface.
         let ray = make_ray(from, d, 1.0 - 1e-5);
-        // As in `intersect`: `CwBvh::ray_traverse_miss` with the triangle test inlined.
-        let mut state = self.bvh.new_traversal(ray.direction);
-        let mut node;
-        let mut occluded = false;
-        'traversal: {
-            obvhs::traverse!(
-                self.bvh,
-                node,
-                state,
-                node_hits(node, &ray, state.oct_inv4),
-                {
-                    if self.rt[state.primitive_id as usize].intersect(&ray) < ray.tmax {
-                        occluded = true;
-                        break 'traversal;
-                    }
+        match &self.accel {
+            Accel::Bvh4(bvh) => {
+                let mut occluded = false;
+                let boxray = BoxRay::new(ray.origin, ray.direction);
+                bvh.traverse(&boxray, ray.tmax, false, |packet, _| {
+                    let (t, _, _) = bvh.tris[packet].intersect(&boxray, ray.tmax);
+                    occluded = t.cmplt(Vec4::splat(ray.tmax)).any();
+                    occluded
+                });
+                occluded
+            }
+            Accel::Cwbvh(bvh) => {
+                // `CwBvh::ray_traverse_miss` with the triangle test inlined.
+                let mut state = bvh.new_traversal(ray.direction);
+                let mut node;
+                let mut occluded = false;
+                'traversal: {
+                    obvhs::traverse!(bvh, node, state, node_hits(node, &ray, state.oct_inv4), {
+                        if self.rt[state.primitive_id as usize].intersect(&ray) < ray.tmax {
+                            occluded = true;
+                            break 'traversal;
+                        }
+                    });
                 }
-            );
+                occluded
+            }
         }
-        occluded
+    }
+
+    /// The closest hit on the 4-wide BVH: (leaf triangle slot, t, barycentrics). The
+    /// barycentrics are the test's own, which are `LeafTri::barycentric`'s bits (the same
+    /// operations), so they need not be computed again.
+    #[inline(always)]
+    fn closest_bvh4(&self, bvh: &Bvh4, ray: &Ray) -> Option<(usize, f32, Vec2)> {
+        let mut best = None;
+        let boxray = BoxRay::new(ray.origin, ray.direction);
+        bvh.traverse(&boxray, ray.tmax, true, |packet, tmax| {
+            let (t, u, v) = bvh.tris[packet].intersect(&boxray, *tmax);
+            let nearest = t.min_element();
+            if nearest < *tmax {
+                // The first lane at the nearest distance, as the scalar test in lane order
+                // (which replaces a hit only by a strictly nearer one) would pick.
+                let lane = t.cmpeq(Vec4::splat(nearest)).bitmask().trailing_zeros() as usize;
+                *tmax = nearest;
+                best = Some((4 * packet + lane, nearest, Vec2::new(u[lane], v[lane])));
+            }
+            false
+        });
+        best
+    }
+
+    /// The closest hit on obvhs's CWBVH: (leaf triangle slot, t).
+    #[inline(always)]
+    fn closest_cwbvh(&self, bvh: &CwBvh, ray: &Ray) -> Option<(usize, f32)> {
+        let mut hit = RayHit::none();
+        // obvhs's traversal macro rather than `CwBvh::ray_traverse`: the same traversal, with
+        // the triangle test inlined in it instead of called through a closure per triangle.
+        let mut traverse_ray = *ray;
+        let mut state = bvh.new_traversal(ray.direction);
+        let mut node;
+        obvhs::traverse!(
+            bvh,
+            node,
+            state,
+            node_hits(node, &traverse_ray, state.oct_inv4),
+            {
+                let t = self.rt[state.primitive_id as usize].intersect(&traverse_ray);
+                if t < traverse_ray.tmax {
+                    hit.primitive_id = state.primitive_id;
+                    hit.t = t;
+                    traverse_ray.tmax = t;
+                }
+            }
+        );
+        (hit.t < ray.tmax).then_some((hit.primitive_id as usize, hit.t))
     }
 
     /// Number of triangles in the original mesh (degenerate ones included).
@@ -669,9 +787,20 @@ impl Geometry {
         self.duplicates
     }
 
-    /// Number of levels of the wide BVH (at most 32, the depth obvhs's traversal stack holds).
+    /// Number of levels of the wide BVH (at most 32, the depth either traversal's stack holds).
     pub fn bvh_depth(&self) -> usize {
-        crate::build::wide_depth(&self.bvh)
+        match &self.accel {
+            Accel::Bvh4(bvh) => bvh.depth(),
+            Accel::Cwbvh(bvh) => crate::build::wide_depth(bvh),
+        }
+    }
+
+    /// The kernel behind this geometry's ray queries.
+    pub fn kernel(&self) -> Kernel {
+        match self.accel {
+            Accel::Bvh4(_) => Kernel::Bvh4,
+            Accel::Cwbvh(_) => Kernel::Cwbvh,
+        }
     }
 
     /// Area of triangle `prim`, m² (0 for a degenerate one).
@@ -790,6 +919,38 @@ mod tests {
             checked += 1;
         }
         assert_eq!(checked, 20_000);
+    }
+
+    /// The 4-wide BVH and the CWBVH run the same triangle test, so on rays where no two
+    /// triangles meet at exactly the same distance they report the same bits: the same
+    /// triangle, distance and point. A box with 300 random triangles inside.
+    #[test]
+    fn both_kernels_find_the_same_hits() {
+        let mut mesh = unit_box();
+        let mut rng = Rng::new(13, Domain::Other, [0; 3]);
+        for _ in 0..300 {
+            let c = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 0.8 + 0.1;
+            let v = [0, 1, 2].map(|_| c + (Vec3::from(rng.uniform3()) - 0.5) * 0.2);
+            let base = mesh.positions.len() as u32;
+            mesh.positions.extend_from_slice(&v);
+            mesh.indices.push([base, base + 1, base + 2]);
+            mesh.materials.push(6);
+        }
+        let a = Geometry::with_kernel(mesh.clone(), Kernel::Bvh4).unwrap();
+        let b = Geometry::with_kernel(mesh, Kernel::Cwbvh).unwrap();
+        assert_eq!((a.kernel(), b.kernel()), (Kernel::Bvh4, Kernel::Cwbvh));
+        for _ in 0..20_000 {
+            let o = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 0.9 + 0.05;
+            let d = crate::sampling::uniform_sphere(rng.uniform2());
+            let tmax = if rng.uniform() < 0.5 {
+                0.3
+            } else {
+                f32::INFINITY
+            };
+            assert_eq!(a.intersect(o, d, tmax), b.intersect(o, d, tmax), "{o} {d}");
+            let to = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform());
+            assert_eq!(a.occluded(o, to), b.occluded(o, to), "{o} {to}");
+        }
     }
 
     #[test]
