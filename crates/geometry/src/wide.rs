@@ -158,7 +158,10 @@ impl BoxRay {
         // 0·MAX = 0 (not NaN) for a plane through the origin, and MAX·|difference| overflows
         // to the infinity of the right sign for any other plane, as 1/0 would.
         let inv = (Vec3A::ONE / dir).clamp(Vec3A::splat(-f32::MAX), Vec3A::splat(f32::MAX));
-        let neg = dir.cmplt(Vec3A::ZERO).bitmask() as usize;
+        // Planes are ordered by the reciprocal's sign, not the direction's: 1/(−0) = −∞ is
+        // negative while −0 < 0 is false, and ordering by the latter swapped near and far and
+        // missed every box (tests/signed_zero.rs in bdpm-geometry).
+        let neg = inv.cmplt(Vec3A::ZERO).bitmask() as usize;
         let s = [neg & 1, (neg >> 1) & 1, (neg >> 2) & 1];
         BoxRay {
             o: [
