@@ -55,13 +55,15 @@ pub fn with_mode(
     spp: u32,
     photons: u64,
 ) -> RenderSettings {
-    RenderSettings {
-        mode: Mode::parse(mode).unwrap_or_else(|| panic!("unknown mode {mode}")),
+    let mut s = RenderSettings {
         passes,
         spp,
         photons,
         ..settings.clone()
-    }
+    };
+    // Like `--mode`: a threshold mode gets the settings' threshold radius.
+    s.select(Mode::parse(mode).unwrap_or_else(|| panic!("unknown mode {mode}")));
+    s
 }
 
 /// The sphere furnace's parameters (method.md §10), read back from the loaded scene.

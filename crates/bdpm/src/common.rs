@@ -2,7 +2,7 @@
 //! pool and the user-facing error type.
 use std::path::{Path, PathBuf};
 
-use bdpm_integrator::{Mode, NoiseModel, RenderSettings};
+use bdpm_integrator::{Mode, NoiseModel, RenderSettings, Setting};
 use bdpm_load::{LoadReport, load_scene};
 use bdpm_scene::Scene;
 use clap::Args;
@@ -105,17 +105,16 @@ pub(crate) fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
 /// Applies command-line overrides to the settings loaded from the scene file.
 pub(crate) fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> CliResult<()> {
     if let Some(name) = &o.mode {
-        settings.mode = Mode::parse(name).ok_or_else(|| {
+        let mode = Mode::parse(name).ok_or_else(|| {
             format!(
                 "--mode: unknown mode '{name}'; expected one of {}",
                 Mode::names().join(", ")
             )
         })?;
+        // A scene file's `threshold_radius` stays the threshold mode's radius.
+        settings.select(mode);
     }
     if let Some(p) = o.passes {
-        if p == 0 {
-            return Err("--passes must be at least 1".into());
-        }
         settings.passes = p;
     }
     if let Some((w, h)) = o.resolution {
@@ -123,15 +122,9 @@ pub(crate) fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> C
         settings.height = h;
     }
     if let Some(n) = o.photons {
-        if n == 0 {
-            return Err("--photons must be at least 1".into());
-        }
         settings.photons = n;
     }
     if let Some(n) = o.spp {
-        if n == 0 {
-            return Err("--spp must be at least 1".into());
-        }
         settings.spp = n;
     }
     if let Some(r) = o.radius {
@@ -145,8 +138,7 @@ pub(crate) fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> C
                 "--radius must be a positive number of metres below 3.4e38, not {r}"
             ));
         }
-        let r = bdpm_integrator::check_radius(r as f32).map_err(|e| format!("--radius: {e}"))?;
-        settings.radius = Some(r);
+        settings.radius = Some(r as f32);
     }
     if o.no_jitter {
         settings.pixel_jitter = false;
@@ -162,7 +154,18 @@ pub(crate) fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> C
     if let Some(s) = o.seed {
         settings.seed = s;
     }
-    Ok(())
+    // The scene file's values were validated by the loader, so an error here is a flag's.
+    settings.validate().map_err(|e| {
+        let flag = match e.setting() {
+            Setting::Width | Setting::Height => "--resolution".to_string(),
+            Setting::Passes => "--passes".into(),
+            Setting::Photons => "--photons".into(),
+            Setting::Spp => "--spp".into(),
+            Setting::Radius => "--radius".into(),
+            other => format!("render.{}", other.key()),
+        };
+        format!("{flag}: {e}")
+    })
 }
 
 pub(crate) fn thread_pool(threads: Option<usize>) -> CliResult<rayon::ThreadPool> {

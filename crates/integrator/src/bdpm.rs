@@ -794,5 +794,5 @@ impl<'a> Mix<'a> {
 /// The default merge radius for `scene`: its largest bounding-box extent / 1600, metres.
 pub fn scene_default_radius(scene: &Scene) -> f32 {
     let (lo, hi) = scene.geometry.bounds();
-    crate::settings::default_radius((hi - lo).max_element())
+    bdpm_settings::default_radius((hi - lo).max_element())
 }

@@ -11,7 +11,8 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::render::{PassOutput, accumulate};
-use crate::settings::{RenderSettings, pixel_offset};
+use crate::settings::pixel_offset;
+use bdpm_settings::RenderSettings;
 
 /// Renders one pass of the `light` reference.
 pub(crate) fn render_light_pass(

@@ -46,8 +46,8 @@ use rayon::prelude::*;
 
 use crate::bdpm::{FirstVertex, Mix};
 use crate::render::{RenderError, Renderer};
-use crate::settings::{Mode, PINHOLE_TABLE_RAYS};
 use crate::table::footprint_overlap;
+use bdpm_settings::PINHOLE_TABLE_RAYS;
 
 /// Jittered primary rays per pixel for T_jitter (method.md §12 leaves this term out; 16 gives
 /// its per-pixel value to about ±35 %, far less over blocks of pixels).
@@ -110,11 +110,8 @@ impl Renderer<'_> {
     /// error. Deterministic: the directions come from the `PixelTable` stream keyed by pixel
     /// (distinct from the A/B rays' keys), the jittered rays likewise.
     pub fn predict_variance(&self) -> Result<Prediction, RenderError> {
-        let Mode::Bdpm(h) = self.settings().mode else {
-            return Err(RenderError::Settings(format!(
-                "mode '{}' has no noise model to predict",
-                self.settings().mode
-            )));
+        let Some(h) = self.heuristic() else {
+            return Err(RenderError::NoNoiseModel(self.settings().mode));
         };
         self.predict_variance_for(h)
     }
@@ -127,18 +124,14 @@ impl Renderer<'_> {
     /// built it (an `optimal*` mode); otherwise the error says so.
     pub fn predict_variance_for(&self, h: Heuristic) -> Result<Prediction, RenderError> {
         if h.needs().pixel_table && !self.pixel_table().is_some_and(|t| t.has_terms()) {
-            return Err(RenderError::Settings(format!(
-                "the weights '{}' need the pixel table's A and B, which mode '{}' does not build",
-                h.name(),
-                self.settings().mode
-            )));
+            return Err(RenderError::NoPixelTable {
+                weights: h.name(),
+                mode: self.settings().mode,
+            });
         }
         let mut mix = self.mix(h);
         if mix.cache.is_none() {
-            return Err(RenderError::Settings(
-                "the noise model needs the radiance cache: build the renderer with with_model_inputs()"
-                    .into(),
-            ));
+            return Err(RenderError::NoCache);
         }
         // The model needs L₀ and L_d at x₁ for every mode; these needs change only what the
         // pair carries, not the weights (a mode reads only the fields it needs).
