@@ -185,8 +185,8 @@ fn sphere_on_floor() -> TriangleMesh {
 
 static CORNELL: LazyLock<Workload> = LazyLock::new(|| {
     let loaded = load_scene(&scene_path("cornell-lambert.toml")).unwrap_or_else(|e| panic!("{e}"));
-    let eye = loaded.scene.camera.position;
-    Workload::new(loaded.scene.geometry, Some(eye), 0)
+    let eye = loaded.scene.camera().position();
+    Workload::new(loaded.scene.into_geometry(), Some(eye), 0)
 });
 
 static SPHERE_MESH: LazyLock<TriangleMesh> = LazyLock::new(|| {

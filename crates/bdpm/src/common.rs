@@ -218,10 +218,9 @@ pub(crate) fn prepare(path: &Path, overrides: &Overrides) -> CliResult<Prepared>
     let mut scene = loaded.scene;
     let mut settings = loaded.settings;
     apply_overrides(&mut settings, overrides)?;
-    if (scene.camera.width, scene.camera.height) != (settings.width, settings.height) {
-        scene.camera = scene
-            .camera
-            .with_resolution(settings.width, settings.height)
+    if (scene.camera().width(), scene.camera().height()) != (settings.width, settings.height) {
+        scene
+            .set_resolution(settings.width, settings.height)
             .map_err(|e| format!("--resolution: {e}"))?;
     }
     Ok(Prepared {

@@ -460,7 +460,7 @@ pub(crate) fn write_exr(
     attributes: &[(String, String)],
 ) -> Result<(), String> {
     let channels = film_channels(film, &[], Precision::Float);
-    write_channels(path, (film.width, film.height), channels, attributes)
+    write_channels(path, (film.width(), film.height()), channels, attributes)
 }
 
 /// The film's mean, `noise` and `stderr` RGB layers, then `extra`, at `precision`.
@@ -497,7 +497,7 @@ pub(crate) fn stage_exr_with_layers(
 ) -> Result<Staged, String> {
     let channels = film_channels(film, extra, precision);
     stage(path, |f| {
-        encode_channels(f, (film.width, film.height), channels, attributes)
+        encode_channels(f, (film.width(), film.height()), channels, attributes)
     })
 }
 
@@ -641,7 +641,7 @@ pub(crate) fn encode_png(film: &Film) -> Result<Vec<u8>, String> {
         .flat_map(|c| [c.x, c.y, c.z])
         .map(|v| (srgb(v * k) * 255.0 + 0.5) as u8)
         .collect();
-    encode_png_rgb8(film.width, film.height, &rgb)
+    encode_png_rgb8(film.width(), film.height(), &rgb)
 }
 
 /// Writes the tonemapped preview of the mean atomically (see [`encode_png`]).

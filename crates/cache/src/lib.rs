@@ -222,7 +222,7 @@ impl RadianceCache {
             (settings.bins.max(1) as f32).sqrt().round().max(1.0) as u32
         };
         let side_bins = (grid * grid) as usize;
-        let g = &scene.geometry;
+        let g = &scene.geometry();
         let n_tris = g.triangle_count();
         let mut first_cell = Vec::with_capacity(n_tris);
         let mut subdivision = Vec::with_capacity(n_tris);

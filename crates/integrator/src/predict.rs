@@ -167,11 +167,13 @@ impl Renderer<'_> {
     fn pixel_terms(&self, mix: &Mix<'_>, h: Heuristic, x: u32, y: u32) -> Option<Terms> {
         let scene = self.scene();
         let s = self.settings();
-        let cam = &scene.camera;
+        let cam = &scene.camera();
         let pixel = y as u64 * s.width as u64 + x as u64;
         let centre = (x as f32 + 0.5, y as f32 + 0.5);
         let dir = cam.ray_direction(centre.0, centre.1);
-        let hit0 = scene.geometry.intersect(cam.position, dir, f32::INFINITY)?;
+        let hit0 = scene
+            .geometry()
+            .intersect(cam.position(), dir, f32::INFINITY)?;
         let x0 = mix.first_vertex(&hit0, -dir)?;
 
         let n_b = s.spp as f64;
@@ -241,7 +243,7 @@ impl Renderer<'_> {
         pixel: u64,
     ) -> f64 {
         let scene = self.scene();
-        let cam = &scene.camera;
+        let cam = &scene.camera();
         let seed = self.settings().seed;
         let cache = mix.cache;
         let n0 = centre.sh.ng;
@@ -254,8 +256,8 @@ impl Renderer<'_> {
             let [jx, jy] = rng.uniform2();
             let dir = cam.ray_direction(x as f32 + jx, y as f32 + jy);
             let value = scene
-                .geometry
-                .intersect(cam.position, dir, f32::INFINITY)
+                .geometry()
+                .intersect(cam.position(), dir, f32::INFINITY)
                 .map_or(0.0, |hit| {
                     let u = -dir;
                     let sh = scene.shade(&hit, u);
@@ -296,7 +298,7 @@ fn direction(
         return None;
     }
     let hit1 = scene
-        .geometry
+        .geometry()
         .intersect(scene.spawn(&x0.sh, v), v, f32::INFINITY)?;
     let wo1 = -v;
     let sh1 = scene.shade(&hit1, wo1);
@@ -340,7 +342,7 @@ fn direction(
 
     // L₀(x₁→x₀) light by light, as BDD=1 evaluates it (shading normal, visibility bits).
     let (mut l0_w, mut l0_w0_sq) = (0.0f64, 0.0f64);
-    for l in 0..scene.lights.len() {
+    for l in 0..scene.lights().len() {
         let c = scene.direct_from_masked(&sh1, wo1, l, x1.lights);
         let c = luminance(c) as f64;
         if c == 0.0 {

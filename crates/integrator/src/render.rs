@@ -135,9 +135,9 @@ impl<'a> Renderer<'a> {
     pub fn new(scene: &'a Scene, settings: &RenderSettings) -> Result<Renderer<'a>, RenderError> {
         let s = settings;
         s.validate()?;
-        if (scene.camera.width, scene.camera.height) != (s.width, s.height) {
+        if (scene.camera().width(), scene.camera().height()) != (s.width, s.height) {
             return Err(RenderError::Resolution {
-                camera: (scene.camera.width, scene.camera.height),
+                camera: (scene.camera().width(), scene.camera().height()),
                 settings: (s.width, s.height),
             });
         }
@@ -236,7 +236,7 @@ impl<'a> Renderer<'a> {
     fn build_cache(&mut self) {
         let s = &self.settings;
         let start = std::time::Instant::now();
-        let (lo, hi) = self.scene.geometry.bounds();
+        let (lo, hi) = self.scene.geometry().bounds();
         let settings = CacheSettings {
             bins: s.cache_bins,
             cell_size: (hi - lo).max_element() / CACHE_CELLS_PER_EXTENT,
@@ -540,7 +540,7 @@ pub fn render_path_pass(
 ) -> PassOutput {
     debug_assert_eq!(settings.mode, Mode::Path);
     let (w, h) = (settings.width, settings.height);
-    let cam = &scene.camera;
+    let cam = &scene.camera();
     let start = std::time::Instant::now();
     let dropped = AtomicU64::new(0);
     let mut estimates = vec![DVec3::ZERO; w as usize * h as usize];
@@ -561,7 +561,13 @@ pub fn render_path_pass(
                     // The numbers are drawn either way, so the streams do not depend on the setting.
                     let [jx, jy] = pixel_offset(rng.uniform2(), settings.pixel_jitter);
                     let dir = cam.ray_direction(x as f32 + jx, y as f32 + jy);
-                    let l = trace_path(scene, cam.position, dir, &mut rng, settings.roulette_depth);
+                    let l = trace_path(
+                        scene,
+                        cam.position(),
+                        dir,
+                        &mut rng,
+                        settings.roulette_depth,
+                    );
                     accumulate(&mut sum, l, &mut row_dropped);
                 }
                 *px = sum / settings.spp as f64;
@@ -599,7 +605,7 @@ pub struct FirstHitLayers {
 /// whose bits it does not touch.
 pub fn first_hit_layers(scene: &Scene, settings: &RenderSettings) -> FirstHitLayers {
     let (w, h) = (settings.width as usize, settings.height as usize);
-    let cam = &scene.camera;
+    let cam = &scene.camera();
     let spp = settings.spp.max(1);
     let mut pixels = vec![(DVec3::ZERO, DVec3::ZERO); w * h];
     pixels.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
@@ -610,7 +616,10 @@ pub fn first_hit_layers(scene: &Scene, settings: &RenderSettings) -> FirstHitLay
                 let mut rng = Rng::new(settings.seed, Domain::Camera, [0, pixel, s as u64]);
                 let [jx, jy] = pixel_offset(rng.uniform2(), settings.pixel_jitter);
                 let dir = cam.ray_direction(x as f32 + jx, y as f32 + jy);
-                let Some(hit) = scene.geometry.intersect(cam.position, dir, f32::INFINITY) else {
+                let Some(hit) = scene
+                    .geometry()
+                    .intersect(cam.position(), dir, f32::INFINITY)
+                else {
                     continue;
                 };
                 let wo = -dir;

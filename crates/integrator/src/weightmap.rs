@@ -42,27 +42,27 @@ impl Renderer<'_> {
             return Err(RenderError::PerLightPathWeights(h.name()));
         }
         let scene = self.scene();
-        let cam = &scene.camera;
+        let cam = &scene.camera();
         let dir = match target {
-            WeightTarget::Point(p) => (p - cam.position).normalize_or_zero(),
+            WeightTarget::Point(p) => (p - cam.position()).normalize_or_zero(),
             WeightTarget::Pixel(x, y) => {
-                if x >= cam.width || y >= cam.height {
+                if x >= cam.width() || y >= cam.height() {
                     return Err(RenderError::Target(TargetError::OutsideImage {
                         x,
                         y,
-                        width: cam.width,
-                        height: cam.height,
+                        width: cam.width(),
+                        height: cam.height(),
                     }));
                 }
                 cam.ray_direction(x as f32 + 0.5, y as f32 + 0.5)
             }
         };
         let hit = scene
-            .geometry
-            .intersect(cam.position, dir, f32::INFINITY)
+            .geometry()
+            .intersect(cam.position(), dir, f32::INFINITY)
             .ok_or(RenderError::Target(TargetError::NoSurface))?;
         if let WeightTarget::Point(p) = target {
-            let d = (p - cam.position).length();
+            let d = (p - cam.position()).length();
             if (hit.p - p).length() > 1e-3 + 1e-3 * d {
                 return Err(RenderError::Target(TargetError::Hidden {
                     point: p,
@@ -87,7 +87,7 @@ impl Renderer<'_> {
             // The footprint of the image point that sees x₀.
             let image_point = cam
                 .project(x0.sh.p)
-                .unwrap_or((cam.width as f32 * 0.5, cam.height as f32 * 0.5));
+                .unwrap_or((cam.width() as f32 * 0.5, cam.height() as f32 * 0.5));
             Some(pixel_weights(&mix, &x0, image_point, &spec, u64::MAX))
         } else {
             None
@@ -96,12 +96,13 @@ impl Renderer<'_> {
             camera_samples: p.camera_samples,
             ..mix.budget
         });
-        let (w, hgt) = (cam.width as usize, cam.height as usize);
+        let (w, hgt) = (cam.width() as usize, cam.height() as usize);
         let mut w0 = vec![f64::NAN; w * hgt];
         w0.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
             for (x, out) in row.iter_mut().enumerate() {
                 let d = cam.ray_direction(x as f32 + 0.5, y as f32 + 0.5);
-                let Some(hit1) = scene.geometry.intersect(cam.position, d, f32::INFINITY) else {
+                let Some(hit1) = scene.geometry().intersect(cam.position(), d, f32::INFINITY)
+                else {
                     continue;
                 };
                 let to = hit1.p - x0.sh.p;
@@ -133,8 +134,8 @@ impl Renderer<'_> {
             .map(|(x, y)| (x as u32, y as u32))
             .unwrap_or((0, 0));
         Ok(WeightMap {
-            width: cam.width,
-            height: cam.height,
+            width: cam.width(),
+            height: cam.height(),
             w0,
             x0: x0.sh.p,
             x0_pixel,

@@ -98,7 +98,7 @@ pub fn emit(scene: &Scene, u_light: f32, u_dir: [f32; 2], photons: u64) -> Optio
     if p.is_nan() || p <= 0.0 || photons == 0 {
         return None;
     }
-    let l = &scene.lights[light];
+    let l = scene.lights()[light];
     Some(Emission {
         light,
         light_probability: p,
@@ -239,7 +239,7 @@ fn trace_one(
     let mut power = e.power;
     let mut previous: Option<PathVertex> = None;
     let mut depth: u32 = 0;
-    while let Some(hit) = scene.geometry.intersect(origin, dir, f32::INFINITY) {
+    while let Some(hit) = scene.geometry().intersect(origin, dir, f32::INFINITY) {
         let incoming = -dir;
         let sh = scene.shade(&hit, incoming);
         let bdf = scene.bdf(sh.material);

@@ -124,16 +124,17 @@ pub struct Shading {
 }
 
 /// Geometry, materials, lights and camera of one render.
+///
+/// The parts are read through accessors and fixed at [`Scene::new`]: the light-selection
+/// CDF is built from the lights, the lights and the camera are moved into the geometry's
+/// frame, and every triangle's material index is checked, so changing one part alone would
+/// leave the others wrong. [`Scene::set_resolution`] changes the one thing that can change.
 #[derive(Debug)]
 pub struct Scene {
-    /// Surfaces and BVH; its frame (world minus [`Geometry::origin`]) is the scene's frame.
-    pub geometry: Geometry,
-    /// Materials indexed by the triangles' material index.
-    pub materials: Vec<Material>,
-    /// Point lights, positions in the geometry's frame.
-    pub lights: Vec<PointLight>,
-    /// The camera, position in the geometry's frame.
-    pub camera: Camera,
+    geometry: Geometry,
+    materials: Vec<Material>,
+    lights: Vec<PointLight>,
+    camera: Camera,
     light_cdf: Vec<f32>,
 }
 
@@ -185,6 +186,41 @@ impl Scene {
             camera,
             light_cdf,
         })
+    }
+
+    /// Surfaces and BVH; its frame (world minus [`Geometry::origin`]) is the scene's frame.
+    #[inline]
+    pub fn geometry(&self) -> &Geometry {
+        &self.geometry
+    }
+
+    /// The geometry alone, the rest of the scene dropped (for benchmarks of the ray kernel).
+    pub fn into_geometry(self) -> Geometry {
+        self.geometry
+    }
+
+    /// Materials indexed by the triangles' material index.
+    #[inline]
+    pub fn materials(&self) -> &[Material] {
+        &self.materials
+    }
+
+    /// Point lights, positions in the geometry's frame (metres).
+    #[inline]
+    pub fn lights(&self) -> &[PointLight] {
+        &self.lights
+    }
+
+    /// The camera, position in the geometry's frame (metres).
+    #[inline]
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
+    /// Gives the camera another image size (the field of view stays vertical).
+    pub fn set_resolution(&mut self, width: u32, height: u32) -> Result<(), SceneError> {
+        self.camera = self.camera.with_resolution(width, height)?;
+        Ok(())
     }
 
     /// The scattering model of a material index.

@@ -7,13 +7,17 @@ fn defaults_validate() {
 
 #[test]
 fn counts_out_of_range_name_their_setting() {
-    let mut s = RenderSettings::default();
-    s.spp = 0;
+    let s = RenderSettings {
+        spp: 0,
+        ..RenderSettings::default()
+    };
     let e = s.validate().unwrap_err();
     assert_eq!(e.setting(), Setting::Spp);
     assert_eq!(e.to_string(), "0 is outside [1, 4294967295]");
-    let mut s = RenderSettings::default();
-    s.pixel_table_rays = Some(limits::MAX_PIXEL_TABLE_RAYS + 1);
+    let s = RenderSettings {
+        pixel_table_rays: Some(limits::MAX_PIXEL_TABLE_RAYS + 1),
+        ..RenderSettings::default()
+    };
     assert_eq!(s.validate().unwrap_err().setting(), Setting::PixelTableRays);
 }
 
