@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use bdpm_bdf::Bdf;
 use bdpm_geometry::{Geometry, GeometryError, TriangleMesh};
-use bdpm_scene::{Camera, Material, PointLight, Scene, SceneError};
+use bdpm_scene::{Camera, CameraError, Material, PointLight, Scene, SceneError};
 use bdpm_settings::{Mode, NoiseModel, RenderSettings, check_radius, default_radius};
 use glam::{Mat4, Vec3};
 
@@ -471,7 +471,7 @@ pub(crate) fn build(
             "every light has zero flux; the image would be black",
         ),
         SceneError::BadLight { index } => ctx.bad(format!("light[{index}]"), e.to_string()),
-        SceneError::BadCamera(why) => ctx.bad("camera", why),
+        SceneError::BadCamera(why) => ctx.bad("camera", why.to_string()),
         SceneError::MissingMaterial { .. } => ctx.bad("shape", e.to_string()),
     })?;
     Ok(LoadedScene {
@@ -674,14 +674,14 @@ fn camera(
     let def =
         def.ok_or_else(|| ctx.bad("camera", "missing [camera] table (position, look_at, vfov)"))?;
     let position = ctx.point(
-        "camera.position()",
-        ctx.required("camera.position()", def.position, "[x, y, z] in metres")?,
+        "camera.position",
+        ctx.required("camera.position", def.position, "[x, y, z] in metres")?,
     )?;
     let look_at = ctx.point(
         "camera.look_at",
         ctx.required("camera.look_at", def.look_at, "[x, y, z] in metres")?,
     )?;
-    let up = ctx.point("camera.up()", def.up.unwrap_or(Point([0.0, 1.0, 0.0])))?;
+    let up = ctx.point("camera.up", def.up.unwrap_or(Point([0.0, 1.0, 0.0])))?;
     let vfov = ctx.required("camera.vfov", def.vfov, "vertical field of view in degrees")?;
     if !(vfov.is_finite() && vfov > 0.0 && vfov < 179.0) {
         return Err(ctx.bad(
@@ -693,11 +693,13 @@ fn camera(
     if position == look_at {
         return Err(ctx.bad(
             "camera.look_at",
-            "equals camera.position(), so there is no viewing direction",
+            "equals camera.position, so there is no viewing direction",
         ));
     }
     Camera::look_at(position, look_at, up, vfov, width, height).map_err(|e| match e {
-        SceneError::BadCamera(why) if why.contains("up") => ctx.bad("camera.up()", why),
+        SceneError::BadCamera(why @ CameraError::UpParallel) => {
+            ctx.bad("camera.up", why.to_string())
+        }
         other => ctx.bad("camera", other.to_string()),
     })
 }

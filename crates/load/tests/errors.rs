@@ -189,7 +189,7 @@ fn infinite_camera_position() {
         "position = [0.0, 0.0, -3.0]",
         "position = [0.0, 0.0, -inf]",
     ));
-    assert!(msg.contains("camera.position(): "), "{msg}");
+    assert!(msg.contains("camera.position: "), "{msg}");
 }
 
 #[test]

@@ -1,6 +1,6 @@
 use glam::Vec3;
 
-use crate::SceneError;
+use crate::{CameraError, SceneError};
 
 /// A pinhole camera with a square-pixel image plane; image row 0 is the top.
 ///
@@ -31,27 +31,21 @@ impl Camera {
         height: u32,
     ) -> Result<Camera, SceneError> {
         if !(eye.is_finite() && target.is_finite() && up.is_finite()) {
-            return Err(SceneError::BadCamera(
-                "position, target and up must be finite",
-            ));
+            return Err(SceneError::BadCamera(CameraError::NotFinite));
         }
         let forward = (target - eye).normalize_or_zero();
         if forward == Vec3::ZERO {
-            return Err(SceneError::BadCamera("target equals position"));
+            return Err(SceneError::BadCamera(CameraError::TargetIsPosition));
         }
         let right = forward.cross(up).normalize_or_zero();
         if right == Vec3::ZERO {
-            return Err(SceneError::BadCamera(
-                "up is parallel to the viewing direction",
-            ));
+            return Err(SceneError::BadCamera(CameraError::UpParallel));
         }
         if !(vfov_degrees > 0.0 && vfov_degrees < 179.0) {
-            return Err(SceneError::BadCamera(
-                "vertical fov must be in (0, 179) degrees",
-            ));
+            return Err(SceneError::BadCamera(CameraError::FieldOfView));
         }
         if width == 0 || height == 0 {
-            return Err(SceneError::BadCamera("resolution must be at least 1×1"));
+            return Err(SceneError::BadCamera(CameraError::Resolution));
         }
         let up = right.cross(forward);
         Ok(Camera {

@@ -81,7 +81,34 @@ pub enum SceneError {
         index: usize,
     },
     /// The camera's parameters do not define a view.
-    BadCamera(&'static str),
+    BadCamera(CameraError),
+}
+
+/// Why a camera's parameters do not define a view ([`SceneError::BadCamera`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CameraError {
+    /// Position, target or up is not finite.
+    NotFinite,
+    /// The target equals the position: no viewing direction.
+    TargetIsPosition,
+    /// The up vector is parallel to the viewing direction.
+    UpParallel,
+    /// The vertical field of view is outside (0, 179) degrees.
+    FieldOfView,
+    /// Width or height is 0.
+    Resolution,
+}
+
+impl fmt::Display for CameraError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            CameraError::NotFinite => "position, target and up must be finite",
+            CameraError::TargetIsPosition => "target equals position",
+            CameraError::UpParallel => "up is parallel to the viewing direction",
+            CameraError::FieldOfView => "vertical fov must be in (0, 179) degrees",
+            CameraError::Resolution => "resolution must be at least 1×1",
+        })
+    }
 }
 
 impl fmt::Display for SceneError {
