@@ -172,8 +172,8 @@ fn compare(scene: &str, kernels: &[Geometry; 2], viewpoint: Option<Vec3>, stream
 
 fn main() {
     let loaded = load_scene(&scene_path("cornell-lambert.toml")).unwrap_or_else(|e| panic!("{e}"));
-    let eye = loaded.scene.camera.position;
-    let g = &loaded.scene.geometry;
+    let eye = loaded.scene.camera().position();
+    let g = loaded.scene.geometry();
     let cornell = [rebuild(g, Kernel::Bvh4), rebuild(g, Kernel::Cwbvh)];
     compare("cornell-lambert", &cornell, Some(eye), 0);
     let mesh = sphere_on_floor();

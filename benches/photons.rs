@@ -69,7 +69,7 @@ impl Workload {
         let map = PhotonMap::trace(&scene, &options(), radius);
         let mut rng = Rng::new(SEED, Domain::Other, [0; 3]);
         let queries = (0..QUERIES)
-            .map(|_| scene.geometry.sample_surface(rng.uniform3()).p)
+            .map(|_| scene.geometry().sample_surface(rng.uniform3()).p)
             .collect();
         Workload {
             scene,

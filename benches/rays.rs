@@ -202,14 +202,14 @@ fn sphere_on_floor() -> TriangleMesh {
 
 static CORNELL: LazyLock<Workload> = LazyLock::new(|| {
     let loaded = load_scene(&scene_path("cornell-lambert.toml")).unwrap_or_else(|e| panic!("{e}"));
-    let eye = loaded.scene.camera.position;
-    Workload::new(loaded.scene.geometry, Some(eye), 0)
+    let eye = loaded.scene.camera().position();
+    Workload::new(loaded.scene.into_geometry(), Some(eye), 0)
 });
 
 static CORNELL_CWBVH: LazyLock<Workload> = LazyLock::new(|| {
     let loaded = load_scene(&scene_path("cornell-lambert.toml")).unwrap_or_else(|e| panic!("{e}"));
-    let eye = loaded.scene.camera.position;
-    let geometry = with_kernel(&loaded.scene.geometry, Kernel::Cwbvh);
+    let eye = loaded.scene.camera().position();
+    let geometry = with_kernel(loaded.scene.geometry(), Kernel::Cwbvh);
     Workload::new(geometry, Some(eye), 0)
 });
 

@@ -42,7 +42,7 @@ fn cache_reproduces_the_uniform_furnace_radiance() {
         .collect();
     // Photons arrive only on the inner side.
     assert!(inside.iter().all(|c| c.side == inside[0].side));
-    assert_eq!(inside.len(), scene.geometry.triangle_count());
+    assert_eq!(inside.len(), scene.geometry().triangle_count());
     let total_area: f64 = inside.iter().map(|c| c.area).sum();
     let mean: f64 = inside.iter().map(|c| c.mean_ld * c.area).sum::<f64>() / total_area;
     eprintln!(

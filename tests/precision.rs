@@ -213,7 +213,7 @@ fn translations_up_to_nine_hundred_kilometres_give_the_same_image_bits_in_every_
 fn rays_leaving_a_seam_towards_the_neighbouring_surface_do_not_escape() {
     let (scene, _) = load("cornell-lambert.toml", 8, 8);
     let seam = Seam::cornell_left_floor();
-    let g = &scene.geometry;
+    let g = &scene.geometry();
     let eye = Vec3::new(1.39, 1.3, 1.4);
     let mut rng = Rng::new(7, Domain::Other, [0; 3]);
     let (mut tried, mut escaped) = (0, 0);
@@ -264,7 +264,7 @@ fn shadow_segments_through_a_neighbouring_surface_are_occluded() {
     for _ in 0..50_000 {
         let target = seam.near(&mut rng, false);
         let dir = (target - eye).normalize();
-        let Some(hit) = scene.geometry.intersect(eye, dir, f32::INFINITY) else {
+        let Some(hit) = scene.geometry().intersect(eye, dir, f32::INFINITY) else {
             continue;
         };
         let sh = scene.shade(&hit, -dir);
@@ -373,7 +373,7 @@ fn rays_leaving_a_surface_never_hit_their_own_triangle() {
         ("unit sphere 900 km away", sphere(1.0, 9e5)),
     ] {
         let (scene, _) = load_text(&text);
-        let g = &scene.geometry;
+        let g = &scene.geometry();
         let mut rng = Rng::new(9, Domain::Other, [0; 3]);
         let mut own = 0;
         for _ in 0..100_000 {

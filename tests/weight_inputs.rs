@@ -35,7 +35,7 @@ fn camera_and_photon_vertices_agree(scene_name: &str, photons: u64) -> usize {
         // A camera ray arriving along the normal from 5 cm off the surface, on y's side.
         let origin = y.p + y.n * 0.05;
         let hit = scene
-            .geometry
+            .geometry()
             .intersect(origin, -y.n, f32::INFINITY)
             .expect("a ray along -n from 5 cm off a surface hits it");
         if hit.prim != y.prim {
@@ -102,13 +102,13 @@ fn the_cache_returns_b_in_lambert_only_scenes() {
     let cache = RadianceCache::build(&scene, &settings);
     assert!(!cache.stats().stores_b);
     let mut lit = 0;
-    for prim in 0..scene.geometry.triangle_count() as u32 {
-        let v = scene.geometry.vertices(prim);
+    for prim in 0..scene.geometry().triangle_count() as u32 {
+        let v = scene.geometry().vertices(prim);
         let p = (v[0] + v[1] + v[2]) / 3.0;
-        let n = scene.geometry.normal(prim);
+        let n = scene.geometry().normal(prim);
         for wo in [n, -n] {
             let (ld, b) = cache.lookup(prim, p, wo);
-            let kd = scene.bdf(scene.geometry.material(prim)).kd();
+            let kd = scene.bdf(scene.geometry().material(prim)).kd();
             let expected = bdpm_bdf::luminance(kd) / std::f32::consts::PI * ld;
             assert_eq!(b, expected, "triangle {prim}");
             lit += usize::from(ld > 0.0);

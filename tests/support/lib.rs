@@ -21,9 +21,8 @@ pub fn load(name: &str, width: u32, height: u32) -> (Scene, RenderSettings) {
     let loaded = load_scene(&scene_path(name)).unwrap_or_else(|e| panic!("{e}"));
     let mut scene = loaded.scene;
     let mut settings = loaded.settings;
-    scene.camera = scene
-        .camera
-        .with_resolution(width, height)
+    scene
+        .set_resolution(width, height)
         .expect("valid resolution");
     settings.width = width;
     settings.height = height;
@@ -55,13 +54,15 @@ pub fn with_mode(
     spp: u32,
     photons: u64,
 ) -> RenderSettings {
-    RenderSettings {
-        mode: Mode::parse(mode).unwrap_or_else(|| panic!("unknown mode {mode}")),
+    let mut s = RenderSettings {
         passes,
         spp,
         photons,
         ..settings.clone()
-    }
+    };
+    // Like `--mode`: a threshold mode gets the settings' threshold radius.
+    s.select(Mode::parse(mode).unwrap_or_else(|| panic!("unknown mode {mode}")));
+    s
 }
 
 /// The sphere furnace's parameters (method.md §10), read back from the loaded scene.
@@ -80,13 +81,13 @@ impl Furnace {
     /// Reads k, Φ, the light and R from a loaded sphere-furnace scene (the radius from its area
     /// is not used: the analytic formula is for the sphere the mesh approximates).
     pub fn of(scene: &Scene) -> Furnace {
-        assert_eq!(scene.lights.len(), 1);
-        let k = scene.materials[0].bdf.kd().x as f64;
-        let (lo, hi) = scene.geometry.bounds();
+        assert_eq!(scene.lights().len(), 1);
+        let k = scene.materials()[0].bdf.kd().x as f64;
+        let (lo, hi) = scene.geometry().bounds();
         Furnace {
             albedo: k,
-            flux: scene.lights[0].flux.x as f64,
-            light: scene.lights[0].position.as_dvec3(),
+            flux: scene.lights()[0].flux.x as f64,
+            light: scene.lights()[0].position.as_dvec3(),
             radius: ((hi - lo).max_element() / 2.0) as f64,
         }
     }
@@ -110,10 +111,10 @@ impl Furnace {
     /// The exact pixel values: each pixel's footprint averaged over an s × s grid of rays cast
     /// against the actual mesh (so the comparison sees the same facets as the render).
     pub fn image(&self, scene: &Scene, s: u32) -> Vec<f64> {
-        let cam = &scene.camera;
-        let mut out = Vec::with_capacity((cam.width * cam.height) as usize);
-        for y in 0..cam.height {
-            for x in 0..cam.width {
+        let cam = &scene.camera();
+        let mut out = Vec::with_capacity((cam.width() * cam.height()) as usize);
+        for y in 0..cam.height() {
+            for x in 0..cam.width() {
                 let mut sum = 0.0;
                 for j in 0..s {
                     for i in 0..s {
@@ -121,8 +122,8 @@ impl Furnace {
                         let fy = y as f32 + (j as f32 + 0.5) / s as f32;
                         let d = cam.ray_direction(fx, fy);
                         let h = scene
-                            .geometry
-                            .intersect(cam.position, d, f32::INFINITY)
+                            .geometry()
+                            .intersect(cam.position(), d, f32::INFINITY)
                             .expect("closed sphere");
                         let n = if h.ng.dot(-d) < 0.0 { -h.ng } else { h.ng };
                         sum += self.radiance(h.p.as_dvec3(), n.as_dvec3());

@@ -585,7 +585,7 @@ fn before_render_warnings(
     renderer: &Renderer<'_>,
 ) -> Vec<String> {
     let mut warnings = Vec::new();
-    let (lo, hi) = scene.geometry.bounds();
+    let (lo, hi) = scene.geometry().bounds();
     let extent = (hi - lo).max_element();
     let r = renderer.radius();
     if matches!(settings.mode, Mode::Bdpm(_)) && r > LARGE_RADIUS_FRACTION * extent {

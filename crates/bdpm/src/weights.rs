@@ -3,7 +3,7 @@
 //! written as a float EXR and as a false-colour PNG on a log scale with x₀ marked.
 use std::path::{Path, PathBuf};
 
-use bdpm_integrator::{Mode, Renderer, WeightMap, WeightTarget};
+use bdpm_integrator::{Mode, RenderError, Renderer, WeightMap, WeightTarget};
 use clap::{ArgGroup, Args};
 use glam::Vec3;
 
@@ -125,15 +125,14 @@ pub(crate) fn run(args: WeightsArgs) -> CliResult<()> {
     let renderer = pool
         .install(|| Renderer::new(&scene, &settings))
         .map_err(|e| format!("{}: {e}", args.scene.display()))?;
-    let map = pool.install(|| renderer.weight_map(target)).map_err(|e| {
-        let msg = e.to_string();
-        // The library names the mode in mode errors; anything else is about x₀.
-        if msg.contains(&format!("mode '{}'", mode.name())) {
-            format!("{mode_source}: {msg}")
-        } else {
-            format!("{target_flag}: {msg}")
-        }
-    })?;
+    let map = pool
+        .install(|| renderer.weight_map(target))
+        .map_err(|e| match e {
+            RenderError::NoWeights(_) | RenderError::PerLightPathWeights(_) => {
+                format!("{mode_source}: {e}")
+            }
+            _ => format!("{target_flag}: {e}"),
+        })?;
 
     let attributes = vec![
         ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),

@@ -76,22 +76,22 @@ pub trait CacheSurfaces: Sync {
 /// bdpm's own scene: its triangle mesh and materials.
 impl CacheSurfaces for Scene {
     fn triangle_count(&self) -> usize {
-        self.geometry.triangle_count()
+        self.geometry().triangle_count()
     }
     fn triangle(&self, prim: u32) -> [Vec3; 3] {
-        self.geometry.vertices(prim)
+        self.geometry().vertices(prim)
     }
     fn normal(&self, prim: u32) -> Vec3 {
-        self.geometry.normal(prim)
+        self.geometry().normal(prim)
     }
     fn area(&self, prim: u32) -> f32 {
-        self.geometry.area(prim)
+        self.geometry().area(prim)
     }
     fn lambert_only(&self) -> bool {
         self.all_lambert()
     }
     fn lambert_albedo(&self, prim: u32) -> f32 {
-        luminance(self.bdf(self.geometry.material(prim)).kd())
+        luminance(self.bdf(self.geometry().material(prim)).kd())
     }
 }
 

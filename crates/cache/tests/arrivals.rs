@@ -79,7 +79,7 @@ fn from_arrivals_of_the_cache_pass_equals_build() {
             Vec3::new(0.2, 1.0, -0.3).normalize(),
         );
         let prim = (0..12)
-            .find(|&t| built.slot(t, p, wo).is_some() && scene.geometry.normal(t).y.abs() > 0.9)
+            .find(|&t| built.slot(t, p, wo).is_some() && scene.geometry().normal(t).y.abs() > 0.9)
             .unwrap();
         assert_eq!(built.lookup(prim, p, wo), supplied.lookup(prim, p, wo));
         assert!(built.lookup(prim, p, wo).0 > 0.0);

@@ -197,10 +197,10 @@ impl<'a> Mix<'a> {
     /// the image plane at unit distance; dω = cos³θ_c·dA_image and dA(x₀) = d₀²·dω/cos θ₀,
     /// hence p_C(x₀) = cos θ₀/(d₀²·a_pix·cos³θ_c).
     fn primary_terms(&self, sh: &Shading, u: Vec3) -> (f64, f64) {
-        let cam = &self.scene.camera;
-        let d2 = (sh.p - cam.position).length_squared() as f64;
+        let cam = &self.scene.camera();
+        let d2 = (sh.p - cam.position()).length_squared() as f64;
         let cos0 = sh.ng.dot(u).abs() as f64;
-        let cos_c = cam.forward.dot(-u).max(0.0) as f64;
+        let cos_c = cam.forward().dot(-u).max(0.0) as f64;
         let image = d2 * cam.pixel_area() as f64 * cos_c * cos_c * cos_c;
         let density = if image > 0.0 { cos0 / image } else { 0.0 };
         (acceptance_area(d2.sqrt()), density)
@@ -262,7 +262,7 @@ impl<'a> Mix<'a> {
         if let Heuristic::Threshold { .. } = self.heuristic {
             pair.light_distance = self
                 .scene
-                .lights
+                .lights()
                 .iter()
                 .map(|l| (l.position - x1.p).length())
                 .fold(f32::INFINITY, f32::min) as f64;
@@ -377,7 +377,7 @@ impl<'a> Mix<'a> {
         light: usize,
         pair: Pair,
     ) -> Pair {
-        let incoming = (self.scene.lights[light].position - x1.p).normalize();
+        let incoming = (self.scene.lights()[light].position - x1.p).normalize();
         let (pc, pl) = self.densities(x0, x1, v, dist2, incoming);
         Pair {
             path: PathKind::OneBounce,
@@ -390,7 +390,7 @@ impl<'a> Mix<'a> {
 
     /// Emission density p_L(light→x₁) in area measure (choice of light included).
     pub(crate) fn emission_density(&self, light: usize, x1: &WeightVertex) -> f64 {
-        let l = &self.scene.lights[light];
+        let l = self.scene.lights()[light];
         let to = l.position - x1.p;
         let d2 = to.length_squared();
         let cos = x1.n.dot(to).abs() / d2.sqrt();
@@ -539,9 +539,12 @@ impl<'a> Mix<'a> {
         slot: &mut Slot<'s>,
     ) {
         let scene = self.scene;
-        let cam = &scene.camera;
+        let cam = &scene.camera();
         let dir = cam.ray_direction(job.x, job.y);
-        let Some(hit0) = scene.geometry.intersect(cam.position, dir, f32::INFINITY) else {
+        let Some(hit0) = scene
+            .geometry()
+            .intersect(cam.position(), dir, f32::INFINITY)
+        else {
             return;
         };
         let u = -dir;
@@ -577,7 +580,7 @@ impl<'a> Mix<'a> {
             return None;
         }
         let hit1 = scene
-            .geometry
+            .geometry()
             .intersect(scene.spawn(&x0.sh, v), v, f32::INFINITY)?;
         // Started before the shadow ray and the weight's inputs, which hide its first fetch.
         map.restart_query(query, hit1.p);
@@ -616,7 +619,7 @@ impl<'a> Mix<'a> {
         } else {
             w_const
         };
-        for l in 0..scene.lights.len() {
+        for l in 0..scene.lights().len() {
             let c = scene.direct_from_masked(&sh1, wo1, l, lights);
             if c == Vec3::ZERO {
                 continue;
@@ -793,6 +796,6 @@ impl<'a> Mix<'a> {
 
 /// The default merge radius for `scene`: its largest bounding-box extent / 1600, metres.
 pub fn scene_default_radius(scene: &Scene) -> f32 {
-    let (lo, hi) = scene.geometry.bounds();
-    crate::settings::default_radius((hi - lo).max_element())
+    let (lo, hi) = scene.geometry().bounds();
+    bdpm_settings::default_radius((hi - lo).max_element())
 }

@@ -3,11 +3,11 @@ use glam::DVec3;
 /// Accumulates per-pixel pass estimates in f64: their sum and sum of squares, so that both
 /// the mean and the per-pass variance V (the preprint's noise measure, method.md §3) are known.
 #[derive(Clone, Debug, PartialEq)]
+///
+/// The size is private: the buffers and [`Film::index`] are laid out for it.
 pub struct Film {
-    /// Image width, pixels.
-    pub width: u32,
-    /// Image height, pixels.
-    pub height: u32,
+    width: u32,
+    height: u32,
     sum: Vec<DVec3>,
     sum_sq: Vec<DVec3>,
     passes: u32,
@@ -42,6 +42,16 @@ impl Film {
         }
         self.passes += 1;
         self.dropped += dropped;
+    }
+
+    /// Image width, pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Image height, pixels.
+    pub fn height(&self) -> u32 {
+        self.height
     }
 
     /// Number of passes accumulated.

@@ -26,12 +26,14 @@ pub use film::Film;
 pub use memory::{MemoryEstimate, MemoryItem, PILOT_PHOTONS, estimate_memory, human_bytes};
 pub use predict::{JITTER_RAYS, Prediction};
 pub use render::{
-    FirstHitLayers, PassOutput, RenderError, Renderer, StageReport, first_hit_layers,
+    FirstHitLayers, PassOutput, RenderError, Renderer, StageReport, TargetError, first_hit_layers,
     render_path_pass,
 };
-pub use settings::{
-    FOOTPRINT_TABLE_RAYS, MIN_RADIUS, Mode, PINHOLE_TABLE_RAYS, RenderSettings, check_radius,
-    default_radius,
+// The settings are `bdpm-settings`'; re-exported so that a user of the integrator needs one
+// dependency.
+pub use bdpm_settings::{
+    FOOTPRINT_TABLE_RAYS, MIN_RADIUS, Mode, PINHOLE_TABLE_RAYS, RadiusError, RenderSettings,
+    Setting, SettingsError, SettingsRecord, WeightClamp, check_radius, default_radius,
 };
 pub use table::{PixelTable, PixelWeights};
 pub use weightmap::{WeightMap, WeightTarget};

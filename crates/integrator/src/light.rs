@@ -11,7 +11,8 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::render::{PassOutput, accumulate};
-use crate::settings::{RenderSettings, pixel_offset};
+use crate::settings::pixel_offset;
+use bdpm_settings::RenderSettings;
 
 /// Renders one pass of the `light` reference.
 pub(crate) fn render_light_pass(
@@ -21,7 +22,7 @@ pub(crate) fn render_light_pass(
     progress: &(dyn Fn(u64) + Sync),
 ) -> PassOutput {
     let (w, h) = (settings.width as usize, settings.height as usize);
-    let cam = &scene.camera;
+    let cam = &scene.camera();
     let t_camera = std::time::Instant::now();
     let dropped = AtomicU64::new(0);
     let mut estimates = vec![DVec3::ZERO; w * h];
@@ -42,7 +43,10 @@ pub(crate) fn render_light_pass(
                     // The numbers are drawn either way, so the streams do not depend on the setting.
                     let [jx, jy] = pixel_offset(rng.uniform2(), settings.pixel_jitter);
                     let dir = cam.ray_direction(x as f32 + jx, y as f32 + jy);
-                    let l = match scene.geometry.intersect(cam.position, dir, f32::INFINITY) {
+                    let l = match scene
+                        .geometry()
+                        .intersect(cam.position(), dir, f32::INFINITY)
+                    {
                         Some(hit) => scene.direct(&scene.shade(&hit, -dir), -dir),
                         None => Vec3::ZERO,
                     };
@@ -71,7 +75,7 @@ pub(crate) fn render_light_pass(
             return;
         }
         let sh = &arrival.shading;
-        let to_cam = cam.position - sh.p;
+        let to_cam = cam.position() - sh.p;
         let d2 = to_cam.length_squared();
         if d2 <= 0.0 || sh.ng.dot(to_cam) <= 0.0 {
             return;
@@ -80,13 +84,17 @@ pub(crate) fn render_light_pass(
         let Some((fx, fy)) = cam.project(sh.p) else {
             return;
         };
-        let cos_cam = cam.forward.dot(-wc);
+        let cos_cam = cam.forward().dot(-wc);
         let cos_x = sh.frame.n.dot(wc);
         if cos_cam <= 0.0 || cos_x <= 0.0 {
             return;
         }
         let f = scene.eval(sh, wc, arrival.vertex.incoming);
-        if f == Vec3::ZERO || scene.geometry.occluded(scene.spawn(sh, wc), cam.position) {
+        if f == Vec3::ZERO
+            || scene
+                .geometry()
+                .occluded(scene.spawn(sh, wc), cam.position())
+        {
             return;
         }
         // Radiance averaged over the pixel's image-plane area: dA_plane = dω/cos³θ_c and

@@ -15,8 +15,8 @@ use bdpm_photon::{PhotonMap, TraceOptions};
 use bdpm_scene::Scene;
 
 use crate::bdpm::{Techniques, scene_default_radius};
-use crate::settings::{Mode, RenderSettings};
 use crate::table::PixelWeights;
+use bdpm_settings::{Mode, RenderSettings};
 
 /// Photons traced by the pilot that measures a scene's photons stored per emitted photon.
 pub const PILOT_PHOTONS: u64 = 4096;

@@ -24,7 +24,7 @@ pub fn trace_path(
     let mut radiance = Vec3::ZERO;
     let mut beta = Vec3::ONE;
     for depth in 0..MAX_DEPTH {
-        let Some(hit) = scene.geometry.intersect(origin, dir, f32::INFINITY) else {
+        let Some(hit) = scene.geometry().intersect(origin, dir, f32::INFINITY) else {
             break;
         };
         let wo = -dir;

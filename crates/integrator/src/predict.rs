@@ -46,8 +46,8 @@ use rayon::prelude::*;
 
 use crate::bdpm::{FirstVertex, Mix};
 use crate::render::{RenderError, Renderer};
-use crate::settings::{Mode, PINHOLE_TABLE_RAYS};
 use crate::table::footprint_overlap;
+use bdpm_settings::PINHOLE_TABLE_RAYS;
 
 /// Jittered primary rays per pixel for T_jitter (method.md §12 leaves this term out; 16 gives
 /// its per-pixel value to about ±35 %, far less over blocks of pixels).
@@ -110,11 +110,8 @@ impl Renderer<'_> {
     /// error. Deterministic: the directions come from the `PixelTable` stream keyed by pixel
     /// (distinct from the A/B rays' keys), the jittered rays likewise.
     pub fn predict_variance(&self) -> Result<Prediction, RenderError> {
-        let Mode::Bdpm(h) = self.settings().mode else {
-            return Err(RenderError::Settings(format!(
-                "mode '{}' has no noise model to predict",
-                self.settings().mode
-            )));
+        let Some(h) = self.heuristic() else {
+            return Err(RenderError::NoNoiseModel(self.settings().mode));
         };
         self.predict_variance_for(h)
     }
@@ -127,18 +124,14 @@ impl Renderer<'_> {
     /// built it (an `optimal*` mode); otherwise the error says so.
     pub fn predict_variance_for(&self, h: Heuristic) -> Result<Prediction, RenderError> {
         if h.needs().pixel_table && !self.pixel_table().is_some_and(|t| t.has_terms()) {
-            return Err(RenderError::Settings(format!(
-                "the weights '{}' need the pixel table's A and B, which mode '{}' does not build",
-                h.name(),
-                self.settings().mode
-            )));
+            return Err(RenderError::NoPixelTable {
+                weights: h.name(),
+                mode: self.settings().mode,
+            });
         }
         let mut mix = self.mix(h);
         if mix.cache.is_none() {
-            return Err(RenderError::Settings(
-                "the noise model needs the radiance cache: build the renderer with with_model_inputs()"
-                    .into(),
-            ));
+            return Err(RenderError::NoCache);
         }
         // The model needs L₀ and L_d at x₁ for every mode; these needs change only what the
         // pair carries, not the weights (a mode reads only the fields it needs).
@@ -174,11 +167,13 @@ impl Renderer<'_> {
     fn pixel_terms(&self, mix: &Mix<'_>, h: Heuristic, x: u32, y: u32) -> Option<Terms> {
         let scene = self.scene();
         let s = self.settings();
-        let cam = &scene.camera;
+        let cam = &scene.camera();
         let pixel = y as u64 * s.width as u64 + x as u64;
         let centre = (x as f32 + 0.5, y as f32 + 0.5);
         let dir = cam.ray_direction(centre.0, centre.1);
-        let hit0 = scene.geometry.intersect(cam.position, dir, f32::INFINITY)?;
+        let hit0 = scene
+            .geometry()
+            .intersect(cam.position(), dir, f32::INFINITY)?;
         let x0 = mix.first_vertex(&hit0, -dir)?;
 
         let n_b = s.spp as f64;
@@ -248,7 +243,7 @@ impl Renderer<'_> {
         pixel: u64,
     ) -> f64 {
         let scene = self.scene();
-        let cam = &scene.camera;
+        let cam = &scene.camera();
         let seed = self.settings().seed;
         let cache = mix.cache;
         let n0 = centre.sh.ng;
@@ -261,8 +256,8 @@ impl Renderer<'_> {
             let [jx, jy] = rng.uniform2();
             let dir = cam.ray_direction(x as f32 + jx, y as f32 + jy);
             let value = scene
-                .geometry
-                .intersect(cam.position, dir, f32::INFINITY)
+                .geometry()
+                .intersect(cam.position(), dir, f32::INFINITY)
                 .map_or(0.0, |hit| {
                     let u = -dir;
                     let sh = scene.shade(&hit, u);
@@ -303,7 +298,7 @@ fn direction(
         return None;
     }
     let hit1 = scene
-        .geometry
+        .geometry()
         .intersect(scene.spawn(&x0.sh, v), v, f32::INFINITY)?;
     let wo1 = -v;
     let sh1 = scene.shade(&hit1, wo1);
@@ -347,7 +342,7 @@ fn direction(
 
     // L₀(x₁→x₀) light by light, as BDD=1 evaluates it (shading normal, visibility bits).
     let (mut l0_w, mut l0_w0_sq) = (0.0f64, 0.0f64);
-    for l in 0..scene.lights.len() {
+    for l in 0..scene.lights().len() {
         let c = scene.direct_from_masked(&sh1, wo1, l, x1.lights);
         let c = luminance(c) as f64;
         if c == 0.0 {

@@ -12,8 +12,9 @@ use bdpm_photon::{PhotonMap, TraceOptions};
 
 use crate::bdpm::{BATCH, Job, Mix, Slots, Techniques, WeightStats, scene_default_radius};
 use crate::path::trace_path;
-use crate::settings::{Mode, RenderSettings, pixel_offset};
+use crate::settings::pixel_offset;
 use crate::table::{self, PixelTable, TableSpec};
+use bdpm_settings::{Mode, RadiusError, RenderSettings, SettingsError, check_radius};
 
 /// Radiance-cache cells per largest scene extent: cells of ~9 cm in the 2.8 m Cornell box,
 /// far larger than the merge radius, as method.md §5 asks.
@@ -32,28 +33,94 @@ pub struct StageReport {
     pub detail: String,
 }
 
-/// Why a render cannot start.
-#[derive(Clone, Debug, PartialEq)]
+/// Why a render cannot start, or why a query of a renderer (weight map, noise prediction)
+/// cannot be answered. `Display` keeps one line that says what is wrong; callers tell the
+/// cases apart by variant, never by the message.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum RenderError {
-    /// The settings do not fit the scene or each other.
-    Settings(String),
+    /// A setting is out of range or inconsistent ([`RenderSettings::validate`]).
+    #[error("{setting}: {0}", setting = .0.setting())]
+    Settings(#[from] SettingsError),
+    /// The scene's camera has another image size than the settings.
+    #[error("camera is {}×{} but the settings ask for {}×{}", .camera.0, .camera.1, .settings.0, .settings.1)]
+    Resolution {
+        /// The camera's (width, height), pixels.
+        camera: (u32, u32),
+        /// The settings' (width, height), pixels.
+        settings: (u32, u32),
+    },
+    /// The merge radius in force (the scene's default when none was given) is unusable.
+    #[error("merge radius {0}")]
+    Radius(RadiusError),
+    /// The mode (`path`, `light`) has no weights, so no weight map.
+    #[error("mode '{0}' has no weights")]
+    NoWeights(Mode),
+    /// The mode weighs each light path by its incoming direction at x₁, so no map over x₁.
+    #[error(
+        "mode '{0}' weighs each light path by its incoming direction at x1, so it has no map over x1 alone"
+    )]
+    PerLightPathWeights(&'static str),
+    /// The mode (`path`, `light`) has no noise model.
+    #[error("mode '{0}' has no noise model to predict")]
+    NoNoiseModel(Mode),
+    /// The weights asked for read the pixel table's A and B, which the mode did not build.
+    #[error(
+        "the weights '{weights}' need the pixel table's A and B, which mode '{mode}' does not build"
+    )]
+    NoPixelTable {
+        /// The weights' name.
+        weights: &'static str,
+        /// The renderer's mode.
+        mode: Mode,
+    },
+    /// The noise model needs the radiance cache, which was not built.
+    #[error(
+        "the noise model needs the radiance cache: build the renderer with with_model_inputs()"
+    )]
+    NoCache,
+    /// The x₀ asked for cannot be used (outside the image, not visible, facing away).
+    #[error("{0}")]
+    Target(TargetError),
 }
 
-impl std::fmt::Display for RenderError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            RenderError::Settings(m) => write!(f, "{m}"),
-        }
-    }
+/// Why a weight map's x₀ cannot be used ([`RenderError::Target`]).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum TargetError {
+    /// The pixel is outside the image.
+    #[error("pixel ({x}, {y}) is outside the {width}x{height} image")]
+    OutsideImage {
+        /// Column asked for.
+        x: u32,
+        /// Row asked for.
+        y: u32,
+        /// Image width, pixels.
+        width: u32,
+        /// Image height, pixels.
+        height: u32,
+    },
+    /// The camera sees no surface in the direction of x₀.
+    #[error("the camera sees no surface towards x0")]
+    NoSurface,
+    /// The point given is hidden behind another surface.
+    #[error("x0 {point} is not visible from the camera (the camera sees {seen} in its direction)")]
+    Hidden {
+        /// The point asked for, metres.
+        point: Vec3,
+        /// The first surface point the camera sees in its direction, metres.
+        seen: Vec3,
+    },
+    /// x₀ faces away from the camera.
+    #[error("x0 faces away from the camera")]
+    FacesAway,
 }
-
-impl std::error::Error for RenderError {}
 
 /// A scene and settings made ready to render passes: validates the settings, builds what the
 /// mode needs once (and nothing it does not need), then renders any pass on demand.
 pub struct Renderer<'a> {
     scene: &'a Scene,
     settings: RenderSettings,
+    /// The heuristic in force (BDPM modes): the mode's, with the weight clamp in force.
+    heuristic: Option<Heuristic>,
     stages: Vec<StageReport>,
     radius: f32,
     techniques: bool,
@@ -67,39 +134,25 @@ impl<'a> Renderer<'a> {
     /// Checks `settings` against `scene` and prepares the mode's pre-passes.
     pub fn new(scene: &'a Scene, settings: &RenderSettings) -> Result<Renderer<'a>, RenderError> {
         let s = settings;
-        if s.width == 0 || s.height == 0 || s.passes == 0 || s.spp == 0 || s.photons == 0 {
-            return Err(RenderError::Settings(
-                "resolution, passes, spp and photons must all be at least 1".into(),
-            ));
-        }
-        if (scene.camera.width, scene.camera.height) != (s.width, s.height) {
-            return Err(RenderError::Settings(format!(
-                "camera is {}×{} but the settings ask for {}×{}",
-                scene.camera.width, scene.camera.height, s.width, s.height
-            )));
-        }
-        let radius = s.radius.unwrap_or_else(|| scene_default_radius(scene));
-        crate::settings::check_radius(radius)
-            .map_err(|e| RenderError::Settings(format!("merge radius {e}")))?;
-        let mut settings = s.clone();
-        settings.radius = Some(radius);
-        // Under the footprint model the weights are clamped to [0, 1] (method-notes.md,
-        // "Clamping"): unclamped, the correlation term pushes many of them outside, and the
-        // two techniques' contributions then cancel with a heavy-tailed sum. The pinhole model
-        // and centred samples keep the preprint's unclamped weights unless asked.
-        let clamp = s.clamp_weights || (s.noise_model == NoiseModel::Footprint && s.pixel_jitter);
-        settings.clamp_weights = clamp;
-        if let Mode::Bdpm(h) = settings.mode {
-            settings.mode = Mode::Bdpm(h.with_weight_clamp(clamp));
-        }
-        if let Mode::Bdpm(Heuristic::Threshold { .. }) = settings.mode {
-            settings.mode = Mode::Bdpm(Heuristic::Threshold {
-                radius: s.threshold_radius as f64,
+        s.validate()?;
+        if (scene.camera().width(), scene.camera().height()) != (s.width, s.height) {
+            return Err(RenderError::Resolution {
+                camera: (scene.camera().width(), scene.camera().height()),
+                settings: (s.width, s.height),
             });
         }
+        let radius = s.radius.unwrap_or_else(|| scene_default_radius(scene));
+        check_radius(radius).map_err(RenderError::Radius)?;
+        // `None` means the scene's default; the renderer's copy holds the value in force. The
+        // mode stays as given: `heuristic` is the mode's with the clamp in force
+        // (RenderSettings::weight_clamp).
+        let mut settings = s.clone();
+        settings.radius = Some(radius);
+        let heuristic = settings.heuristic();
         let mut renderer = Renderer {
             scene,
             settings,
+            heuristic,
             stages: Vec::new(),
             radius,
             techniques: false,
@@ -108,7 +161,7 @@ impl<'a> Renderer<'a> {
             cache: None,
             table: None,
         };
-        if let Mode::Bdpm(h) = renderer.settings.mode {
+        if let Some(h) = renderer.heuristic {
             renderer.prepare(h);
         }
         Ok(renderer)
@@ -183,7 +236,7 @@ impl<'a> Renderer<'a> {
     fn build_cache(&mut self) {
         let s = &self.settings;
         let start = std::time::Instant::now();
-        let (lo, hi) = self.scene.geometry.bounds();
+        let (lo, hi) = self.scene.geometry().bounds();
         let settings = CacheSettings {
             bins: s.cache_bins,
             cell_size: (hi - lo).max_element() / CACHE_CELLS_PER_EXTENT,
@@ -277,9 +330,15 @@ impl<'a> Renderer<'a> {
         self.radius
     }
 
-    /// The settings this renderer uses.
+    /// The settings this renderer uses: the caller's, with the merge radius in force.
     pub fn settings(&self) -> &RenderSettings {
         &self.settings
+    }
+
+    /// The heuristic the BDPM modes weigh with: the mode's, with the weight clamp in force
+    /// ([`RenderSettings::heuristic`]); `None` for `path` and `light`.
+    pub fn heuristic(&self) -> Option<Heuristic> {
+        self.heuristic
     }
 
     /// The preparatory stages that ran, with their cost.
@@ -295,7 +354,10 @@ impl<'a> Renderer<'a> {
             Mode::Light => {
                 crate::light::render_light_pass(self.scene, &self.settings, pass, progress)
             }
-            Mode::Bdpm(h) => self.render_bdpm_pass(h, pass, progress),
+            Mode::Bdpm(_) => {
+                let h = self.heuristic.expect("a BDPM mode has a heuristic");
+                self.render_bdpm_pass(h, pass, progress)
+            }
         }
     }
 
@@ -478,7 +540,7 @@ pub fn render_path_pass(
 ) -> PassOutput {
     debug_assert_eq!(settings.mode, Mode::Path);
     let (w, h) = (settings.width, settings.height);
-    let cam = &scene.camera;
+    let cam = &scene.camera();
     let start = std::time::Instant::now();
     let dropped = AtomicU64::new(0);
     let mut estimates = vec![DVec3::ZERO; w as usize * h as usize];
@@ -499,7 +561,13 @@ pub fn render_path_pass(
                     // The numbers are drawn either way, so the streams do not depend on the setting.
                     let [jx, jy] = pixel_offset(rng.uniform2(), settings.pixel_jitter);
                     let dir = cam.ray_direction(x as f32 + jx, y as f32 + jy);
-                    let l = trace_path(scene, cam.position, dir, &mut rng, settings.roulette_depth);
+                    let l = trace_path(
+                        scene,
+                        cam.position(),
+                        dir,
+                        &mut rng,
+                        settings.roulette_depth,
+                    );
                     accumulate(&mut sum, l, &mut row_dropped);
                 }
                 *px = sum / settings.spp as f64;
@@ -537,7 +605,7 @@ pub struct FirstHitLayers {
 /// whose bits it does not touch.
 pub fn first_hit_layers(scene: &Scene, settings: &RenderSettings) -> FirstHitLayers {
     let (w, h) = (settings.width as usize, settings.height as usize);
-    let cam = &scene.camera;
+    let cam = &scene.camera();
     let spp = settings.spp.max(1);
     let mut pixels = vec![(DVec3::ZERO, DVec3::ZERO); w * h];
     pixels.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
@@ -548,7 +616,10 @@ pub fn first_hit_layers(scene: &Scene, settings: &RenderSettings) -> FirstHitLay
                 let mut rng = Rng::new(settings.seed, Domain::Camera, [0, pixel, s as u64]);
                 let [jx, jy] = pixel_offset(rng.uniform2(), settings.pixel_jitter);
                 let dir = cam.ray_direction(x as f32 + jx, y as f32 + jy);
-                let Some(hit) = scene.geometry.intersect(cam.position, dir, f32::INFINITY) else {
+                let Some(hit) = scene
+                    .geometry()
+                    .intersect(cam.position(), dir, f32::INFINITY)
+                else {
                     continue;
                 };
                 let wo = -dir;

@@ -80,7 +80,7 @@ pub(crate) fn pixel_terms(
             continue;
         }
         let Some(hit1) = scene
-            .geometry
+            .geometry()
             .intersect(scene.spawn(&x0.sh, v), v, f32::INFINITY)
         else {
             continue;
@@ -115,9 +115,9 @@ pub(crate) fn pixel_terms(
 /// (ρ ≈ S/|F| either way), and for small ones ρ ≈ 1 either way. A footprint that reaches the
 /// horizon of the plane gives ρ = 0.
 pub(crate) fn footprint_overlap(scene: &Scene, sh: &Shading, x: f32, y: f32, radius: f32) -> f64 {
-    let cam = &scene.camera;
+    let cam = &scene.camera();
     let n = sh.ng.as_dvec3();
-    let origin = cam.position.as_dvec3();
+    let origin = cam.position().as_dvec3();
     let plane = n.dot(sh.p.as_dvec3() - origin);
     let cross = |px: f32, py: f32| {
         let d = cam.ray_direction(px, py).as_dvec3();
@@ -185,7 +185,7 @@ pub(crate) fn pixel_weights(
 /// silhouette, spread out) and A = B = 0.
 pub(crate) fn build(mix: &Mix<'_>, width: u32, height: u32, spec: &TableSpec) -> PixelTable {
     let scene = mix.scene;
-    let cam = &scene.camera;
+    let cam = &scene.camera();
     let n_b = mix.budget.camera_samples;
     let missed = PixelWeights {
         terms: PixelTerms::default(),
@@ -201,7 +201,10 @@ pub(crate) fn build(mix: &Mix<'_>, width: u32, height: u32, spec: &TableSpec) ->
                 let pixel = (y * width as usize + x) as u64;
                 let centre = (x as f32 + 0.5, y as f32 + 0.5);
                 let dir = cam.ray_direction(centre.0, centre.1);
-                let Some(hit0) = scene.geometry.intersect(cam.position, dir, f32::INFINITY) else {
+                let Some(hit0) = scene
+                    .geometry()
+                    .intersect(cam.position(), dir, f32::INFINITY)
+                else {
                     continue;
                 };
                 let Some(x0) = mix.first_vertex(&hit0, -dir) else {

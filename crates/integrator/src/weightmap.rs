@@ -3,8 +3,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::render::{RenderError, Renderer};
-use crate::settings::Mode;
+use crate::render::{RenderError, Renderer, TargetError};
 use crate::table::{TableSpec, pixel_weights};
 
 /// Where x₀ is.
@@ -36,49 +35,45 @@ impl Renderer<'_> {
     /// Computes the weight map of this renderer's mode for x₀ at `target`. The `path` and
     /// `light` modes have no weights and give an error.
     pub fn weight_map(&self, target: WeightTarget) -> Result<WeightMap, RenderError> {
-        let Mode::Bdpm(h) = self.settings().mode else {
-            return Err(RenderError::Settings(format!(
-                "mode '{}' has no weights",
-                self.settings().mode
-            )));
+        let Some(h) = self.heuristic() else {
+            return Err(RenderError::NoWeights(self.settings().mode));
         };
         if h.needs().densities || h.needs().x1_scattering {
-            return Err(RenderError::Settings(format!(
-                "mode '{}' weighs each light path by its incoming direction at x1, so it has no map over x1 alone",
-                h.name()
-            )));
+            return Err(RenderError::PerLightPathWeights(h.name()));
         }
         let scene = self.scene();
-        let cam = &scene.camera;
+        let cam = &scene.camera();
         let dir = match target {
-            WeightTarget::Point(p) => (p - cam.position).normalize_or_zero(),
+            WeightTarget::Point(p) => (p - cam.position()).normalize_or_zero(),
             WeightTarget::Pixel(x, y) => {
-                if x >= cam.width || y >= cam.height {
-                    return Err(RenderError::Settings(format!(
-                        "pixel ({x}, {y}) is outside the {}x{} image",
-                        cam.width, cam.height
-                    )));
+                if x >= cam.width() || y >= cam.height() {
+                    return Err(RenderError::Target(TargetError::OutsideImage {
+                        x,
+                        y,
+                        width: cam.width(),
+                        height: cam.height(),
+                    }));
                 }
                 cam.ray_direction(x as f32 + 0.5, y as f32 + 0.5)
             }
         };
         let hit = scene
-            .geometry
-            .intersect(cam.position, dir, f32::INFINITY)
-            .ok_or_else(|| RenderError::Settings("the camera sees no surface towards x0".into()))?;
+            .geometry()
+            .intersect(cam.position(), dir, f32::INFINITY)
+            .ok_or(RenderError::Target(TargetError::NoSurface))?;
         if let WeightTarget::Point(p) = target {
-            let d = (p - cam.position).length();
+            let d = (p - cam.position()).length();
             if (hit.p - p).length() > 1e-3 + 1e-3 * d {
-                return Err(RenderError::Settings(format!(
-                    "x0 {p} is not visible from the camera (the camera sees {} in its direction)",
-                    hit.p
-                )));
+                return Err(RenderError::Target(TargetError::Hidden {
+                    point: p,
+                    seen: hit.p,
+                }));
             }
         }
         let mix = self.mix(h);
         let x0 = mix
             .first_vertex(&hit, -dir)
-            .ok_or_else(|| RenderError::Settings("x0 faces away from the camera".into()))?;
+            .ok_or(RenderError::Target(TargetError::FacesAway))?;
         let s = self.settings();
         let needs = h.needs();
         let footprint = self.footprint_model() && needs.effective_samples;
@@ -92,7 +87,7 @@ impl Renderer<'_> {
             // The footprint of the image point that sees x₀.
             let image_point = cam
                 .project(x0.sh.p)
-                .unwrap_or((cam.width as f32 * 0.5, cam.height as f32 * 0.5));
+                .unwrap_or((cam.width() as f32 * 0.5, cam.height() as f32 * 0.5));
             Some(pixel_weights(&mix, &x0, image_point, &spec, u64::MAX))
         } else {
             None
@@ -101,12 +96,13 @@ impl Renderer<'_> {
             camera_samples: p.camera_samples,
             ..mix.budget
         });
-        let (w, hgt) = (cam.width as usize, cam.height as usize);
+        let (w, hgt) = (cam.width() as usize, cam.height() as usize);
         let mut w0 = vec![f64::NAN; w * hgt];
         w0.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
             for (x, out) in row.iter_mut().enumerate() {
                 let d = cam.ray_direction(x as f32 + 0.5, y as f32 + 0.5);
-                let Some(hit1) = scene.geometry.intersect(cam.position, d, f32::INFINITY) else {
+                let Some(hit1) = scene.geometry().intersect(cam.position(), d, f32::INFINITY)
+                else {
                     continue;
                 };
                 let to = hit1.p - x0.sh.p;
@@ -138,8 +134,8 @@ impl Renderer<'_> {
             .map(|(x, y)| (x as u32, y as u32))
             .unwrap_or((0, 0));
         Ok(WeightMap {
-            width: cam.width,
-            height: cam.height,
+            width: cam.width(),
+            height: cam.height(),
             w0,
             x0: x0.sh.p,
             x0_pixel,

@@ -198,7 +198,7 @@ pub(crate) fn run(args: BenchArgs) -> CliResult<()> {
     for &threads in &threads_list {
         for (name, mode) in names.iter().zip(&modes) {
             let mut s = base.clone();
-            s.mode = *mode;
+            s.select(*mode);
             let cell = time_cell(&scene, &s, name, threads, args.passes, args.repeats)?;
             eprintln!(
                 "{name:>16} {threads} thread(s): {} M photons/s, {} M samples/s, {:.3} s/pass",

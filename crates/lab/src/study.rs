@@ -419,7 +419,7 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
     let mut states = Vec::new();
     for (name, mode) in names.iter().zip(&modes) {
         let mut s = settings.clone();
-        s.mode = *mode;
+        s.select(*mode);
         let (t0, c0) = (Instant::now(), cpu_now());
         let renderer = pool
             .install(|| Renderer::new(&scene, &s))

@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 
 use bdpm_bdf::Bdf;
 use bdpm_geometry::{Geometry, GeometryError, TriangleMesh};
-use bdpm_integrator::{Mode, NoiseModel, RenderSettings, check_radius, default_radius};
-use bdpm_scene::{Camera, Material, PointLight, Scene, SceneError};
+use bdpm_scene::{Camera, CameraError, Material, PointLight, Scene, SceneError};
+use bdpm_settings::{Mode, NoiseModel, RenderSettings, check_radius, default_radius};
 use glam::{Mat4, Vec3};
 
 use crate::gltf_mesh::{Origin, load_gltf};
@@ -471,7 +471,7 @@ pub(crate) fn build(
             "every light has zero flux; the image would be black",
         ),
         SceneError::BadLight { index } => ctx.bad(format!("light[{index}]"), e.to_string()),
-        SceneError::BadCamera(why) => ctx.bad("camera", why),
+        SceneError::BadCamera(why) => ctx.bad("camera", why.to_string()),
         SceneError::MissingMaterial { .. } => ctx.bad("shape", e.to_string()),
     })?;
     Ok(LoadedScene {
@@ -597,8 +597,6 @@ fn render_settings(
             ));
         }
     };
-    let _ = ctx.count("render.resolution[0]", width, 1, limits::MAX_RESOLUTION)?;
-    let _ = ctx.count("render.resolution[1]", height, 1, limits::MAX_RESOLUTION)?;
     let mode = match r.mode {
         None => d.mode,
         Some(name) => Mode::parse(&name).ok_or_else(|| {
@@ -623,56 +621,39 @@ fn render_settings(
             )
         })?,
     };
+    // The values as written are checked here (a number beyond f32 is reported as written);
+    // every range is checked once, by `RenderSettings::validate`.
     let radius = match r.radius {
         None => None,
-        Some(v) => {
-            let r = ctx.positive("render.radius", v, "metres")?;
-            Some(check_radius(r).map_err(|e| ctx.bad("render.radius", e))?)
-        }
+        Some(v) => Some(ctx.positive("render.radius", v, "metres")?),
     };
     let threshold_radius = match r.threshold_radius {
         None => d.threshold_radius,
         Some(v) => ctx.positive("render.threshold_radius", v, "metres")?,
     };
-    let settings = RenderSettings {
+    let mut settings = RenderSettings {
         width,
         height,
-        passes: ctx.count("render.passes", r.passes.unwrap_or(d.passes), 1, u32::MAX)?,
-        photons: ctx.count(
-            "render.photons",
-            r.photons.unwrap_or(d.photons),
-            1,
-            limits::MAX_PHOTONS,
-        )?,
-        spp: ctx.count("render.spp", r.spp.unwrap_or(d.spp), 1, u32::MAX)?,
+        passes: r.passes.unwrap_or(d.passes),
+        photons: r.photons.unwrap_or(d.photons),
+        spp: r.spp.unwrap_or(d.spp),
         radius,
         seed: r.seed.unwrap_or(d.seed),
-        mode,
+        mode: d.mode,
         threshold_radius,
-        cache_bins: ctx.count(
-            "render.cache_bins",
-            r.cache_bins.unwrap_or(d.cache_bins),
-            1,
-            limits::MAX_CACHE_BINS,
-        )?,
-        cache_photons: match r.cache_photons {
-            None => None,
-            Some(n) => Some(ctx.count("render.cache_photons", n, 1, limits::MAX_PHOTONS)?),
-        },
-        pixel_table_rays: match r.pixel_table_rays {
-            None => d.pixel_table_rays,
-            Some(n) => Some(ctx.count(
-                "render.pixel_table_rays",
-                n,
-                1,
-                limits::MAX_PIXEL_TABLE_RAYS,
-            )?),
-        },
+        cache_bins: r.cache_bins.unwrap_or(d.cache_bins),
+        cache_photons: r.cache_photons,
+        pixel_table_rays: r.pixel_table_rays.or(d.pixel_table_rays),
         clamp_weights: r.clamp_weights.unwrap_or(d.clamp_weights),
         pixel_jitter: r.pixel_jitter.unwrap_or(d.pixel_jitter),
         noise_model,
         roulette_depth: r.roulette_depth.unwrap_or(d.roulette_depth),
     };
+    // The file's `threshold_radius` is the threshold mode's radius.
+    settings.select(mode);
+    settings
+        .validate()
+        .map_err(|e| ctx.bad(format!("render.{}", e.setting().key()), e.to_string()))?;
     if let Some(out) = &r.output
         && out.as_os_str().is_empty()
     {
@@ -716,7 +697,9 @@ fn camera(
         ));
     }
     Camera::look_at(position, look_at, up, vfov, width, height).map_err(|e| match e {
-        SceneError::BadCamera(why) if why.contains("up") => ctx.bad("camera.up", why),
+        SceneError::BadCamera(why @ CameraError::UpParallel) => {
+            ctx.bad("camera.up", why.to_string())
+        }
         other => ctx.bad("camera", other.to_string()),
     })
 }

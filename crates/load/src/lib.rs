@@ -1,5 +1,5 @@
 //! Scene loading for bdpm: a TOML scene file (plus any glTF 2.0 meshes it names) becomes a
-//! [`bdpm_scene::Scene`] and the [`bdpm_integrator::RenderSettings`] to render it with.
+//! [`bdpm_scene::Scene`] and the [`bdpm_settings::RenderSettings`] to render it with.
 //!
 //! The file format is documented field by field in `docs/scene-format.md`. In short:
 //! `[render]` (all optional), `[camera]` (required), `[[light]]` point lights,
@@ -57,12 +57,10 @@ pub use error::LoadError;
 
 /// Caps on values that size allocations or loops, so that a typo cannot exhaust memory.
 pub mod limits {
-    /// Largest image side, pixels.
-    pub const MAX_RESOLUTION: u32 = 16384;
-    /// Most photons per pass.
-    pub const MAX_PHOTONS: u64 = 1_000_000_000;
-    /// Most angular bins per radiance-cache cell.
-    pub const MAX_CACHE_BINS: u32 = 4096;
+    /// The ranges of the `[render]` settings, checked by `RenderSettings::validate`.
+    pub use bdpm_settings::limits::{
+        MAX_CACHE_BINS, MAX_PHOTONS, MAX_PIXEL_TABLE_RAYS, MAX_RESOLUTION,
+    };
     /// Default geodesic frequency of a sphere (20·16² = 5120 triangles).
     pub const SPHERE_SUBDIVISIONS_DEFAULT: u32 = 16;
     /// Largest geodesic frequency of a sphere (20·256² ≈ 1.3 million triangles).
@@ -75,9 +73,6 @@ pub mod limits {
     pub const DELTA_MIN_DEGREES: f32 = 0.05;
     /// Widest lobe width Δ, degrees.
     pub const DELTA_MAX_DEGREES: f32 = 90.0;
-    /// Most backward rays per pixel of the A/B pre-pass (256 times the default of 64). The
-    /// pre-pass shows no progress, and 4·10⁹ rays per pixel would run for days.
-    pub const MAX_PIXEL_TABLE_RAYS: u32 = 16384;
     /// Largest scene (TOML) file, bytes. Real scenes are kilobytes; the cap stops a device
     /// such as `/dev/zero` given as the scene from being read until memory runs out.
     pub const MAX_SCENE_FILE_BYTES: u64 = 256 << 20;
@@ -95,7 +90,7 @@ pub struct LoadedScene {
     pub scene: bdpm_scene::Scene,
     /// `[render]` with defaults filled in; `radius` is always `Some`: the file's value, or
     /// `default_radius` of the largest extent of the scene's bounding box.
-    pub settings: bdpm_integrator::RenderSettings,
+    pub settings: bdpm_settings::RenderSettings,
     /// `[render].output` exactly as written. A relative path is meant relative to the current
     /// directory (as a path typed on the command line would be), not to the scene file.
     pub output: Option<PathBuf>,

@@ -55,7 +55,7 @@ fn the_base_scene_loads() {
     assert_eq!(s.settings.passes, 1);
     assert_eq!(
         s.settings.photons,
-        bdpm_integrator::RenderSettings::default().photons
+        bdpm_settings::RenderSettings::default().photons
     );
 }
 

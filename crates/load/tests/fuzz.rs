@@ -159,7 +159,7 @@ fn the_unmutated_gltf_seed_loads() {
     let scene = dir.join("s.toml");
     std::fs::write(&scene, "[camera]\nposition = [0.5, 2, -2]\nlook_at = [0.5, 0, 0.5]\nvfov = 40\n[[shape]]\ntype = \"mesh\"\nfile = \"m.gltf\"\n").unwrap();
     let loaded = load_scene(&scene).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(loaded.scene.lights.len(), 1);
+    assert_eq!(loaded.scene.lights().len(), 1);
     assert_eq!(loaded.report.triangles, 2);
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -158,7 +158,7 @@ fn close(a: Vec3, b: Vec3, tol: f32) -> bool {
 
 /// Everything the test file encodes, checked on a loaded scene.
 fn check(s: &LoadedScene, gltf_path: &Path) {
-    let g = &s.scene.geometry;
+    let g = &s.scene.geometry();
     // Mesh 0 (2) + mesh 1 (2) + mesh 2's triangle (1) + mesh 3 (2); the line primitive is skipped.
     assert_eq!(s.report.triangles, 7);
     assert_eq!(s.report.skipped_primitives, 1);
@@ -176,7 +176,7 @@ fn check(s: &LoadedScene, gltf_path: &Path) {
         .intersect(Vec3::new(1.0, 1.25, 0.0), Vec3::Z, f32::INFINITY)
         .expect("node 0 quad");
     assert!((hit.p.z - 2.5).abs() < 1e-6);
-    let m = &s.scene.materials[hit.material as usize];
+    let m = &s.scene.materials()[hit.material as usize];
     assert_eq!(m.name, "painted");
     assert_eq!(m.bdf.kd(), Vec3::new(0.2, 0.4, 0.6));
     // Normal (1,0,1)/√2 under scale (2,1,1): the inverse transpose gives (0.5,0,1) normalised.
@@ -191,7 +191,7 @@ fn check(s: &LoadedScene, gltf_path: &Path) {
         .intersect(Vec3::new(0.1, 0.4, 0.0), Vec3::Z, f32::INFINITY)
         .expect("node 1 quad");
     assert!((hit.p.z - 3.5).abs() < 1e-6);
-    let m = &s.scene.materials[hit.material as usize];
+    let m = &s.scene.materials()[hit.material as usize];
     assert_eq!(m.name, "red");
     assert_eq!(m.bdf.kd(), Vec3::new(0.9, 0.1, 0.1));
     assert_eq!(hit.ns, hit.ng, "no normals in the file: flat");
@@ -201,7 +201,7 @@ fn check(s: &LoadedScene, gltf_path: &Path) {
         .intersect(Vec3::new(0.4, 0.1, 0.0), Vec3::Z, f32::INFINITY)
         .expect("node 3 triangle");
     assert!((hit.p.z - 1.0).abs() < 1e-6);
-    let m = &s.scene.materials[hit.material as usize];
+    let m = &s.scene.materials()[hit.material as usize];
     assert_eq!(m.name, "gltf:default");
     assert_eq!(m.bdf.kd(), Vec3::splat(0.8));
 
@@ -209,7 +209,7 @@ fn check(s: &LoadedScene, gltf_path: &Path) {
     let hit = g
         .intersect(Vec3::new(5.25, 0.25, 0.0), Vec3::Z, f32::INFINITY)
         .expect("node 5 quad");
-    let m = &s.scene.materials[hit.material as usize];
+    let m = &s.scene.materials()[hit.material as usize];
     assert!(
         m.name.starts_with("gltf:") && m.name.ends_with("#2"),
         "{}",
@@ -218,8 +218,8 @@ fn check(s: &LoadedScene, gltf_path: &Path) {
     assert_eq!(m.bdf.kd(), Vec3::splat(0.3));
 
     // The point light of node 2 (child of node 1): (0,1,0) + (0,0,5), then the placement.
-    assert_eq!(s.scene.lights.len(), 1);
-    let light = s.scene.lights[0];
+    assert_eq!(s.scene.lights().len(), 1);
+    let light = s.scene.lights()[0];
     assert!(
         close(light.position, Vec3::new(0.0, 0.5, 3.5), 1e-6),
         "{}",
@@ -445,7 +445,7 @@ fn strips_and_fans_become_triangle_lists_and_skips_are_counted() {
     assert!(warnings.iter().any(|w| w.contains("base-colour texture")));
     // The strip's triangles are the specification's (v0, v1, v2), (v1, v3, v2); the fan's
     // (v1, v2, v0), (v2, v3, v0), both facing +z like the quad.
-    let g = &s.scene.geometry;
+    let g = &s.scene.geometry();
     let q = [
         Vec3::new(0.0, 0.0, 0.0),
         Vec3::new(1.0, 0.0, 0.0),

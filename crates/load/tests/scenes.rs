@@ -26,22 +26,25 @@ fn close(a: Vec3, b: Vec3, tol: f32) -> bool {
 fn check_cornell_geometry(s: &LoadedScene) {
     // 5 room quads + 5 per block, 2 triangles each.
     assert_eq!(s.report.triangles, 30);
-    assert_eq!(s.scene.geometry.triangle_count(), 30);
+    assert_eq!(s.scene.geometry().triangle_count(), 30);
     assert_eq!(s.report.degenerate_triangles, 0);
-    let (lo, hi) = s.scene.geometry.bounds();
+    let (lo, hi) = s.scene.geometry().bounds();
     assert!(close(lo, Vec3::ZERO, 1e-6), "min {lo}");
     assert!(close(hi, Vec3::new(2.78, 2.744, 2.796), 1e-5), "max {hi}");
     let radius = s.settings.radius.expect("radius resolved");
     assert!((radius - 2.796 / 1600.0).abs() < 1e-7, "radius {radius}");
-    let cam = &s.scene.camera;
-    assert!(close(cam.position, Vec3::new(1.39, 1.365, -4.0), 1e-6));
-    assert!(close(cam.forward, Vec3::Z, 1e-6));
-    assert_eq!((cam.width, cam.height, cam.vfov_degrees), (256, 256, 39.3));
+    let cam = &s.scene.camera();
+    assert!(close(cam.position(), Vec3::new(1.39, 1.365, -4.0), 1e-6));
+    assert!(close(cam.forward(), Vec3::Z, 1e-6));
+    assert_eq!(
+        (cam.width(), cam.height(), cam.vfov_degrees()),
+        (256, 256, 39.3)
+    );
     // The floor quad as published: (552.8,0,0) (0,0,0) (0,0,559.2) (549.6,0,559.2) mm, split 0–2.
-    let t0 = s.scene.geometry.vertices(0);
+    let t0 = s.scene.geometry().vertices(0);
     assert!(close(t0[0], Vec3::new(2.764, 0.0, 0.0), 1e-6));
     assert!(close(t0[2], Vec3::new(0.0, 0.0, 2.796), 1e-6));
-    let t1 = s.scene.geometry.vertices(1);
+    let t1 = s.scene.geometry().vertices(1);
     assert!(close(t1[2], Vec3::new(2.748, 0.0, 2.796), 1e-6));
 }
 
@@ -49,17 +52,17 @@ fn check_cornell_geometry(s: &LoadedScene) {
 fn cornell_lambert_matches_appendix_a() {
     let s = load("cornell-lambert.toml");
     check_cornell_geometry(&s);
-    assert_eq!(s.scene.lights.len(), 1);
+    assert_eq!(s.scene.lights().len(), 1);
     assert!(close(
-        s.scene.lights[0].position,
+        s.scene.lights()[0].position,
         Vec3::new(1.39, 2.676, 1.398),
         1e-6
     ));
-    assert_eq!(s.scene.lights[0].flux, Vec3::ONE);
+    assert_eq!(s.scene.lights()[0].flux, Vec3::ONE);
     assert!(s.scene.all_lambert());
     for prim in 0..30 {
         assert_eq!(
-            s.scene.bdf(s.scene.geometry.material(prim)).kd(),
+            s.scene.bdf(s.scene.geometry().material(prim)).kd(),
             Vec3::splat(0.5)
         );
     }
@@ -80,7 +83,7 @@ fn cornell_glossy_matches_method_section_10() {
     let s = load("cornell-glossy.toml");
     check_cornell_geometry(&s);
     assert!(close(
-        s.scene.lights[0].position,
+        s.scene.lights()[0].position,
         Vec3::new(1.39, 2.626, 1.398),
         1e-6
     ));
@@ -92,7 +95,7 @@ fn cornell_glossy_matches_method_section_10() {
     let material_towards = |dir: Vec3| {
         let hit = s
             .scene
-            .geometry
+            .geometry()
             .intersect(centre, dir, f32::INFINITY)
             .expect("the box is closed there");
         s.scene.bdf(hit.material)
@@ -116,7 +119,7 @@ fn cornell_glossy_matches_method_section_10() {
     // Blocks: the short block's top at (186, 165, 169) mm, seen from above.
     let hit = s
         .scene
-        .geometry
+        .geometry()
         .intersect(Vec3::new(0.93, 2.0, 0.845), Vec3::NEG_Y, f32::INFINITY)
         .expect("block top");
     assert!((hit.p.y - 0.825).abs() < 1e-5);
@@ -126,7 +129,7 @@ fn cornell_glossy_matches_method_section_10() {
 #[test]
 fn sphere_furnace_is_a_fine_inward_sphere() {
     let s = load("sphere-furnace.toml");
-    let g = &s.scene.geometry;
+    let g = &s.scene.geometry();
     assert!(
         g.triangle_count() >= 20_000,
         "{} triangles",
@@ -151,12 +154,12 @@ fn sphere_furnace_is_a_fine_inward_sphere() {
         "an inscribed polyhedron has less area than its sphere"
     );
     assert!(close(
-        s.scene.lights[0].position,
+        s.scene.lights()[0].position,
         Vec3::new(0.3, -0.2, 0.1),
         0.0
     ));
-    assert!(close(s.scene.camera.forward, Vec3::X, 1e-6));
-    assert_eq!(s.scene.camera.vfov_degrees, 60.0);
+    assert!(close(s.scene.camera().forward(), Vec3::X, 1e-6));
+    assert_eq!(s.scene.camera().vfov_degrees(), 60.0);
     assert_eq!(s.scene.bdf(0).kd(), Vec3::splat(0.5));
     // Watertight: rays from inside in many directions all hit the sphere.
     for k in 0..2000 {

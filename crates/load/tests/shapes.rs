@@ -29,7 +29,7 @@ fn load(shapes: &str) -> LoadedScene {
 
 /// Sign of (front normal) · (centroid − centre) for every triangle: +1 all outward, −1 all inward.
 fn facing(s: &LoadedScene, centre: Vec3) -> f32 {
-    let g = &s.scene.geometry;
+    let g = &s.scene.geometry();
     let signs: Vec<f32> = (0..g.triangle_count() as u32)
         .map(|t| {
             let v = g.vertices(t);
@@ -48,8 +48,8 @@ fn box_faces_outward_by_default_and_inward_on_request() {
     let s = load(shape);
     assert_eq!(s.report.triangles, 12);
     assert_eq!(facing(&s, Vec3::new(1.5, 3.0, 4.5)), 1.0);
-    assert!((s.scene.geometry.total_area() - 2.0 * (2.0 + 3.0 + 6.0)).abs() < 1e-4);
-    let (lo, hi) = s.scene.geometry.bounds();
+    assert!((s.scene.geometry().total_area() - 2.0 * (2.0 + 3.0 + 6.0)).abs() < 1e-4);
+    let (lo, hi) = s.scene.geometry().bounds();
     assert_eq!(
         (lo, hi),
         (Vec3::new(1.0, 2.0, 3.0), Vec3::new(2.0, 4.0, 6.0))
@@ -61,7 +61,7 @@ fn box_faces_outward_by_default_and_inward_on_request() {
     assert_eq!(s.report.triangles, 8);
     assert_eq!(facing(&s, Vec3::new(1.5, 3.0, 4.5)), -1.0);
     // The −z face is open: a ray from inside towards −z escapes, one towards +z does not.
-    let g = &s.scene.geometry;
+    let g = &s.scene.geometry();
     assert!(
         g.intersect(Vec3::new(1.5, 3.0, 4.5), Vec3::NEG_Z, f32::INFINITY)
             .is_none()
@@ -76,7 +76,7 @@ fn box_faces_outward_by_default_and_inward_on_request() {
 fn box_placement_with_negative_scale() {
     let shape = "[[shape]]\ntype = \"box\"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\nscale = [-2, 1, 1]\ntranslate = [0, 0, 1]\nmaterial = \"m\"\n";
     let s = load(shape);
-    let (lo, hi) = s.scene.geometry.bounds();
+    let (lo, hi) = s.scene.geometry().bounds();
     assert_eq!(
         (lo, hi),
         (Vec3::new(-2.0, 0.0, 1.0), Vec3::new(0.0, 1.0, 2.0))
@@ -88,7 +88,7 @@ fn box_placement_with_negative_scale() {
 fn quad_keeps_vertex_order_and_split() {
     let shape = "[[shape]]\ntype = \"quad\"\nvertices = [[0,0,0],[0,0,100],[100,0,100],[100,0,0]]\nscale = 0.01\nmaterial = \"m\"\n";
     let s = load(shape);
-    let g = &s.scene.geometry;
+    let g = &s.scene.geometry();
     assert_eq!(
         g.vertices(0),
         [
@@ -123,7 +123,7 @@ fn sphere_counts_area_and_facing() {
         assert_eq!(s.report.triangles, 20 * subdivisions * subdivisions);
         assert_eq!(s.report.degenerate_triangles, 0);
         assert_eq!(facing(&s, centre), sign);
-        let ratio = s.scene.geometry.total_area() as f32 / (4.0 * PI * 4.0);
+        let ratio = s.scene.geometry().total_area() as f32 / (4.0 * PI * 4.0);
         assert!(ratio < 1.0, "inscribed");
         if subdivisions == 32 {
             assert!((ratio - 1.0).abs() < 0.001, "area ratio {ratio}");

@@ -4,7 +4,7 @@
 //! progress bar and the facts about the machine that reports record.
 use std::path::{Path, PathBuf};
 
-use bdpm_integrator::{Mode, NoiseModel, RenderSettings};
+use bdpm_integrator::{Mode, NoiseModel, RenderSettings, Setting};
 use bdpm_load::{LoadReport, load_scene};
 use bdpm_scene::Scene;
 use clap::Args;
@@ -111,17 +111,16 @@ pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
 /// Applies command-line overrides to the settings loaded from the scene file.
 pub fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> CliResult<()> {
     if let Some(name) = &o.mode {
-        settings.mode = Mode::parse(name).ok_or_else(|| {
+        let mode = Mode::parse(name).ok_or_else(|| {
             format!(
                 "--mode: unknown mode '{name}'; expected one of {}",
                 Mode::names().join(", ")
             )
         })?;
+        // A scene file's `threshold_radius` stays the threshold mode's radius.
+        settings.select(mode);
     }
     if let Some(p) = o.passes {
-        if p == 0 {
-            return Err("--passes must be at least 1".into());
-        }
         settings.passes = p;
     }
     if let Some((w, h)) = o.resolution {
@@ -129,15 +128,9 @@ pub fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> CliResul
         settings.height = h;
     }
     if let Some(n) = o.photons {
-        if n == 0 {
-            return Err("--photons must be at least 1".into());
-        }
         settings.photons = n;
     }
     if let Some(n) = o.spp {
-        if n == 0 {
-            return Err("--spp must be at least 1".into());
-        }
         settings.spp = n;
     }
     if let Some(r) = o.radius {
@@ -151,8 +144,7 @@ pub fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> CliResul
                 "--radius must be a positive number of metres below 3.4e38, not {r}"
             ));
         }
-        let r = bdpm_integrator::check_radius(r as f32).map_err(|e| format!("--radius: {e}"))?;
-        settings.radius = Some(r);
+        settings.radius = Some(r as f32);
     }
     if o.no_jitter {
         settings.pixel_jitter = false;
@@ -168,7 +160,18 @@ pub fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> CliResul
     if let Some(s) = o.seed {
         settings.seed = s;
     }
-    Ok(())
+    // The scene file's values were validated by the loader, so an error here is a flag's.
+    settings.validate().map_err(|e| {
+        let flag = match e.setting() {
+            Setting::Width | Setting::Height => "--resolution".to_string(),
+            Setting::Passes => "--passes".into(),
+            Setting::Photons => "--photons".into(),
+            Setting::Spp => "--spp".into(),
+            Setting::Radius => "--radius".into(),
+            other => format!("render.{}", other.key()),
+        };
+        format!("{flag}: {e}")
+    })
 }
 
 /// The worker threads of a command: `threads` of them (`--threads`), or one per core.
@@ -216,10 +219,9 @@ pub fn prepare(path: &Path, overrides: &Overrides) -> CliResult<Prepared> {
     let mut scene = loaded.scene;
     let mut settings = loaded.settings;
     apply_overrides(&mut settings, overrides)?;
-    if (scene.camera.width, scene.camera.height) != (settings.width, settings.height) {
-        scene.camera = scene
-            .camera
-            .with_resolution(settings.width, settings.height)
+    if (scene.camera().width(), scene.camera().height()) != (settings.width, settings.height) {
+        scene
+            .set_resolution(settings.width, settings.height)
             .map_err(|e| format!("--resolution: {e}"))?;
     }
     Ok(Prepared {

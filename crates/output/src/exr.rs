@@ -125,7 +125,7 @@ fn rgb_channels(
 /// mean. `attributes` go into the header as text.
 pub fn write_exr(path: &Path, film: &Film, attributes: &[(String, String)]) -> Result<(), String> {
     let channels = film_channels(film, &[], Precision::Float);
-    write_channels(path, (film.width, film.height), channels, attributes)
+    write_channels(path, (film.width(), film.height()), channels, attributes)
 }
 
 /// The film's mean, `noise` and `stderr` RGB layers, then `extra`, at `precision`.
@@ -162,7 +162,7 @@ pub fn stage_exr_with_layers(
 ) -> Result<Staged, String> {
     let channels = film_channels(film, extra, precision);
     stage(path, |f| {
-        encode_channels(f, (film.width, film.height), channels, attributes)
+        encode_channels(f, (film.width(), film.height()), channels, attributes)
     })
 }
 

@@ -66,7 +66,7 @@ pub fn encode_png(film: &Film) -> Result<Vec<u8>, String> {
         .flat_map(|c| [c.x, c.y, c.z])
         .map(|v| (srgb(v * k) * 255.0 + 0.5) as u8)
         .collect();
-    encode_png_rgb8(film.width, film.height, &rgb)
+    encode_png_rgb8(film.width(), film.height(), &rgb)
 }
 
 /// Writes the tonemapped preview of the mean atomically (see [`encode_png`]).

@@ -2,7 +2,9 @@
 //! each stage cost.
 use std::path::Path;
 
-use bdpm_integrator::{Film, MemoryEstimate, RenderSettings, Renderer, WeightStats};
+use bdpm_integrator::{
+    Film, MemoryEstimate, RenderSettings, Renderer, SettingsRecord, WeightStats,
+};
 use bdpm_load::LoadReport;
 use serde::Serialize;
 
@@ -142,30 +144,6 @@ struct Stage {
 }
 
 #[derive(Serialize)]
-struct SettingsOut {
-    mode: String,
-    width: u32,
-    height: u32,
-    passes: u32,
-    photons_per_pass: u64,
-    spp: u32,
-    /// The merge radius in use (the scene's default when none was given).
-    radius_m: f32,
-    /// Whether the radius was given (scene file or `--radius`) or is the scene default.
-    radius_given: bool,
-    seed: u64,
-    threshold_radius_m: f32,
-    cache_bins: u32,
-    /// Photons traced for the radiance cache (N_F unless set).
-    cache_photons: u64,
-    pixel_table_rays: u32,
-    clamp_weights: bool,
-    pixel_jitter: bool,
-    /// `pinhole` or `footprint` (method.md §12).
-    noise_model: &'static str,
-}
-
-#[derive(Serialize)]
 struct SceneOut {
     path: String,
     triangles: usize,
@@ -207,7 +185,7 @@ pub struct RunReport {
     /// Equal to the EXR's `bdpm.run_id` when the two files come from the same run.
     run_id: String,
     scene: SceneOut,
-    settings: SettingsOut,
+    settings: SettingsRecord,
     threads: usize,
     passes_done: u32,
     interrupted: bool,
@@ -232,34 +210,6 @@ pub struct RunReport {
     warnings: Vec<String>,
     /// The memory estimate made before rendering, its limit and the measured peak.
     memory: MemoryOut,
-}
-
-/// The settings as asked for, with the merge radius and the weight clamp in force (the
-/// footprint noise model always clamps).
-fn settings_out(
-    s: &RenderSettings,
-    radius: f32,
-    radius_given: bool,
-    clamp_weights: bool,
-) -> SettingsOut {
-    SettingsOut {
-        mode: s.mode.name().to_string(),
-        width: s.width,
-        height: s.height,
-        passes: s.passes,
-        photons_per_pass: s.photons,
-        spp: s.spp,
-        radius_m: radius,
-        radius_given,
-        seed: s.seed,
-        threshold_radius_m: s.threshold_radius,
-        cache_bins: s.cache_bins,
-        cache_photons: s.cache_photons.unwrap_or(s.photons),
-        pixel_table_rays: s.table_rays(),
-        clamp_weights,
-        pixel_jitter: s.pixel_jitter,
-        noise_model: s.noise_model.name(),
-    }
 }
 
 impl RunReport {
@@ -289,12 +239,8 @@ impl RunReport {
                     textured_materials: f.load.textured_materials,
                 },
             },
-            settings: settings_out(
-                f.settings,
-                f.renderer.radius(),
-                f.radius_given,
-                f.renderer.settings().clamp_weights,
-            ),
+            // The settings as asked for, with the merge radius and the weight clamp in force.
+            settings: f.settings.record(f.renderer.radius(), f.radius_given),
             threads: f.threads,
             passes_done: f.film.passes(),
             interrupted: f.interrupted,
@@ -377,22 +323,14 @@ pub fn header_attributes(
     r: &Renderer<'_>,
     radius_given: bool,
 ) -> Vec<(String, String)> {
-    let mut v = vec![
-        ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
-        ("mode".into(), s.mode.name().into()),
-        ("seed".into(), s.seed.to_string()),
-        ("passes".into(), s.passes.to_string()),
-        ("photons_per_pass".into(), s.photons.to_string()),
-        ("spp".into(), s.spp.to_string()),
-        ("pixel_jitter".into(), s.pixel_jitter.to_string()),
-        ("noise_model".into(), s.noise_model.name().into()),
-        // The radius in use, also when the scene left it to the default.
-        ("radius_m".into(), r.radius().to_string()),
-        (
-            "radius_source".into(),
-            if radius_given { "given" } else { "default" }.into(),
-        ),
-    ];
+    let mut v = vec![("version".to_string(), env!("CARGO_PKG_VERSION").to_string())];
+    // The same record as the JSON report's, with the radius in use.
+    v.extend(
+        s.record(r.radius(), radius_given)
+            .header_attributes()
+            .into_iter()
+            .map(|(k, val)| (k.to_string(), val)),
+    );
     for st in r.stages() {
         v.push((
             format!("stage.{}", st.name.replace(' ', "_")),

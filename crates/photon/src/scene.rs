@@ -57,12 +57,12 @@ impl PhotonScene for Scene {
 
     #[inline]
     fn light(&self, index: usize) -> PointLight {
-        self.lights[index]
+        self.lights()[index]
     }
 
     #[inline]
     fn intersect(&self, origin: Vec3, dir: Vec3) -> Option<Shading> {
-        self.geometry
+        self.geometry()
             .intersect(origin, dir, f32::INFINITY)
             .map(|hit| self.shade(&hit, -dir))
     }

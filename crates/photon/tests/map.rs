@@ -237,7 +237,7 @@ fn photons_point_back_to_their_previous_vertex() {
         assert_eq!(q.to_bits(), v.survival.to_bits());
         assert!(v.survival <= 0.95);
         if v.depth == 0 {
-            let to_light = (scene.lights[v.light as usize].position - v.at.p).normalize();
+            let to_light = (scene.lights()[v.light as usize].position - v.at.p).normalize();
             assert!((to_light - v.incoming).length() < 1e-4);
         }
     }
@@ -254,7 +254,7 @@ fn light_visibility_bits_match_analytic_shadows() {
     let (mut checked, mut set, mut shelf_back) = (0, 0, 0);
     // Visibility is recorded where the weights read it: at each photon's previous vertex.
     for v in map.photons().iter().map(|p| map.vertex(p.prev)) {
-        for (l, light) in scene.lights.iter().enumerate() {
+        for (l, light) in scene.lights().iter().enumerate() {
             let to = light.position - v.at.p;
             // A vertex on the shelf itself sees only the lights on its own side; that is the
             // side test below, so its segment "crosses" nothing.

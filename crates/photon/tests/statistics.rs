@@ -90,7 +90,7 @@ fn emit_chi_square_accepts_uniform_and_rejects_biased_directions() {
     for _ in 0..n {
         let e = emit(&scene, rng.uniform(), rng.uniform2(), n).unwrap();
         assert!((e.direction.length() - 1.0).abs() < 1e-5);
-        assert_eq!(e.origin, scene.lights[e.light].position);
+        assert_eq!(e.origin, scene.lights()[e.light].position);
         good[sphere_bin(e.direction)] += 1;
         // A 5 % tilt towards +z, as a plausible sampling bug.
         biased[sphere_bin((e.direction + Vec3::Z * 0.05).normalize())] += 1;
@@ -177,7 +177,7 @@ fn furnace_density_matches_uniform_indirect_irradiance() {
         vec![Bdf::lambert(Vec3::splat(k)).unwrap()],
         &[(Vec3::new(0.3, -0.2, 0.1), Vec3::splat(flux))],
     );
-    let area = scene.geometry.total_area();
+    let area = scene.geometry().total_area();
     let e_ind = (k * flux) as f64 / ((1.0 - k) as f64 * area);
     let r = 0.1f32;
     let map = PhotonMap::trace(&scene, &TraceOptions::new(400_000, 9, 0), r);
@@ -188,7 +188,7 @@ fn furnace_density_matches_uniform_indirect_irradiance() {
     for _ in 0..points {
         let d = bdpm_geometry::sampling::uniform_sphere(rng.uniform2());
         let hit = scene
-            .geometry
+            .geometry()
             .intersect(Vec3::ZERO, d, f32::INFINITY)
             .unwrap();
         let (mut sum, mut sum2, mut count) = (0.0f64, 0.0f64, 0u64);

@@ -1,24 +1,21 @@
 use glam::Vec3;
 
-use crate::SceneError;
+use crate::{CameraError, SceneError};
 
 /// A pinhole camera with a square-pixel image plane; image row 0 is the top.
+///
+/// The fields are private because they depend on each other (an orthonormal frame, the
+/// tangent of half the field of view): build one with [`Camera::look_at`] and resize it with
+/// [`Camera::with_resolution`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
-    /// Pinhole position, metres.
-    pub position: Vec3,
-    /// Unit viewing direction.
-    pub forward: Vec3,
-    /// Unit image-right direction (`forward × up`).
-    pub right: Vec3,
-    /// Unit image-up direction.
-    pub up: Vec3,
-    /// Vertical field of view, degrees.
-    pub vfov_degrees: f32,
-    /// Image width, pixels.
-    pub width: u32,
-    /// Image height, pixels.
-    pub height: u32,
+    pub(crate) position: Vec3,
+    forward: Vec3,
+    right: Vec3,
+    up: Vec3,
+    vfov_degrees: f32,
+    width: u32,
+    height: u32,
     tan_half: f32,
 }
 
@@ -34,27 +31,21 @@ impl Camera {
         height: u32,
     ) -> Result<Camera, SceneError> {
         if !(eye.is_finite() && target.is_finite() && up.is_finite()) {
-            return Err(SceneError::BadCamera(
-                "position, target and up must be finite",
-            ));
+            return Err(SceneError::BadCamera(CameraError::NotFinite));
         }
         let forward = (target - eye).normalize_or_zero();
         if forward == Vec3::ZERO {
-            return Err(SceneError::BadCamera("target equals position"));
+            return Err(SceneError::BadCamera(CameraError::TargetIsPosition));
         }
         let right = forward.cross(up).normalize_or_zero();
         if right == Vec3::ZERO {
-            return Err(SceneError::BadCamera(
-                "up is parallel to the viewing direction",
-            ));
+            return Err(SceneError::BadCamera(CameraError::UpParallel));
         }
         if !(vfov_degrees > 0.0 && vfov_degrees < 179.0) {
-            return Err(SceneError::BadCamera(
-                "vertical fov must be in (0, 179) degrees",
-            ));
+            return Err(SceneError::BadCamera(CameraError::FieldOfView));
         }
         if width == 0 || height == 0 {
-            return Err(SceneError::BadCamera("resolution must be at least 1×1"));
+            return Err(SceneError::BadCamera(CameraError::Resolution));
         }
         let up = right.cross(forward);
         Ok(Camera {
@@ -67,6 +58,49 @@ impl Camera {
             height,
             tan_half: (vfov_degrees.to_radians() * 0.5).tan(),
         })
+    }
+
+    /// Pinhole position, metres (in the scene's frame once the camera is part of a
+    /// [`crate::Scene`]).
+    #[inline]
+    pub fn position(&self) -> Vec3 {
+        self.position
+    }
+
+    /// Unit viewing direction.
+    #[inline]
+    pub fn forward(&self) -> Vec3 {
+        self.forward
+    }
+
+    /// Unit image-right direction (`forward × up`).
+    #[inline]
+    pub fn right(&self) -> Vec3 {
+        self.right
+    }
+
+    /// Unit image-up direction.
+    #[inline]
+    pub fn up(&self) -> Vec3 {
+        self.up
+    }
+
+    /// Vertical field of view, degrees.
+    #[inline]
+    pub fn vfov_degrees(&self) -> f32 {
+        self.vfov_degrees
+    }
+
+    /// Image width, pixels.
+    #[inline]
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Image height, pixels.
+    #[inline]
+    pub fn height(&self) -> u32 {
+        self.height
     }
 
     /// The same camera with another image size (the field of view stays vertical).

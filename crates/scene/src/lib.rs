@@ -81,7 +81,34 @@ pub enum SceneError {
         index: usize,
     },
     /// The camera's parameters do not define a view.
-    BadCamera(&'static str),
+    BadCamera(CameraError),
+}
+
+/// Why a camera's parameters do not define a view ([`SceneError::BadCamera`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CameraError {
+    /// Position, target or up is not finite.
+    NotFinite,
+    /// The target equals the position: no viewing direction.
+    TargetIsPosition,
+    /// The up vector is parallel to the viewing direction.
+    UpParallel,
+    /// The vertical field of view is outside (0, 179) degrees.
+    FieldOfView,
+    /// Width or height is 0.
+    Resolution,
+}
+
+impl fmt::Display for CameraError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            CameraError::NotFinite => "position, target and up must be finite",
+            CameraError::TargetIsPosition => "target equals position",
+            CameraError::UpParallel => "up is parallel to the viewing direction",
+            CameraError::FieldOfView => "vertical fov must be in (0, 179) degrees",
+            CameraError::Resolution => "resolution must be at least 1×1",
+        })
+    }
 }
 
 impl fmt::Display for SceneError {
@@ -124,16 +151,17 @@ pub struct Shading {
 }
 
 /// Geometry, materials, lights and camera of one render.
+///
+/// The parts are read through accessors and fixed at [`Scene::new`]: the light-selection
+/// CDF is built from the lights, the lights and the camera are moved into the geometry's
+/// frame, and every triangle's material index is checked, so changing one part alone would
+/// leave the others wrong. [`Scene::set_resolution`] changes the one thing that can change.
 #[derive(Debug)]
 pub struct Scene {
-    /// Surfaces and BVH; its frame (world minus [`Geometry::origin`]) is the scene's frame.
-    pub geometry: Geometry,
-    /// Materials indexed by the triangles' material index.
-    pub materials: Vec<Material>,
-    /// Point lights, positions in the geometry's frame.
-    pub lights: Vec<PointLight>,
-    /// The camera, position in the geometry's frame.
-    pub camera: Camera,
+    geometry: Geometry,
+    materials: Vec<Material>,
+    lights: Vec<PointLight>,
+    camera: Camera,
     light_cdf: Vec<f32>,
 }
 
@@ -185,6 +213,41 @@ impl Scene {
             camera,
             light_cdf,
         })
+    }
+
+    /// Surfaces and BVH; its frame (world minus [`Geometry::origin`]) is the scene's frame.
+    #[inline]
+    pub fn geometry(&self) -> &Geometry {
+        &self.geometry
+    }
+
+    /// The geometry alone, the rest of the scene dropped (for benchmarks of the ray kernel).
+    pub fn into_geometry(self) -> Geometry {
+        self.geometry
+    }
+
+    /// Materials indexed by the triangles' material index.
+    #[inline]
+    pub fn materials(&self) -> &[Material] {
+        &self.materials
+    }
+
+    /// Point lights, positions in the geometry's frame (metres).
+    #[inline]
+    pub fn lights(&self) -> &[PointLight] {
+        &self.lights
+    }
+
+    /// The camera, position in the geometry's frame (metres).
+    #[inline]
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
+    /// Gives the camera another image size (the field of view stays vertical).
+    pub fn set_resolution(&mut self, width: u32, height: u32) -> Result<(), SceneError> {
+        self.camera = self.camera.with_resolution(width, height)?;
+        Ok(())
     }
 
     /// The scattering model of a material index.

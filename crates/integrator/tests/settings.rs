@@ -1,0 +1,106 @@
+//! The renderer keeps the caller's settings: the weight clamp in force is computed and
+//! reported, never written into the caller's mode, and settings errors are typed.
+
+use bdpm_bdf::Bdf;
+use bdpm_geometry::{Geometry, TriangleMesh};
+use bdpm_integrator::{Mode, RenderError, RenderSettings, Renderer, Setting, SettingsError};
+use bdpm_mis::Heuristic;
+use bdpm_scene::{Camera, Material, PointLight, Scene};
+use glam::Vec3;
+
+/// A floor lit from above, seen by an 8×8 camera.
+fn scene() -> Scene {
+    let mut mesh = TriangleMesh::default();
+    mesh.push_quad(
+        [
+            Vec3::new(-1.0, 0.0, -1.0),
+            Vec3::new(-1.0, 0.0, 1.0),
+            Vec3::new(1.0, 0.0, 1.0),
+            Vec3::new(1.0, 0.0, -1.0),
+        ],
+        0,
+    );
+    Scene::new(
+        Geometry::new(mesh).unwrap(),
+        vec![Material {
+            name: "floor".into(),
+            bdf: Bdf::lambert(Vec3::splat(0.5)).unwrap(),
+        }],
+        vec![PointLight {
+            position: Vec3::new(0.0, 1.0, 0.0),
+            flux: Vec3::ONE,
+        }],
+        Camera::look_at(Vec3::new(0.0, 1.0, -2.0), Vec3::ZERO, Vec3::Y, 40.0, 8, 8).unwrap(),
+    )
+    .unwrap()
+}
+
+fn settings(mode: Mode) -> RenderSettings {
+    let mut s = RenderSettings {
+        width: 8,
+        height: 8,
+        photons: 1000,
+        ..RenderSettings::default()
+    };
+    s.select(mode);
+    s
+}
+
+#[test]
+fn the_footprint_clamp_is_computed_not_written_into_the_mode() {
+    let scene = scene();
+    let s = settings(Mode::parse("optimal").unwrap());
+    let r = Renderer::new(&scene, &s).unwrap();
+    assert_eq!(r.settings().mode, s.mode, "the caller's mode is kept");
+    assert_eq!(
+        r.heuristic(),
+        Some(Heuristic::Optimal {
+            clamp_weights: true
+        })
+    );
+    assert!(r.settings().weight_clamp().footprint);
+    assert!(r.settings().record(r.radius(), false).clamp_weights);
+}
+
+#[test]
+fn the_callers_threshold_radius_is_used_or_refused() {
+    let scene = scene();
+    let mut s = RenderSettings {
+        mode: Mode::Bdpm(Heuristic::Threshold { radius: 0.5 }),
+        ..settings(Mode::Path)
+    };
+    assert_eq!(
+        Renderer::new(&scene, &s).err(),
+        Some(RenderError::Settings(SettingsError::ThresholdMismatch {
+            mode: 0.5,
+            setting: 0.2
+        }))
+    );
+    s.set_threshold_radius(0.5);
+    let r = Renderer::new(&scene, &s).unwrap();
+    assert_eq!(r.heuristic(), Some(Heuristic::Threshold { radius: 0.5 }));
+}
+
+#[test]
+fn settings_errors_are_typed() {
+    let scene = scene();
+    let s = RenderSettings {
+        spp: 0,
+        ..settings(Mode::Path)
+    };
+    match Renderer::new(&scene, &s).err() {
+        Some(RenderError::Settings(e)) => assert_eq!(e.setting(), Setting::Spp),
+        other => panic!("{other:?}"),
+    }
+    let s = RenderSettings {
+        width: 16,
+        ..settings(Mode::Path)
+    };
+    assert!(matches!(
+        Renderer::new(&scene, &s).err(),
+        Some(RenderError::Resolution {
+            camera: (8, 8),
+            settings: (16, 8)
+        })
+    ));
+}

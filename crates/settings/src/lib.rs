@@ -1,0 +1,502 @@
+//! The render settings of bdpm: one type ([`RenderSettings`]), one validation
+//! ([`RenderSettings::validate`]) and one record of them for reports and image headers
+//! ([`SettingsRecord`]), shared by the scene loader, the integrator and the driver.
+//!
+//! Units: distances in metres.
+//!
+//! **Architecture invariant:** this crate depends on `bdpm-mis` (for [`Heuristic`] and
+//! [`NoiseModel`]) and on nothing of geometry, scenes or photons, so the loader can build
+//! settings without the integrator. Serde support is behind the cargo feature `serde`.
+//!
+//! **No silent rewrites:** the parameters a caller puts into [`Mode`] are the ones used.
+//! The threshold radius lives both in the `threshold` heuristic and in
+//! [`RenderSettings::threshold_radius`]; [`RenderSettings::validate`] rejects the two when
+//! they disagree instead of picking one. The weight clamp the renderer uses is computed, not
+//! written back: [`RenderSettings::weight_clamp`] says whether the caller asked for it and
+//! whether the footprint noise model needs it, and [`RenderSettings::heuristic`] gives the
+//! heuristic in force with that clamp.
+//!
+//! ```
+//! use bdpm_settings::{Mode, RenderSettings, Setting, SettingsError};
+//! let mut s = RenderSettings::default();
+//! s.select(Mode::parse("threshold").unwrap());
+//! s.set_threshold_radius(0.5);
+//! assert!(s.validate().is_ok());
+//! s.passes = 0;
+//! let e = s.validate().unwrap_err();
+//! assert_eq!(e.setting(), Setting::Passes);
+//! assert!(matches!(e, SettingsError::OutOfRange { value: 0, .. }));
+//! ```
+
+use std::fmt;
+
+pub use bdpm_mis::{Heuristic, NoiseModel};
+
+mod record;
+#[cfg(feature = "serde")]
+mod serde_impl;
+
+pub use record::SettingsRecord;
+
+/// What a render computes: the unidirectional reference, or the BDPM mix with a weight mode.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Mode {
+    /// Unidirectional path tracing with next-event estimation (the reference).
+    Path,
+    /// Exact direct light plus light tracing connected to the camera (a second, independent
+    /// reference that converges fast around small bright secondary sources).
+    Light,
+    /// The BDD=0/BDD=1 photon-mapping mix weighted by a heuristic (method.md §4, §8).
+    Bdpm(Heuristic),
+}
+
+impl Mode {
+    /// Every mode name the parser accepts, the references (`path`, `light`) first.
+    pub fn names() -> Vec<&'static str> {
+        ["path", "light"]
+            .into_iter()
+            .chain(Heuristic::ALL_NAMES.iter().copied())
+            .collect()
+    }
+
+    /// Parses a mode name (`path`, `bdd0`, `bdd1`, `threshold`, …) with the heuristic's
+    /// default parameters ([`Heuristic::parse`]); [`RenderSettings::select`] gives it the
+    /// settings' own.
+    pub fn parse(name: &str) -> Option<Mode> {
+        match name {
+            "path" => Some(Mode::Path),
+            "light" => Some(Mode::Light),
+            _ => Heuristic::parse(name).map(Mode::Bdpm),
+        }
+    }
+
+    /// The mode's name as [`Mode::parse`] accepts it.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Mode::Path => "path",
+            Mode::Light => "light",
+            Mode::Bdpm(h) => h.name(),
+        }
+    }
+
+    /// The heuristic of a BDPM mode; `None` for the references.
+    pub fn heuristic(&self) -> Option<Heuristic> {
+        match self {
+            Mode::Bdpm(h) => Some(*h),
+            Mode::Path | Mode::Light => None,
+        }
+    }
+}
+
+impl fmt::Display for Mode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Everything a render needs besides the scene. Defaults live in [`RenderSettings::default`];
+/// [`RenderSettings::validate`] checks a value before use.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderSettings {
+    /// Image width, pixels.
+    pub width: u32,
+    /// Image height, pixels.
+    pub height: u32,
+    /// Number of passes K (each with a new photon map and new camera samples).
+    pub passes: u32,
+    /// Photons emitted per pass, N_F.
+    pub photons: u64,
+    /// Camera samples per pixel per pass, N_B.
+    pub spp: u32,
+    /// Merge (gather) radius r, metres; `None` = the scene's largest extent / 1600
+    /// ([`default_radius`]).
+    pub radius: Option<f32>,
+    /// Master seed of every random stream.
+    pub seed: u64,
+    /// Integrator and weight mode. A `threshold` mode's radius must equal
+    /// [`RenderSettings::threshold_radius`] ([`RenderSettings::set_threshold_radius`] sets
+    /// both, [`RenderSettings::select`] sets a mode with the settings' radius).
+    pub mode: Mode,
+    /// Radius R of the threshold rule (eq. 11), metres.
+    pub threshold_radius: f32,
+    /// Angular bins K per radiance-cache cell (one bin is used for Lambert-only scenes).
+    pub cache_bins: u32,
+    /// Photons traced for the radiance cache (`None` = N_F, one pass's worth). More photons
+    /// with more bins make an "oracle" cache, to tell cache error from model error.
+    pub cache_photons: Option<u64>,
+    /// Backward rays per pixel of the A/B pre-pass, N (`None`: the default of the noise model,
+    /// see [`RenderSettings::table_rays`]).
+    pub pixel_table_rays: Option<u32>,
+    /// Ask for the `optimal*` weights clamped to [0, 1] (the mix stays unbiased either way).
+    /// An `optimal*` mode whose own flag is set asks too. The footprint noise model with
+    /// jittered samples clamps whatever is asked: see [`RenderSettings::weight_clamp`].
+    pub clamp_weights: bool,
+    /// Path-tracing depth after which Russian roulette starts.
+    pub roulette_depth: u32,
+    /// Jitter camera samples over the pixel (box filter). When false, all N_B samples of a
+    /// pixel go through its centre and share x₀, the layout the preprint's noise model (and
+    /// its optimal weights) assumes.
+    pub pixel_jitter: bool,
+    /// How the model-based weights account for the photons that a pixel's camera samples
+    /// share at x₀ (method.md §12): `Footprint` (default) uses N_eff per pixel, `Pinhole` the
+    /// preprint's N_B. Without jitter both give N_eff = N_B.
+    pub noise_model: NoiseModel,
+}
+
+/// A/B rays per pixel when the footprint noise model weighs jittered samples: there N_eff is
+/// close to 1 and the c·G̃ term that A and B feed is small, and 16 rays give the same noise as
+/// 64 (cornell-lambert 512², `optimal-path`, 10 passes: mean √V 7.6036e-4 against 7.6025e-4;
+/// docs/results.md) at a quarter of the pre-pass's rays.
+pub const FOOTPRINT_TABLE_RAYS: u32 = 16;
+
+/// A/B rays per pixel otherwise (the preprint's layout, where c·G̃ matters).
+pub const PINHOLE_TABLE_RAYS: u32 = 64;
+
+/// The ranges [`RenderSettings::validate`] accepts beyond "at least 1".
+pub mod limits {
+    /// Largest image side, pixels.
+    pub const MAX_RESOLUTION: u32 = 16384;
+    /// Most photons per pass (also for the radiance cache).
+    pub const MAX_PHOTONS: u64 = 1_000_000_000;
+    /// Most angular bins per radiance-cache cell.
+    pub const MAX_CACHE_BINS: u32 = 4096;
+    /// Most backward rays per pixel of the A/B pre-pass (256 times the default of 64). The
+    /// pre-pass shows no progress, and 4·10⁹ rays per pixel would run for days.
+    pub const MAX_PIXEL_TABLE_RAYS: u32 = 16384;
+}
+
+/// Whether the `optimal*` weights are clamped to [0, 1], and why.
+///
+/// Under the footprint model with jittered samples the weights are clamped
+/// (method-notes.md, "Clamping"): unclamped, the correlation term pushes many of them
+/// outside, and the two techniques' contributions then cancel with a heavy-tailed sum. The
+/// pinhole model and centred samples keep the preprint's unclamped weights unless asked.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct WeightClamp {
+    /// The caller asked for it ([`RenderSettings::clamp_weights`] or the mode's own flag).
+    pub requested: bool,
+    /// The footprint noise model with jittered samples needs it.
+    pub footprint: bool,
+}
+
+impl WeightClamp {
+    /// The clamp in force: asked for or needed.
+    pub fn effective(&self) -> bool {
+        self.requested || self.footprint
+    }
+}
+
+/// One setting, as named in the scene file's `[render]` table (see [`Setting::key`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Setting {
+    /// [`RenderSettings::width`].
+    Width,
+    /// [`RenderSettings::height`].
+    Height,
+    /// [`RenderSettings::passes`].
+    Passes,
+    /// [`RenderSettings::photons`].
+    Photons,
+    /// [`RenderSettings::spp`].
+    Spp,
+    /// [`RenderSettings::radius`].
+    Radius,
+    /// [`RenderSettings::mode`].
+    Mode,
+    /// [`RenderSettings::threshold_radius`].
+    ThresholdRadius,
+    /// [`RenderSettings::cache_bins`].
+    CacheBins,
+    /// [`RenderSettings::cache_photons`].
+    CachePhotons,
+    /// [`RenderSettings::pixel_table_rays`].
+    PixelTableRays,
+}
+
+impl Setting {
+    /// The key in the scene file's `[render]` table (`resolution[0]` for the width).
+    pub fn key(&self) -> &'static str {
+        match self {
+            Setting::Width => "resolution[0]",
+            Setting::Height => "resolution[1]",
+            Setting::Passes => "passes",
+            Setting::Photons => "photons",
+            Setting::Spp => "spp",
+            Setting::Radius => "radius",
+            Setting::Mode => "mode",
+            Setting::ThresholdRadius => "threshold_radius",
+            Setting::CacheBins => "cache_bins",
+            Setting::CachePhotons => "cache_photons",
+            Setting::PixelTableRays => "pixel_table_rays",
+        }
+    }
+}
+
+impl fmt::Display for Setting {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.key())
+    }
+}
+
+/// Why a merge radius cannot be used. `Display` says what is wrong without naming the field.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum RadiusError {
+    /// Not finite, or not > 0 (metres).
+    #[error("{0:e} m must be a finite number > 0")]
+    NotPositive(f32),
+    /// Below [`MIN_RADIUS`] (metres).
+    #[error(
+        "{0:e} m is below the smallest usable merge radius {MIN_RADIUS:e} m (1/(pi r^2) would overflow single precision)"
+    )]
+    BelowMinimum(f32),
+}
+
+/// Why settings are not acceptable. `Display` says what is wrong; [`SettingsError::setting`]
+/// says which setting, so that the loader can name the scene-file key and the driver its flag.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SettingsError {
+    /// A count outside its range.
+    #[error("{value} is outside [{min}, {max}]")]
+    OutOfRange {
+        /// Which setting.
+        setting: Setting,
+        /// The value given.
+        value: u64,
+        /// Smallest accepted.
+        min: u64,
+        /// Largest accepted.
+        max: u64,
+    },
+    /// A merge radius that cannot be used.
+    #[error("{0}")]
+    Radius(RadiusError),
+    /// A threshold radius R that is not finite, not > 0 or not a normal f32 (metres).
+    #[error("{0:e} must be a finite number > 0 (metres)")]
+    ThresholdRadius(f32),
+    /// The `threshold` mode carries another radius than [`RenderSettings::threshold_radius`].
+    #[error(
+        "the threshold mode's radius {mode} m differs from threshold_radius = {setting} m; set both (RenderSettings::set_threshold_radius)"
+    )]
+    ThresholdMismatch {
+        /// The radius inside [`Mode`], metres.
+        mode: f64,
+        /// [`RenderSettings::threshold_radius`], metres.
+        setting: f32,
+    },
+}
+
+impl SettingsError {
+    /// The setting the error is about.
+    pub fn setting(&self) -> Setting {
+        match self {
+            SettingsError::OutOfRange { setting, .. } => *setting,
+            SettingsError::Radius(_) => Setting::Radius,
+            SettingsError::ThresholdRadius(_) => Setting::ThresholdRadius,
+            SettingsError::ThresholdMismatch { .. } => Setting::Mode,
+        }
+    }
+}
+
+impl RenderSettings {
+    /// The A/B rays per pixel in force: `pixel_table_rays` if given, else
+    /// [`FOOTPRINT_TABLE_RAYS`] under the footprint noise model with jittered samples and
+    /// [`PINHOLE_TABLE_RAYS`] otherwise (which keeps the preprint's weights bit for bit).
+    pub fn table_rays(&self) -> u32 {
+        self.pixel_table_rays.unwrap_or(if self.footprint_jitter() {
+            FOOTPRINT_TABLE_RAYS
+        } else {
+            PINHOLE_TABLE_RAYS
+        })
+    }
+
+    /// True under the footprint noise model with jittered samples.
+    fn footprint_jitter(&self) -> bool {
+        self.noise_model == NoiseModel::Footprint && self.pixel_jitter
+    }
+
+    /// Whether the `optimal*` weights are clamped, and why (see [`WeightClamp`]). The same for
+    /// every mode; only the `optimal*` weights can leave [0, 1].
+    pub fn weight_clamp(&self) -> WeightClamp {
+        let mode_asks = matches!(
+            self.mode,
+            Mode::Bdpm(
+                Heuristic::Optimal {
+                    clamp_weights: true
+                } | Heuristic::OptimalSplit {
+                    clamp_weights: true
+                } | Heuristic::OptimalPath {
+                    clamp_weights: true
+                }
+            )
+        );
+        WeightClamp {
+            requested: self.clamp_weights || mode_asks,
+            footprint: self.footprint_jitter(),
+        }
+    }
+
+    /// The heuristic a BDPM render uses: the mode's, with the clamp in force
+    /// ([`RenderSettings::weight_clamp`]). `None` for the references. The mode itself is
+    /// left as the caller gave it.
+    pub fn heuristic(&self) -> Option<Heuristic> {
+        let clamp = self.weight_clamp().effective();
+        self.mode.heuristic().map(|h| h.with_weight_clamp(clamp))
+    }
+
+    /// Sets the mode chosen by name: a `threshold` mode gets this settings'
+    /// [`RenderSettings::threshold_radius`] (as a scene file's `threshold_radius` key and a
+    /// `--mode threshold` flag combine). Other modes are set as given.
+    pub fn select(&mut self, mode: Mode) {
+        self.mode = match mode {
+            Mode::Bdpm(Heuristic::Threshold { .. }) => Mode::Bdpm(Heuristic::Threshold {
+                radius: self.threshold_radius as f64,
+            }),
+            other => other,
+        };
+    }
+
+    /// Sets the threshold radius R (metres), in [`RenderSettings::threshold_radius`] and in a
+    /// `threshold` mode alike.
+    pub fn set_threshold_radius(&mut self, radius: f32) {
+        self.threshold_radius = radius;
+        if let Mode::Bdpm(Heuristic::Threshold { .. }) = self.mode {
+            self.mode = Mode::Bdpm(Heuristic::Threshold {
+                radius: radius as f64,
+            });
+        }
+    }
+
+    /// Checks every setting: counts at least 1 and within [`limits`], a given merge radius
+    /// usable ([`check_radius`]), the threshold radius finite, > 0 and normal, and a
+    /// `threshold` mode's radius equal to [`RenderSettings::threshold_radius`]. The first
+    /// problem found is returned.
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        use limits::*;
+        let range = |setting, value: u64, min: u64, max: u64| {
+            if (min..=max).contains(&value) {
+                Ok(())
+            } else {
+                Err(SettingsError::OutOfRange {
+                    setting,
+                    value,
+                    min,
+                    max,
+                })
+            }
+        };
+        let max_res = MAX_RESOLUTION as u64;
+        range(Setting::Width, self.width.into(), 1, max_res)?;
+        range(Setting::Height, self.height.into(), 1, max_res)?;
+        range(Setting::Passes, self.passes.into(), 1, u32::MAX.into())?;
+        range(Setting::Photons, self.photons, 1, MAX_PHOTONS)?;
+        range(Setting::Spp, self.spp.into(), 1, u32::MAX.into())?;
+        if let Some(r) = self.radius {
+            check_radius(r).map_err(SettingsError::Radius)?;
+        }
+        let t = self.threshold_radius;
+        if !(t.is_finite() && t > 0.0 && t.is_normal()) {
+            return Err(SettingsError::ThresholdRadius(t));
+        }
+        if let Mode::Bdpm(Heuristic::Threshold { radius }) = self.mode
+            && radius != t as f64
+        {
+            return Err(SettingsError::ThresholdMismatch {
+                mode: radius,
+                setting: t,
+            });
+        }
+        range(
+            Setting::CacheBins,
+            self.cache_bins.into(),
+            1,
+            MAX_CACHE_BINS.into(),
+        )?;
+        if let Some(n) = self.cache_photons {
+            range(Setting::CachePhotons, n, 1, MAX_PHOTONS)?;
+        }
+        if let Some(n) = self.pixel_table_rays {
+            range(
+                Setting::PixelTableRays,
+                n.into(),
+                1,
+                MAX_PIXEL_TABLE_RAYS.into(),
+            )?;
+        }
+        Ok(())
+    }
+
+    /// The settings as reports and image headers give them, with the merge radius in force
+    /// (`radius`, metres: the scene's default when none was given) and whether it was given.
+    pub fn record(&self, radius: f32, radius_given: bool) -> SettingsRecord {
+        SettingsRecord {
+            mode: self.mode.name(),
+            width: self.width,
+            height: self.height,
+            passes: self.passes,
+            photons_per_pass: self.photons,
+            spp: self.spp,
+            radius_m: radius,
+            radius_given,
+            seed: self.seed,
+            threshold_radius_m: self.threshold_radius,
+            cache_bins: self.cache_bins,
+            cache_photons: self.cache_photons.unwrap_or(self.photons),
+            pixel_table_rays: self.table_rays(),
+            clamp_weights: self.weight_clamp().effective(),
+            clamp_weights_requested: self.weight_clamp().requested,
+            pixel_jitter: self.pixel_jitter,
+            noise_model: self.noise_model.name(),
+        }
+    }
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            width: 256,
+            height: 256,
+            passes: 4,
+            photons: 100_000,
+            spp: 4,
+            radius: None,
+            seed: 1,
+            // `balance` wins at equal time on both preprint scenes with jittered pixels
+            // (docs/results.md); `path` and `light` are references, not defaults.
+            mode: Mode::Bdpm(Heuristic::Balance),
+            threshold_radius: bdpm_mis::DEFAULT_THRESHOLD_RADIUS as f32,
+            cache_bins: 100,
+            cache_photons: None,
+            pixel_table_rays: None,
+            clamp_weights: false,
+            roulette_depth: 3,
+            pixel_jitter: true,
+            noise_model: NoiseModel::Footprint,
+        }
+    }
+}
+
+/// Smallest merge radius accepted, metres. The renderer divides by the merge disk's area in
+/// f32 (1/(πr²)) and the photon grid by its cell edge 2r; below about 10⁻¹⁹ m r² is subnormal
+/// or zero in f32 and the quotient infinite. At 10⁻¹⁸ m, 1/(πr²) ≈ 3·10³⁵ stays finite.
+pub const MIN_RADIUS: f32 = 1e-18;
+
+/// Checks a merge radius r (metres) in the precision the renderer uses it in: finite and at
+/// least [`MIN_RADIUS`].
+pub fn check_radius(r: f32) -> Result<f32, RadiusError> {
+    if !(r.is_finite() && r > 0.0) {
+        return Err(RadiusError::NotPositive(r));
+    }
+    if r < MIN_RADIUS {
+        return Err(RadiusError::BelowMinimum(r));
+    }
+    Ok(r)
+}
+
+/// Default merge radius for a scene whose bounding box has largest extent `extent` (metres):
+/// extent / 1600, as the preprint's Cornell box uses.
+pub fn default_radius(extent: f32) -> f32 {
+    extent / 1600.0
+}
+
+#[cfg(test)]
+mod tests;

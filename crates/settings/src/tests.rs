@@ -1,0 +1,117 @@
+use super::*;
+
+#[test]
+fn defaults_validate() {
+    assert_eq!(RenderSettings::default().validate(), Ok(()));
+}
+
+#[test]
+fn counts_out_of_range_name_their_setting() {
+    let s = RenderSettings {
+        spp: 0,
+        ..RenderSettings::default()
+    };
+    let e = s.validate().unwrap_err();
+    assert_eq!(e.setting(), Setting::Spp);
+    assert_eq!(e.to_string(), "0 is outside [1, 4294967295]");
+    let s = RenderSettings {
+        pixel_table_rays: Some(limits::MAX_PIXEL_TABLE_RAYS + 1),
+        ..RenderSettings::default()
+    };
+    assert_eq!(s.validate().unwrap_err().setting(), Setting::PixelTableRays);
+}
+
+#[test]
+fn radius_errors_are_typed() {
+    assert_eq!(check_radius(-1.0), Err(RadiusError::NotPositive(-1.0)));
+    assert_eq!(check_radius(1e-20), Err(RadiusError::BelowMinimum(1e-20)));
+    assert!(
+        check_radius(1e-20)
+            .unwrap_err()
+            .to_string()
+            .contains("smallest usable")
+    );
+}
+
+/// The radius inside the mode is never replaced by the settings' field: a disagreement is an
+/// error, and the setters keep the two equal.
+#[test]
+fn threshold_radius_is_never_overwritten() {
+    let mut s = RenderSettings {
+        mode: Mode::Bdpm(Heuristic::Threshold { radius: 0.5 }),
+        ..RenderSettings::default()
+    };
+    assert_eq!(
+        s.validate(),
+        Err(SettingsError::ThresholdMismatch {
+            mode: 0.5,
+            setting: 0.2
+        })
+    );
+    s.set_threshold_radius(0.5);
+    assert_eq!(s.validate(), Ok(()));
+    assert_eq!(s.heuristic(), Some(Heuristic::Threshold { radius: 0.5 }));
+    let mut t = RenderSettings::default();
+    t.set_threshold_radius(0.7);
+    t.select(Mode::parse("threshold").unwrap());
+    assert_eq!(
+        t.mode,
+        Mode::Bdpm(Heuristic::Threshold {
+            radius: 0.7f32 as f64
+        })
+    );
+}
+
+/// The footprint model's clamp is computed and reported, and the mode stays as given.
+#[test]
+fn clamp_is_computed_not_written_back() {
+    let mut s = RenderSettings::default();
+    s.select(Mode::parse("optimal").unwrap());
+    let clamp = s.weight_clamp();
+    assert!(!clamp.requested && clamp.footprint && clamp.effective());
+    assert_eq!(
+        s.heuristic(),
+        Some(Heuristic::Optimal {
+            clamp_weights: true
+        })
+    );
+    assert_eq!(
+        s.mode,
+        Mode::Bdpm(Heuristic::Optimal {
+            clamp_weights: false
+        })
+    );
+    s.pixel_jitter = false;
+    assert!(!s.weight_clamp().effective());
+    s.mode = Mode::Bdpm(Heuristic::Optimal {
+        clamp_weights: true,
+    });
+    assert!(s.weight_clamp().requested);
+    let r = s.record(0.01, false);
+    assert!(r.clamp_weights && r.clamp_weights_requested);
+}
+
+#[test]
+fn record_feeds_the_header() {
+    let r = RenderSettings::default().record(0.25, true);
+    let h = r.header_attributes();
+    assert_eq!(h[0], ("mode", "balance".to_string()));
+    assert!(h.contains(&("radius_source", "given".to_string())));
+    assert!(h.contains(&("radius_m", "0.25".to_string())));
+}
+
+#[cfg(feature = "serde")]
+#[test]
+fn serde_round_trip() {
+    let mut s = RenderSettings::default();
+    s.set_threshold_radius(0.4);
+    s.select(Mode::parse("threshold").unwrap());
+    let text = serde_json::to_string(&s).unwrap();
+    let back: RenderSettings = serde_json::from_str(&text).unwrap();
+    assert_eq!(back, s);
+    assert!(
+        serde_json::to_string(&s.record(0.1, false))
+            .unwrap()
+            .contains("\"threshold_radius_m\"")
+    );
+}
