@@ -169,7 +169,7 @@ const MAX_INSET: f32 = 0.3;
 /// of a seam (on the floor where it meets a wall, say) lies on the wall's plane or just beyond
 /// it, so a ray leaving it towards the wall met the wall at t ≤ 0, which the triangle test
 /// rejects, and escaped from the box (about 1 in 10³ of the rays leaving points within
-/// 10⁻⁴ m of the Cornell box's seams; tests/seams.rs). Held one offset away from every edge,
+/// 10⁻⁴ m of the Cornell box's seams; tests/suite/seams.rs). Held one offset away from every edge,
 /// and then one offset off its surface, the origin is about an offset inside both planes of a
 /// right-angled seam, and the wall is met at t > 0, well inside its own edges.
 #[inline]

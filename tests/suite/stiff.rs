@@ -1,6 +1,6 @@
 //! Stiff and extreme cases (method.md §11): every mode at a tiny resolution must give finite
 //! output everywhere, drop no sample as non-finite, and keep its technique layers finite.
-//! Where an exact answer exists it is checked elsewhere (tests/furnace.rs); here the point is
+//! Where an exact answer exists it is checked elsewhere (tests/suite/furnace.rs); here the point is
 //! that nothing blows up.
 
 use std::path::Path;

@@ -3,7 +3,7 @@
 //! error, never a panic (proptest reports a panic as a failure, with a shrunk input).
 //!
 //! The default run is bounded for CI (256 cases per target). Run longer with e.g.
-//! `PROPTEST_CASES=100000 cargo test --release -p bdpm-load --test fuzz`.
+//! `PROPTEST_CASES=100000 cargo test --release -p bdpm-load --test suite fuzz::`.
 
 use std::path::{Path, PathBuf};
 

@@ -1,12 +1,10 @@
 //! Photon map structure: range queries, determinism, path bookkeeping, light visibility.
 
-mod common;
-
+use crate::common::*;
 use bdpm_bdf::Bdf;
 use bdpm_geometry::{Domain, Rng};
 use bdpm_photon::{PathVertex, Photon, PhotonMap, TraceOptions, survival_probability};
 use bdpm_scene::WeightVertex;
-use common::*;
 use glam::Vec3;
 
 fn dummy_vertex() -> PathVertex {

@@ -1,11 +1,9 @@
 //! Statistical tests of emission, energy and density (fixed seeds; tolerances in standard errors).
 
-mod common;
-
+use crate::common::*;
 use bdpm_bdf::{Bdf, luminance};
 use bdpm_geometry::{Domain, Rng};
 use bdpm_photon::{PhotonMap, TraceOptions, emit, trace_photons};
-use common::*;
 use glam::{DVec3, Vec3};
 use std::f64::consts::PI;
 

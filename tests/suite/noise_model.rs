@@ -7,7 +7,7 @@
 //! Only the photon part of the sample (the `x0_weighted` technique layer, which for `bdd0` is the
 //! whole indirect estimate) is measured: the direct light at x₀ varies over the footprint and
 //! averages as 1/N_B whatever ρ is, which is not what this checks. The test prints the table of
-//! docs/results.md: `cargo test --release -p bdpm-suite --test noise_model -- --nocapture`.
+//! docs/results.md: `cargo test --release -p bdpm-suite --test suite noise_model:: -- --nocapture`.
 
 use bdpm_integrator::{Mode, NoiseModel, RenderSettings, Renderer};
 use bdpm_suite::{load, lum};

@@ -139,7 +139,7 @@ fn default_sphere_subdivisions() {
 
 #[test]
 fn documented_example_loads() {
-    let doc = include_str!("../../../docs/scene-format.md");
+    let doc = include_str!("../../../../docs/scene-format.md");
     let start = doc.find("## Example").expect("example section");
     let body = &doc[start..];
     let open = body.find("```toml\n").expect("toml block") + "```toml\n".len();

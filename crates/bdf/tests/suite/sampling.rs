@@ -1,10 +1,8 @@
 //! `Bdf::sample` against `Bdf::pdf` (chi-square goodness of fit) and against
 //! `Bdf::albedo` (Monte Carlo estimate of the directional albedo).
 
-mod common;
-
+use crate::common::{MirrorFrame, chi2_p_value, close, direction, gauss_legendre, rng, u3};
 use bdpm_bdf::Bdf;
-use common::{MirrorFrame, chi2_p_value, close, direction, gauss_legendre, rng, u3};
 use glam::Vec3;
 
 const LOBE_WIDTHS_DEG: [f32; 6] = [0.05, 0.5, 1.5, 5.0, 30.0, 90.0];

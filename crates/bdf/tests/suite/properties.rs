@@ -1,12 +1,10 @@
 //! Physical and API properties of `Bdf`: reciprocity, energy conservation, the lobe's
 //! normalisation constant, constructor validation, and finite output at the edges.
 
-mod common;
-
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_2};
 
+use crate::common::{MirrorFrame, close, direction, gauss_legendre, rng, u3, uniform_hemisphere};
 use bdpm_bdf::{Bdf, BdfError, luminance};
-use common::{MirrorFrame, close, direction, gauss_legendre, rng, u3, uniform_hemisphere};
 use glam::Vec3;
 
 fn lobe_widths_deg() -> [f32; 11] {
@@ -30,7 +28,14 @@ fn reciprocity() {
                 let wi = if k % 2 == 0 {
                     uniform_hemisphere(&mut rng)
                 } else {
-                    match bdf.sample(wo, [0.0, common::uf(&mut rng), common::uf(&mut rng)]) {
+                    match bdf.sample(
+                        wo,
+                        [
+                            0.0,
+                            crate::common::uf(&mut rng),
+                            crate::common::uf(&mut rng),
+                        ],
+                    ) {
                         Some(s) => s.wi,
                         None => continue,
                     }

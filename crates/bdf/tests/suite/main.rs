@@ -1,0 +1,9 @@
+//! Integration tests of bdpm-bdf: BDF properties, proptests and sampling statistics.
+//!
+//! One test binary per package (the files are its modules), so CI links one executable
+//! per package instead of one per file.
+
+mod common;
+mod properties;
+mod proptests;
+mod sampling;

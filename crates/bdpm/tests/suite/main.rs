@@ -1,0 +1,7 @@
+//! Command-line tests of the `bdpm` binary (render, merge, weights, and the lab's commands).
+//!
+//! One test binary per package (the files are its modules), so CI links one executable
+//! per package instead of one per file.
+
+mod cli;
+mod study;

@@ -1,0 +1,17 @@
+//! Workspace integration tests of bdpm: statistical render tests against exact answers and
+//! independent references, determinism, stages, stiff inputs, geometry robustness.
+//!
+//! One test binary per package (the files are its modules), so CI links one executable
+//! per package instead of one per file.
+
+mod cache;
+mod cornell;
+mod determinism;
+mod furnace;
+mod noise_model;
+mod precision;
+mod predict;
+mod seams;
+mod stages;
+mod stiff;
+mod weight_inputs;
