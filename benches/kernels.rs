@@ -11,13 +11,12 @@
 //!
 //! Run: `cargo bench -p bdpm-suite --bench kernels` (Linux only: it reads /proc).
 
-use std::f32::consts::PI;
 use std::hint::black_box;
 
 use bdpm_geometry::sampling::uniform_sphere;
-use bdpm_geometry::{Domain, Geometry, Kernel, Rng, TriangleMesh};
+use bdpm_geometry::{Domain, Geometry, Kernel, Rng};
 use bdpm_load::load_scene;
-use bdpm_suite::scene_path;
+use bdpm_suite::{scene_path, sphere_on_floor, with_kernel};
 use glam::Vec3;
 
 /// Queries per batch.
@@ -32,64 +31,6 @@ fn cpu_ns() -> u64 {
         .next()
         .and_then(|s| s.parse().ok())
         .expect("schedstat's first field")
-}
-
-/// The same triangles (flat) as `g`, built for `kernel`.
-fn rebuild(g: &Geometry, kernel: Kernel) -> Geometry {
-    let mut mesh = TriangleMesh::default();
-    for prim in 0..g.triangle_count() as u32 {
-        let base = mesh.positions.len() as u32;
-        mesh.positions.extend(g.vertices(prim));
-        mesh.indices.push([base, base + 1, base + 2]);
-        mesh.materials.push(g.material(prim));
-    }
-    Geometry::with_kernel(mesh, kernel).expect("valid mesh")
-}
-
-/// The UV sphere of `benches/rays.rs` (radius 1 m, 256 × 256 segments) on a 4 m floor quad.
-fn sphere_on_floor() -> TriangleMesh {
-    let (stacks, slices) = (256u32, 256u32);
-    let centre = Vec3::new(0.0, 1.05, 0.0);
-    let mut mesh = TriangleMesh::default();
-    mesh.push_quad(
-        [
-            Vec3::new(-2.0, 0.0, -2.0),
-            Vec3::new(-2.0, 0.0, 2.0),
-            Vec3::new(2.0, 0.0, 2.0),
-            Vec3::new(2.0, 0.0, -2.0),
-        ],
-        1,
-    );
-    let mut sphere = TriangleMesh::default();
-    for i in 0..=stacks {
-        let theta = PI * i as f32 / stacks as f32;
-        for j in 0..=slices {
-            let phi = 2.0 * PI * j as f32 / slices as f32;
-            let n = Vec3::new(
-                theta.sin() * phi.cos(),
-                theta.cos(),
-                theta.sin() * phi.sin(),
-            );
-            sphere.positions.push(centre + n);
-            sphere.normals.push(n);
-        }
-    }
-    let vertex = |i: u32, j: u32| i * (slices + 1) + j;
-    for i in 0..stacks {
-        for j in 0..slices {
-            let (a, b) = (vertex(i, j), vertex(i, j + 1));
-            let (c, d) = (vertex(i + 1, j + 1), vertex(i + 1, j));
-            if i > 0 {
-                sphere.indices.push([a, b, c]);
-            }
-            if i + 1 < stacks {
-                sphere.indices.push([a, c, d]);
-            }
-        }
-    }
-    sphere.materials = vec![0; sphere.indices.len()];
-    mesh.append(&sphere);
-    mesh
 }
 
 /// Rays leaving sampled surface points (the side facing `viewpoint`, if any, else the normal's
@@ -174,7 +115,7 @@ fn main() {
     let loaded = load_scene(&scene_path("cornell-lambert.toml")).unwrap_or_else(|e| panic!("{e}"));
     let eye = loaded.scene.camera().position();
     let g = loaded.scene.geometry();
-    let cornell = [rebuild(g, Kernel::Bvh4), rebuild(g, Kernel::Cwbvh)];
+    let cornell = [with_kernel(g, Kernel::Bvh4), with_kernel(g, Kernel::Cwbvh)];
     compare("cornell-lambert", &cornell, Some(eye), 0);
     let mesh = sphere_on_floor();
     let sphere = [

@@ -25,13 +25,12 @@
 //! Run: `cargo bench -p bdpm-suite --bench rays` (append e.g. `-- --sample-count 5` for a
 //! quick look, or a filter such as `-- sphere`).
 
-use std::f32::consts::PI;
 use std::sync::LazyLock;
 
 use bdpm_geometry::sampling::uniform_sphere;
 use bdpm_geometry::{Domain, Geometry, Kernel, Rng, TriangleMesh};
 use bdpm_load::load_scene;
-use bdpm_suite::{scene_path, thread_pool};
+use bdpm_suite::{scene_path, sphere_on_floor, thread_pool, with_kernel};
 use divan::Bencher;
 use divan::counter::ItemsCount;
 use glam::Vec3;
@@ -47,10 +46,6 @@ const THREADS: &[usize] = &[1, 2];
 const RAYS: usize = 65_536;
 /// Seed of every input stream.
 const SEED: u64 = 1;
-/// Latitude bands of the UV sphere.
-const STACKS: u32 = 256;
-/// Longitude segments of the UV sphere; 2·STACKS·SLICES − 2·SLICES = 130,560 triangles.
-const SLICES: u32 = 256;
 
 /// A ray `origin + t·dir`, `dir` unit.
 struct Ray {
@@ -69,19 +64,6 @@ struct Workload {
     geometry: Geometry,
     rays: Vec<Ray>,
     segments: Vec<Segment>,
-}
-
-/// The same triangles (flat, with their materials) as `geometry`, built for `kernel`. Surface
-/// sampling does not depend on the kernel, so [`Workload::new`] draws the same queries on it.
-fn with_kernel(geometry: &Geometry, kernel: Kernel) -> Geometry {
-    let mut mesh = TriangleMesh::default();
-    for prim in 0..geometry.triangle_count() as u32 {
-        let base = mesh.positions.len() as u32;
-        mesh.positions.extend(geometry.vertices(prim));
-        mesh.indices.push([base, base + 1, base + 2]);
-        mesh.materials.push(geometry.material(prim));
-    }
-    Geometry::with_kernel(mesh, kernel).expect("valid mesh")
 }
 
 impl Workload {
@@ -150,54 +132,6 @@ impl Workload {
                 })
             });
     }
-}
-
-/// A UV sphere (radius 1 m, centre 1.05 m above the floor, smooth vertex normals, material 0)
-/// on a 4 m × 4 m floor quad (flat, material 1). Triangles that collapse at the poles are left
-/// out, so none is degenerate.
-fn sphere_on_floor() -> TriangleMesh {
-    let centre = Vec3::new(0.0, 1.05, 0.0);
-    let mut sphere = TriangleMesh::default();
-    for i in 0..=STACKS {
-        let theta = PI * i as f32 / STACKS as f32;
-        for j in 0..=SLICES {
-            let phi = 2.0 * PI * j as f32 / SLICES as f32;
-            let n = Vec3::new(
-                theta.sin() * phi.cos(),
-                theta.cos(),
-                theta.sin() * phi.sin(),
-            );
-            sphere.positions.push(centre + n);
-            sphere.normals.push(n);
-        }
-    }
-    let vertex = |i: u32, j: u32| i * (SLICES + 1) + j;
-    for i in 0..STACKS {
-        for j in 0..SLICES {
-            // Counter-clockwise seen from outside: along the longitude, then down the latitude.
-            let (a, b) = (vertex(i, j), vertex(i, j + 1));
-            let (c, d) = (vertex(i + 1, j + 1), vertex(i + 1, j));
-            if i > 0 {
-                sphere.indices.push([a, b, c]);
-            }
-            if i + 1 < STACKS {
-                sphere.indices.push([a, c, d]);
-            }
-        }
-    }
-    sphere.materials = vec![0; sphere.indices.len()];
-    let mut mesh = TriangleMesh::default();
-    mesh.push_quad(
-        [
-            Vec3::new(-2.0, 0.0, -2.0),
-            Vec3::new(-2.0, 0.0, 2.0),
-            Vec3::new(2.0, 0.0, 2.0),
-            Vec3::new(2.0, 0.0, -2.0),
-        ],
-        1,
-    );
-    mesh.append(&sphere);
-    mesh
 }
 
 static CORNELL: LazyLock<Workload> = LazyLock::new(|| {

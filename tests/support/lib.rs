@@ -2,7 +2,10 @@
 //! small settings, rendering a film, the sphere-furnace analytic answer, and per-pixel
 //! statistics against a reference.
 
+use std::f32::consts::PI;
 use std::path::{Path, PathBuf};
+
+use bdpm_geometry::{Geometry, Kernel, TriangleMesh};
 
 use bdpm_integrator::{Film, Mode, RenderSettings, Renderer};
 use bdpm_load::load_scene;
@@ -207,4 +210,71 @@ pub fn thread_pool(threads: usize) -> rayon::ThreadPool {
         .num_threads(threads)
         .build()
         .expect("cannot start the benchmark's worker threads")
+}
+
+/// Latitude bands of the benchmarks' UV sphere.
+pub const SPHERE_STACKS: u32 = 256;
+/// Longitude segments of the benchmarks' UV sphere; 2·STACKS·SLICES − 2·SLICES = 130,560
+/// triangles.
+pub const SPHERE_SLICES: u32 = 256;
+
+/// A UV sphere (radius 1 m, centre 1.05 m above the floor, smooth vertex normals, material 0)
+/// on a 4 m × 4 m floor quad (flat, material 1). Triangles that collapse at the poles are left
+/// out, so none is degenerate.
+pub fn sphere_on_floor() -> TriangleMesh {
+    let centre = Vec3::new(0.0, 1.05, 0.0);
+    let mut sphere = TriangleMesh::default();
+    for i in 0..=SPHERE_STACKS {
+        let theta = PI * i as f32 / SPHERE_STACKS as f32;
+        for j in 0..=SPHERE_SLICES {
+            let phi = 2.0 * PI * j as f32 / SPHERE_SLICES as f32;
+            let n = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            );
+            sphere.positions.push(centre + n);
+            sphere.normals.push(n);
+        }
+    }
+    let vertex = |i: u32, j: u32| i * (SPHERE_SLICES + 1) + j;
+    for i in 0..SPHERE_STACKS {
+        for j in 0..SPHERE_SLICES {
+            // Counter-clockwise seen from outside: along the longitude, then down the latitude.
+            let (a, b) = (vertex(i, j), vertex(i, j + 1));
+            let (c, d) = (vertex(i + 1, j + 1), vertex(i + 1, j));
+            if i > 0 {
+                sphere.indices.push([a, b, c]);
+            }
+            if i + 1 < SPHERE_STACKS {
+                sphere.indices.push([a, c, d]);
+            }
+        }
+    }
+    sphere.materials = vec![0; sphere.indices.len()];
+    let mut mesh = TriangleMesh::default();
+    mesh.push_quad(
+        [
+            Vec3::new(-2.0, 0.0, -2.0),
+            Vec3::new(-2.0, 0.0, 2.0),
+            Vec3::new(2.0, 0.0, 2.0),
+            Vec3::new(2.0, 0.0, -2.0),
+        ],
+        1,
+    );
+    mesh.append(&sphere);
+    mesh
+}
+
+/// The same triangles (flat, with their materials) as `geometry`, built for `kernel`. Surface
+/// sampling does not depend on the kernel, so the benchmarks draw the same queries on it.
+pub fn with_kernel(geometry: &Geometry, kernel: Kernel) -> Geometry {
+    let mut mesh = TriangleMesh::default();
+    for prim in 0..geometry.triangle_count() as u32 {
+        let base = mesh.positions.len() as u32;
+        mesh.positions.extend(geometry.vertices(prim));
+        mesh.indices.push([base, base + 1, base + 2]);
+        mesh.materials.push(geometry.material(prim));
+    }
+    Geometry::with_kernel(mesh, kernel).expect("valid mesh")
 }
