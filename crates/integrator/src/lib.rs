@@ -22,7 +22,7 @@ mod weightmap;
 
 pub use bdpm::{Techniques, WeightStats, scene_default_radius};
 pub use bdpm_mis::NoiseModel;
-pub use film::Film;
+pub use film::{Film, PassSums, PassValue};
 pub use memory::{MemoryEstimate, MemoryItem, PILOT_PHOTONS, estimate_memory, human_bytes};
 pub use predict::{JITTER_RAYS, Prediction};
 pub use render::{

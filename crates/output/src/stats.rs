@@ -3,6 +3,7 @@
 //! study`). The film of the integrator keeps per-channel statistics; these are of the
 //! luminance, which the per-channel ones cannot give (they lack the covariances between
 //! channels).
+use bdpm_integrator::PassSums;
 use glam::DVec3;
 
 /// Rec. 709 luminance of a linear RGB value (same unit as the value, e.g. W·m⁻²·sr⁻¹).
@@ -32,69 +33,50 @@ pub fn standard_error_of_mean(samples: &[[f64; 3]]) -> [f64; 3] {
     out
 }
 
-/// Per-pixel sums of the pass luminance and of its square, over the passes added so far.
+/// Per-pixel statistics of the pass luminance: the integrator's one accumulator
+/// ([`PassSums`]) over luminance instead of RGB.
 #[derive(Clone, Debug)]
 pub struct PixelStats {
-    sum: Vec<f64>,
-    sum_sq: Vec<f64>,
-    passes: u32,
+    sums: PassSums<f64>,
 }
 
 impl PixelStats {
     /// Empty statistics for an image of `pixels` pixels.
     pub fn new(pixels: usize) -> PixelStats {
         PixelStats {
-            sum: vec![0.0; pixels],
-            sum_sq: vec![0.0; pixels],
-            passes: 0,
+            sums: PassSums::new(pixels),
         }
     }
 
     /// Adds one pass's per-pixel estimates (row-major, W·m⁻²·sr⁻¹).
     pub fn add_pass(&mut self, estimates: &[DVec3]) {
-        for ((s, q), e) in self.sum.iter_mut().zip(&mut self.sum_sq).zip(estimates) {
-            let l = luminance(*e);
-            *s += l;
-            *q += l * l;
-        }
-        self.passes += 1;
+        self.sums.add_pass(estimates.iter().map(|e| luminance(*e)));
     }
 
     /// Running mean luminance per pixel, W·m⁻²·sr⁻¹.
     pub fn mean(&self) -> Vec<f64> {
-        let k = self.passes.max(1) as f64;
-        self.sum.iter().map(|s| s / k).collect()
+        self.sums.mean()
     }
 
     /// Unbiased per-pass variance V per pixel, (W·m⁻²·sr⁻¹)²; `None` before two passes.
     pub fn variance(&self) -> Option<Vec<f64>> {
-        if self.passes < 2 {
-            return None;
-        }
-        let k = self.passes as f64;
-        Some(
-            self.sum
-                .iter()
-                .zip(&self.sum_sq)
-                .map(|(s, q)| ((q - s * s / k) / (k - 1.0)).max(0.0))
-                .collect(),
-        )
+        self.sums.pass_variance()
     }
 
     /// √V per pixel, W·m⁻²·sr⁻¹; zero with fewer than two passes (V unknown).
     pub fn noise(&self) -> Vec<f64> {
         match self.variance() {
             Some(v) => v.into_iter().map(f64::sqrt).collect(),
-            None => vec![0.0; self.sum.len()],
+            None => vec![0.0; self.sums.len()],
         }
     }
 
     /// Mean over pixels with a non-zero mean of (standard error of the mean) / mean
     /// (dimensionless); `None` with fewer than two passes or an all-black image.
     pub fn mean_relative_stderr(&self) -> Option<f64> {
-        let k = self.passes as f64;
+        let k = self.sums.passes() as f64;
         let (mut total, mut count) = (0.0, 0u64);
-        for (s, var) in self.sum.iter().zip(self.variance()?) {
+        for (s, var) in self.sums.sums().iter().zip(self.variance()?) {
             let mean = s / k;
             if mean > 0.0 {
                 total += (var / k).sqrt() / mean;
