@@ -6,12 +6,12 @@ use std::process::ExitCode;
 use std::time::{Instant, SystemTime};
 
 use bdpm_integrator::{
-    Film, Mode, Renderer, WeightStats, estimate_memory, first_hit_layers, human_bytes,
+    Film, Mode, Renderer, StageProbe, WeightStats, estimate_memory, first_hit_layers, human_bytes,
 };
 use bdpm_output::accum::{self, Identity, PassRecord};
 use bdpm_output::cli::{
-    CliResult, Overrides, available_memory, default_output, parse_bytes, peak_resident_memory,
-    positive, prepare, progress_bar, thread_pool, whole,
+    CliResult, Overrides, StagePeaks, available_memory, default_output, parse_bytes, positive,
+    prepare, progress_bar, thread_pool, whole,
 };
 use bdpm_output::exr::{self as exr_file, Precision, RGB, TechniqueSums};
 use bdpm_output::files::{self, Outputs};
@@ -295,10 +295,14 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
     }
 
     let t_prepare = Instant::now();
-    let renderer = pool
+    let peaks = StagePeaks::default();
+    peaks.enter("prepare");
+    let mut renderer = pool
         .install(|| Renderer::new(&scene, &settings))
         .map_err(|e| format!("{}: {e}", args.scene.display()))?
         .with_technique_layers(args.techniques);
+    peaks.leave("prepare");
+    renderer.set_stage_probe(&peaks);
     let prepare_seconds = t_prepare.elapsed().as_secs_f64();
     let radius_given = loaded.report.radius_given || args.overrides.radius.is_some();
     let mut warnings = loaded.report.warnings();
@@ -508,7 +512,8 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
             estimate: &estimate,
             limit,
             limit_source,
-            peak_resident: peak_resident_memory(),
+            peak_resident: peaks.overall(),
+            stage_peaks: peaks.stages(),
         },
     });
     let json = files::stage_bytes(&outputs.json, run.to_json().as_bytes())

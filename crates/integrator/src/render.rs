@@ -20,6 +20,15 @@ use bdpm_settings::{Mode, RadiusError, RenderSettings, SettingsError, check_radi
 /// far larger than the merge radius, as method.md §5 asks.
 const CACHE_CELLS_PER_EXTENT: f32 = 32.0;
 
+/// Told by [`Renderer::render_pass`] when each stage of a pass starts and ends, e.g. to sample
+/// the process's memory per stage. A probe sees stage names only and cannot change the render.
+pub trait StageProbe: Sync {
+    /// Stage `name` of a pass (the names of [`PassOutput::stage_seconds`]) is about to start.
+    fn enter(&self, name: &'static str);
+    /// Stage `name` has ended.
+    fn leave(&self, name: &'static str);
+}
+
 /// Time and memory of one preparatory stage (photon map, radiance cache, A/B table, …).
 #[derive(Clone, Debug, PartialEq)]
 pub struct StageReport {
@@ -128,6 +137,7 @@ pub struct Renderer<'a> {
     per_visit_inputs: bool,
     cache: Option<RadianceCache>,
     table: Option<PixelTable>,
+    probe: Option<&'a dyn StageProbe>,
 }
 
 impl<'a> Renderer<'a> {
@@ -160,6 +170,7 @@ impl<'a> Renderer<'a> {
             per_visit_inputs: false,
             cache: None,
             table: None,
+            probe: None,
         };
         if let Some(h) = renderer.heuristic {
             renderer.prepare(h);
@@ -350,14 +361,38 @@ impl<'a> Renderer<'a> {
     /// (one per image row); a pass has [`Renderer::work_per_pass`] units.
     pub fn render_pass(&self, pass: u32, progress: &(dyn Fn(u64) + Sync)) -> PassOutput {
         match self.settings.mode {
-            Mode::Path => render_path_pass(self.scene, &self.settings, pass, progress),
-            Mode::Light => {
-                crate::light::render_light_pass(self.scene, &self.settings, pass, progress)
+            // The references' stages interleave; the probe sees the pass as one stage.
+            Mode::Path | Mode::Light => {
+                self.enter("pass");
+                let out = if self.settings.mode == Mode::Path {
+                    render_path_pass(self.scene, &self.settings, pass, progress)
+                } else {
+                    crate::light::render_light_pass(self.scene, &self.settings, pass, progress)
+                };
+                self.leave("pass");
+                out
             }
             Mode::Bdpm(_) => {
                 let h = self.heuristic.expect("a BDPM mode has a heuristic");
                 self.render_bdpm_pass(h, pass, progress)
             }
+        }
+    }
+
+    /// Reports each pass stage's start and end to `probe` from now on (see [`StageProbe`]).
+    pub fn set_stage_probe(&mut self, probe: &'a dyn StageProbe) {
+        self.probe = Some(probe);
+    }
+
+    fn enter(&self, name: &'static str) {
+        if let Some(p) = self.probe {
+            p.enter(name);
+        }
+    }
+
+    fn leave(&self, name: &'static str) {
+        if let Some(p) = self.probe {
+            p.leave(name);
         }
     }
 
@@ -385,6 +420,7 @@ impl Renderer<'_> {
     ) -> PassOutput {
         let s = &self.settings;
         let needs = heuristic.needs();
+        self.enter("photons");
         let t_photons = std::time::Instant::now();
         let options = TraceOptions {
             photons: s.photons,
@@ -398,6 +434,8 @@ impl Renderer<'_> {
         let mix = self.mix(heuristic);
         let prev_inputs = mix.prev_inputs(&map);
         let photon_seconds = t_photons.elapsed().as_secs_f64();
+        self.leave("photons");
+        self.enter("camera");
         let table = self.table.as_ref();
         let t_camera = std::time::Instant::now();
         let (w, h) = (s.width as usize, s.height as usize);
@@ -482,6 +520,7 @@ impl Renderer<'_> {
                 .enumerate()
                 .for_each(|(y, row)| render_row(y, row, None));
         }
+        self.leave("camera");
         PassOutput {
             estimates,
             dropped: dropped.into_inner(),

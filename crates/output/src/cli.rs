@@ -4,7 +4,7 @@
 //! progress bar and the facts about the machine that reports record.
 use std::path::{Path, PathBuf};
 
-use bdpm_integrator::{Mode, NoiseModel, RenderSettings, Setting};
+use bdpm_integrator::{Mode, NoiseModel, RenderSettings, Setting, StageProbe};
 use bdpm_load::{LoadReport, load_scene};
 use bdpm_scene::Scene;
 use clap::Args;
@@ -330,6 +330,65 @@ pub fn peak_resident_memory() -> Option<u64> {
     let line = text.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kb * 1024)
+}
+
+/// Peak resident memory per stage of a render (Linux): as a stage starts, the kernel's
+/// high-water mark VmHWM is folded into the overall peak and reset to the current resident
+/// size (`/proc/self/clear_refs`, value 5); as it ends, VmHWM is that stage's peak. Where the
+/// reset is not possible, no stage peaks are recorded (they would be cumulative).
+#[derive(Debug, Default)]
+pub struct StagePeaks {
+    state: std::sync::Mutex<PeakState>,
+}
+
+#[derive(Debug, Default)]
+struct PeakState {
+    overall: u64,
+    reset_works: Option<bool>,
+    stages: Vec<(&'static str, u64)>,
+}
+
+impl StagePeaks {
+    /// The largest peak of each stage, bytes, in the order the stages first ended.
+    pub fn stages(&self) -> Vec<(&'static str, u64)> {
+        self.state
+            .lock()
+            .map(|s| s.stages.clone())
+            .unwrap_or_default()
+    }
+
+    /// The process's peak resident memory over the whole run, bytes (VmHWM now, or any
+    /// earlier peak that a stage reset hid).
+    pub fn overall(&self) -> Option<u64> {
+        let now = peak_resident_memory()?;
+        Some(self.state.lock().map_or(now, |s| s.overall.max(now)))
+    }
+}
+
+impl StageProbe for StagePeaks {
+    fn enter(&self, _name: &'static str) {
+        let Ok(mut s) = self.state.lock() else { return };
+        if let Some(peak) = peak_resident_memory() {
+            s.overall = s.overall.max(peak);
+        }
+        let ok = std::fs::write("/proc/self/clear_refs", "5").is_ok();
+        s.reset_works = Some(s.reset_works.unwrap_or(true) && ok);
+    }
+
+    fn leave(&self, name: &'static str) {
+        let Ok(mut s) = self.state.lock() else { return };
+        let Some(peak) = peak_resident_memory() else {
+            return;
+        };
+        s.overall = s.overall.max(peak);
+        if s.reset_works != Some(true) {
+            return;
+        }
+        match s.stages.iter_mut().find(|(n, _)| *n == name) {
+            Some((_, p)) => *p = (*p).max(peak),
+            None => s.stages.push((name, peak)),
+        }
+    }
 }
 
 /// One line of /proc/loadavg (its first three fields), or "unknown".

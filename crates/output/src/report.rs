@@ -98,6 +98,8 @@ pub struct MemoryFacts<'a> {
     pub limit_source: &'static str,
     /// Peak resident memory of the process when the report was made, bytes.
     pub peak_resident: Option<u64>,
+    /// Peak resident memory of each stage (`prepare`, then the pass stages), bytes.
+    pub stage_peaks: Vec<(&'static str, u64)>,
 }
 
 /// The memory estimate in the report: estimated and measured peak, bytes.
@@ -111,6 +113,15 @@ struct MemoryOut {
     limit_source: &'static str,
     /// VmHWM when the report was written (Linux), to compare with the estimate.
     measured_peak_bytes: Option<u64>,
+    /// The peak resident memory of each stage (Linux), bytes: `prepare` (loading excluded:
+    /// cache and A/B table), then each pass stage's largest peak over the passes.
+    stage_peaks: Vec<StagePeakOut>,
+}
+
+#[derive(Serialize)]
+struct StagePeakOut {
+    stage: &'static str,
+    peak_bytes: u64,
 }
 
 #[derive(Serialize)]
@@ -307,6 +318,12 @@ impl RunReport {
                 limit_bytes: f.memory.limit,
                 limit_source: f.memory.limit_source,
                 measured_peak_bytes: f.memory.peak_resident,
+                stage_peaks: f
+                    .memory
+                    .stage_peaks
+                    .iter()
+                    .map(|&(stage, peak_bytes)| StagePeakOut { stage, peak_bytes })
+                    .collect(),
             },
         }
     }

@@ -1028,6 +1028,17 @@ fn memory_is_estimated_before_the_render_and_refused_above_the_limit() {
             estimate >= peak / 2,
             "estimate {estimate} far below the peak {peak}"
         );
+        // Where the kernel's high-water mark can be reset (Linux), every stage has its own
+        // peak, none above the run's.
+        let stages = memory["stage_peaks"].as_array().expect("stage_peaks");
+        if !stages.is_empty() {
+            let names: Vec<&str> = stages.iter().filter_map(|s| s["stage"].as_str()).collect();
+            assert_eq!(names, ["prepare", "photons", "camera"]);
+            for s in stages {
+                let p = s["peak_bytes"].as_u64().expect("peak_bytes");
+                assert!(p > 0 && p <= peak, "{s} against the run's peak {peak}");
+            }
+        }
     }
 }
 
