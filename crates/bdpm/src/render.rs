@@ -57,6 +57,10 @@ pub(crate) struct RenderArgs {
     /// available on this machine (MemAvailable of /proc/meminfo), no limit where unknown.
     #[arg(long, value_parser = parse_bytes)]
     max_memory: Option<u64>,
+    /// Report each stage's peak memory (JSON memory.stage_peaks; Linux). It resets the
+    /// kernel's high-water mark per stage, so `time -f %M` then sees the last stage only.
+    #[arg(long)]
+    stage_memory: bool,
     /// Global index of the first pass: a partial render of passes K..K+N (with --passes N)
     /// whose random streams are those of the same passes of a full render. Writes
     /// OUT.accum.exr for `bdpm merge` and `--resume`.
@@ -132,6 +136,7 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
         aov: args.aov,
         precision: args.exr_precision,
         max_memory: args.max_memory,
+        stage_memory: args.stage_memory,
         first_pass: args.first_pass,
         held_from: held.iter().map(|h| h.path.clone()).collect(),
         held,
@@ -165,6 +170,7 @@ pub(crate) fn merge(args: MergeArgs) -> CliResult<ExitCode> {
         aov: false,
         precision: Precision::Float,
         max_memory: None,
+        stage_memory: false,
         first_pass: None,
         held: Some(held),
         held_from: sources,
@@ -188,6 +194,7 @@ struct Job {
     /// Sample type of the EXR's channels.
     precision: Precision,
     max_memory: Option<u64>,
+    stage_memory: bool,
     /// First pass to render (default 0, or after the held passes when resuming).
     first_pass: Option<u32>,
     /// Passes to replay before rendering (`--resume`, `bdpm merge`).
@@ -296,17 +303,20 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
 
     let t_prepare = Instant::now();
     let peaks = StagePeaks::default();
-    peaks.enter("prepare");
+    let probe = args.stage_memory.then_some(&peaks as &dyn StageProbe);
+    probe.inspect(|p| p.enter("prepare"));
     let mut renderer = pool
         .install(|| Renderer::new(&scene, &settings))
         .map_err(|e| format!("{}: {e}", args.scene.display()))?
         .with_technique_layers(args.techniques);
-    peaks.leave("prepare");
-    renderer.set_stage_probe(&peaks);
+    if let Some(p) = probe {
+        p.leave("prepare");
+        renderer.set_stage_probe(p);
+    }
     let prepare_seconds = t_prepare.elapsed().as_secs_f64();
     let radius_given = loaded.report.radius_given || args.overrides.radius.is_some();
     let mut warnings = loaded.report.warnings();
-    warnings.extend(before_render_warnings(&scene, &settings, &renderer));
+    warnings.extend(renderer.warnings());
     for w in &warnings {
         say!("warning: {w}");
     }
@@ -577,28 +587,4 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
 /// An error message prefixed with the file it concerns.
 fn named(path: &Path) -> impl Fn(String) -> String + '_ {
     move |e| format!("{}: {e}", path.display())
-}
-
-/// A merge radius above this fraction of the scene's largest extent draws a warning: the
-/// density estimate then averages photons over a large part of the scene.
-const LARGE_RADIUS_FRACTION: f32 = 0.1;
-
-/// Warnings known before the first pass: a merge radius that is a large part of the scene.
-fn before_render_warnings(
-    scene: &bdpm_scene::Scene,
-    settings: &bdpm_integrator::RenderSettings,
-    renderer: &Renderer<'_>,
-) -> Vec<String> {
-    let mut warnings = Vec::new();
-    let (lo, hi) = scene.geometry().bounds();
-    let extent = (hi - lo).max_element();
-    let r = renderer.radius();
-    if matches!(settings.mode, Mode::Bdpm(_)) && r > LARGE_RADIUS_FRACTION * extent {
-        warnings.push(format!(
-            "the merge radius {r} m is {:.0}% of the scene's largest extent ({extent} m): photons \
-             are merged across large parts of the scene, so the image is strongly blurred and biased",
-            100.0 * r / extent
-        ));
-    }
-    warnings
 }

@@ -26,8 +26,8 @@ pub use film::{Film, PassSums, PassValue};
 pub use memory::{MemoryEstimate, MemoryItem, PILOT_PHOTONS, estimate_memory, human_bytes};
 pub use predict::{JITTER_RAYS, Prediction};
 pub use render::{
-    FirstHitLayers, PassOutput, RenderError, Renderer, StageProbe, StageReport, TargetError,
-    first_hit_layers, render_path_pass,
+    FirstHitLayers, LARGE_RADIUS_FRACTION, PassOutput, RenderError, Renderer, StageProbe,
+    StageReport, TargetError, first_hit_layers, render_path_pass,
 };
 // The settings are `bdpm-settings`'; re-exported so that a user of the integrator needs one
 // dependency.

@@ -20,6 +20,11 @@ use bdpm_settings::{Mode, RadiusError, RenderSettings, SettingsError, check_radi
 /// far larger than the merge radius, as method.md §5 asks.
 const CACHE_CELLS_PER_EXTENT: f32 = 32.0;
 
+/// A merge radius above this fraction of the scene's largest extent draws a warning
+/// ([`Renderer::warnings`]): the density estimate then averages photons over a large part of
+/// the scene.
+pub const LARGE_RADIUS_FRACTION: f32 = 0.1;
+
 /// Told by [`Renderer::render_pass`] when each stage of a pass starts and ends, e.g. to sample
 /// the process's memory per stage. A probe sees stage names only and cannot change the render.
 pub trait StageProbe: Sync {
@@ -394,6 +399,23 @@ impl<'a> Renderer<'a> {
         if let Some(p) = self.probe {
             p.leave(name);
         }
+    }
+
+    /// Warnings known before the first pass, one line each: a merge radius that is a large
+    /// part of the scene (above [`LARGE_RADIUS_FRACTION`] of its largest extent).
+    pub fn warnings(&self) -> Vec<String> {
+        let mut warnings = Vec::new();
+        let (lo, hi) = self.scene.geometry().bounds();
+        let extent = (hi - lo).max_element();
+        let r = self.radius;
+        if matches!(self.settings.mode, Mode::Bdpm(_)) && r > LARGE_RADIUS_FRACTION * extent {
+            warnings.push(format!(
+                "the merge radius {r} m is {:.0}% of the scene's largest extent ({extent} m): photons \
+                 are merged across large parts of the scene, so the image is strongly blurred and biased",
+                100.0 * r / extent
+            ));
+        }
+        warnings
     }
 
     /// Units of progress one pass reports.

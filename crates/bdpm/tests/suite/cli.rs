@@ -1007,7 +1007,15 @@ fn memory_is_estimated_before_the_render_and_refused_above_the_limit() {
         .arg("render")
         .arg(scene("cornell-lambert.toml"))
         .args(["--mode", "bdd0", "--resolution", "16x16", "--passes", "1"])
-        .args(["--photons", "100000", "--max-memory", "4G", "--quiet", "-o"])
+        .args([
+            "--photons",
+            "100000",
+            "--max-memory",
+            "4G",
+            "--stage-memory",
+            "--quiet",
+            "-o",
+        ])
         .arg(dir.path("m.exr")));
     assert_success(&out);
     let json = read_json(&dir.path("m.json"));
