@@ -89,13 +89,14 @@ fn read_measured(path: &Path) -> CliResult<Measured> {
         })
     };
     let (r, g, b) = (find("noise.R")?, find("noise.G")?, find("noise.B")?);
+    let [wr, wg, wb] = bdpm_bdf::LUMINANCE_WEIGHTS;
     let variance = r
         .iter()
         .zip(g)
         .zip(b)
         // Not `stats::luminance` of the squares: this order of the products is what the
         // outputs were made with, and it keeps their bits.
-        .map(|((r, g), b)| 0.2126 * r * r + 0.7152 * g * g + 0.0722 * b * b)
+        .map(|((r, g), b)| wr * r * r + wg * g * g + wb * b * b)
         .collect();
     Ok(Measured {
         width: layer.width,

@@ -8,7 +8,8 @@ use glam::DVec3;
 
 /// Rec. 709 luminance of a linear RGB value (same unit as the value, e.g. W·m⁻²·sr⁻¹).
 pub fn luminance(c: DVec3) -> f64 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+    let [r, g, b] = bdpm_bdf::LUMINANCE_WEIGHTS;
+    r * c.x + g * c.y + b * c.z
 }
 
 /// Mean over pixels of an image (e.g. one pass's estimates), per channel.
