@@ -79,6 +79,13 @@ fn the_callers_threshold_radius_is_used_or_refused() {
     s.set_threshold_radius(0.5);
     let r = Renderer::new(&scene, &s).unwrap();
     assert_eq!(r.heuristic(), Some(Heuristic::Threshold { radius: 0.5 }));
+    // A mode parsed by name carries 0.2 m in f64, the default field 0.2 m in f32: the same
+    // radius, so no mismatch.
+    let parsed = RenderSettings {
+        mode: Mode::parse("threshold").unwrap(),
+        ..settings(Mode::Path)
+    };
+    assert!(Renderer::new(&scene, &parsed).is_ok());
 }
 
 #[test]

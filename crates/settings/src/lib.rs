@@ -397,8 +397,10 @@ impl RenderSettings {
         if !(t.is_finite() && t > 0.0 && t.is_normal()) {
             return Err(SettingsError::ThresholdRadius(t));
         }
+        // Compared at the field's f32 precision: `Mode::parse("threshold")` carries 0.2 m in
+        // f64, the default field 0.2 m in f32, and the two are the same radius.
         if let Mode::Bdpm(Heuristic::Threshold { radius }) = self.mode
-            && radius != t as f64
+            && radius as f32 != t
         {
             return Err(SettingsError::ThresholdMismatch {
                 mode: radius,
