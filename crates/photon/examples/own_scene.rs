@@ -103,8 +103,12 @@ fn main() {
     println!("density estimate at {x}: {local:.5} W/m²");
     assert!((local / exact - 1.0).abs() < 0.2, "{local} vs {exact}");
 
-    // Every stored photon's previous vertex is one scattering earlier on the same path.
+    // Every stored photon's previous vertex y_p is preceded by the rest of its light path:
+    // one vertex per scattering before it, depths counting down to 0.
     for p in map.photons() {
-        assert_eq!(map.vertex(p.prev).depth + 1, map.vertex(p.vertex).depth);
+        let y = map.vertex(p.prev);
+        for k in 0..=y.depth as u32 {
+            assert_eq!(map.vertex(p.prev - k).depth as u32, y.depth as u32 - k);
+        }
     }
 }

@@ -63,9 +63,11 @@
 //! let map = PhotonMap::trace(&scene, &TraceOptions::new(10_000, 1, 0), 0.05);
 //! assert_eq!(map.emitted(), 10_000);
 //! for p in map.photons() {
-//!     // Stored photons have been scattered at least once; y_p is one scattering earlier.
-//!     assert!(map.vertex(p.vertex).depth >= 1);
-//!     assert_eq!(map.vertex(p.prev).depth + 1, map.vertex(p.vertex).depth);
+//!     // Stored photons have been scattered at least once, last at y_p; the vertices before
+//!     // y_p are the rest of its light path, back to the first hit (depth 0).
+//!     let y = map.vertex(p.prev);
+//!     let first = map.vertex(p.prev - u32::from(y.depth));
+//!     assert_eq!((first.depth, first.light), (0, y.light));
 //! }
 //! // Density estimate of the indirect irradiance at the floor's centre, W/m².
 //! let mut sum = Vec3::ZERO;

@@ -17,11 +17,10 @@ pub struct Photon {
     /// Power E_p, W per channel; already includes Φ/N_F.
     pub power: Vec3,
     /// Index into [`PhotonMap::vertices()`] of the previous vertex y_p (where it was scattered
-    /// from); that vertex's depth is one less than this photon's.
+    /// from); this photon's depth is that vertex's depth + 1, and its incoming direction points
+    /// from `position` to that vertex. No two photons share a previous vertex (a path goes on
+    /// from a vertex once), so `prev` also identifies the photon within its pass.
     pub prev: u32,
-    /// Index into [`PhotonMap::vertices()`] of this photon's own arrival vertex (its incoming
-    /// direction, normal, material and depth).
-    pub vertex: u32,
 }
 
 // Photons are the bulk of a pass's memory: keep them small.
@@ -90,8 +89,8 @@ enum Scan {
 
 /// The photons of one pass in a hashed uniform grid for fixed-radius gathers.
 ///
-/// [`Self::photons`] are kept in grid (bucket) order; [`Self::vertices`] in path order (each path's vertices
-/// consecutive, paths in photon-index order), so `Photon::prev` and `Photon::vertex` stay
+/// [`Self::photons`] are kept in grid (bucket) order; [`Self::vertices`] in path order (each
+/// path's kept vertices consecutive, paths in photon-index order), so `Photon::prev` stays
 /// valid. Every field is a pure function of the scene, [`TraceOptions`] and the radius.
 #[derive(Clone, Debug)]
 pub struct PhotonMap {
@@ -103,7 +102,7 @@ pub struct PhotonMap {
     /// only these 12 bytes per candidate, so the candidates of a query share fewer cache lines
     /// and the array stays in the last-level cache for a million photons.
     positions: Vec<Vec3>,
-    /// Every light-path vertex of the pass (depth 0 included), in path order.
+    /// The light-path vertices the paths went on from (depth 0 included), in path order.
     vertices: Vec<PathVertex>,
     grid: HashGrid,
     radius: f32,
@@ -121,21 +120,26 @@ impl PhotonMap {
         options: &TraceOptions,
         radius: f32,
     ) -> PhotonMap {
+        // Only the vertices a path goes on from are kept: they are the previous vertices y_p
+        // the weights read. A path's last vertex (where it was absorbed, and every depth-0
+        // vertex of a path that ended there) is nobody's y_p; keeping those too held 2.6 times
+        // as many vertices on the Lambert Cornell box (docs/performance.md, memory).
         let chunks = trace_chunks(
             scene,
             options,
             |_| (Vec::<PathVertex>::new(), Vec::<Photon>::new()),
             |(vertices, photons), a| {
-                let index = vertices.len() as u32;
-                vertices.push(a.vertex);
                 if a.vertex.depth >= 1 {
-                    // A path's vertices are pushed consecutively, so y_p is the one just before.
+                    // The path went on from its previous arrival, which was therefore the last
+                    // vertex pushed.
                     photons.push(Photon {
                         position: a.vertex.at.p,
                         power: a.power,
-                        prev: index - 1,
-                        vertex: index,
+                        prev: vertices.len() as u32 - 1,
                     });
+                }
+                if a.continued {
+                    vertices.push(a.vertex);
                 }
             },
         );
@@ -160,9 +164,11 @@ impl PhotonMap {
         let vertices = concat_parallel(&vertex_parts, |_, v| v);
         let photons = concat_parallel(&photon_parts, |chunk, p| Photon {
             prev: p.prev + offsets[chunk],
-            vertex: p.vertex + offsets[chunk],
             ..p
         });
+        // The parts are freed before the grid's sort arrays are allocated: holding both was
+        // the photon stage's memory peak.
+        drop(chunks);
         PhotonMap::from_parts(photons, vertices, options.photons, radius)
     }
 
@@ -340,8 +346,10 @@ impl PhotonMap {
         &self.positions
     }
 
-    /// Every light-path vertex of the pass (depth 0 included), in path order: the targets of
-    /// [`Photon::prev`] and [`Photon::vertex`].
+    /// The light-path vertices of the pass that a path went on from (depth 0 included), in
+    /// path order: the targets of [`Photon::prev`]. A path's vertices are consecutive and
+    /// their depths count up from 0, so the vertices before a photon's y_p are the rest of its
+    /// light path. A vertex where a path ended is not kept (it is nobody's y_p).
     #[inline]
     pub fn vertices(&self) -> &[PathVertex] {
         &self.vertices
@@ -353,7 +361,7 @@ impl PhotonMap {
         (self.photons, self.vertices)
     }
 
-    /// The path vertex with index `i` (a [`Photon::prev`] or [`Photon::vertex`]).
+    /// The path vertex with index `i` (a [`Photon::prev`]).
     #[inline]
     pub fn vertex(&self, i: u32) -> &PathVertex {
         &self.vertices[i as usize]

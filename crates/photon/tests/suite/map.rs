@@ -23,7 +23,7 @@ fn dummy_vertex() -> PathVertex {
     }
 }
 
-/// Photons whose `vertex` field is a unique id, so results can be compared as id sets.
+/// Photons whose `prev` field is a unique id, so results can be compared as id sets.
 fn synthetic(positions: &[Vec3]) -> Vec<Photon> {
     positions
         .iter()
@@ -31,8 +31,7 @@ fn synthetic(positions: &[Vec3]) -> Vec<Photon> {
         .map(|(i, &position)| Photon {
             position,
             power: Vec3::ONE,
-            prev: 0,
-            vertex: i as u32,
+            prev: i as u32,
         })
         .collect()
 }
@@ -45,11 +44,11 @@ fn check_against_brute_force(photons: &[Photon], queries: &[Vec3], radius: f32) 
     let mut total = 0;
     for &x in queries {
         let mut got = Vec::new();
-        map.for_each_near(x, |p| got.push(p.vertex));
+        map.for_each_near(x, |p| got.push(p.prev));
         let mut want: Vec<u32> = photons
             .iter()
             .filter(|p| (p.position - x).length_squared() <= r2)
-            .map(|p| p.vertex)
+            .map(|p| p.prev)
             .collect();
         got.sort_unstable();
         want.sort_unstable();
@@ -111,25 +110,27 @@ fn traced_map_queries_match_brute_force() {
     let mut rng = Rng::new(3, Domain::Other, [0; 3]);
     for _ in 0..100 {
         let x = map.photons()[(rng.uniform() * map.photons().len() as f32) as usize].position;
-        let mut got: Vec<(u32, u32)> = Vec::new();
-        map.for_each_near(x, |p| got.push((p.vertex, p.prev)));
-        let mut want: Vec<(u32, u32)> = map
+        let mut got: Vec<u32> = Vec::new();
+        map.for_each_near(x, |p| got.push(p.prev));
+        let mut want: Vec<u32> = map
             .photons()
             .iter()
             .filter(|p| (p.position - x).length_squared() <= 0.03 * 0.03)
-            .map(|p| (p.vertex, p.prev))
+            .map(|p| p.prev)
             .collect();
         got.sort_unstable();
         want.sort_unstable();
         assert!(!got.is_empty());
         assert_eq!(got, want);
     }
-    // The grid holds every photon once (each has a unique arrival vertex).
-    let mut ids: Vec<u32> = map.photons().iter().map(|p| p.vertex).collect();
+    // The grid holds every photon once (each has its own previous vertex).
+    let mut ids: Vec<u32> = map.photons().iter().map(|p| p.prev).collect();
     ids.sort_unstable();
     ids.dedup();
     assert_eq!(ids.len(), map.photons().len());
-    assert!(map.memory_bytes() >= (map.photons().len() * 32 + map.vertices().len() * 56) as u64);
+    assert!(
+        map.memory_bytes() >= (size_of_val(map.photons()) + size_of_val(map.vertices())) as u64
+    );
 }
 
 /// A box with an opaque shelf at y = 0.5 over x ∈ [0, 0.7] (full depth), a light above and a
@@ -163,7 +164,7 @@ fn bits(map: &PhotonMap) -> Vec<u32> {
     for p in map.photons() {
         out.extend(p.position.to_array().map(f32::to_bits));
         out.extend(p.power.to_array().map(f32::to_bits));
-        out.extend([p.prev, p.vertex]);
+        out.push(p.prev);
     }
     for v in map.vertices() {
         for w in [v.at.p, v.at.n, v.incoming] {
@@ -209,14 +210,22 @@ fn photons_point_back_to_their_previous_vertex() {
     options.light_visibility = true;
     let map = PhotonMap::trace(&scene, &options, 0.02);
     assert!(!map.photons().is_empty());
+    // A photon at y_p's successor: the light left y_p on the side of its normal.
     for p in map.photons() {
-        let v = map.vertex(p.vertex);
         let y = map.vertex(p.prev);
-        assert_eq!(v.at.p, p.position);
-        assert!(v.depth >= 1);
+        assert!(y.at.n.dot(p.position - y.at.p) > 0.0);
+    }
+    // Within a path, each kept vertex's incoming direction points back at the vertex before it.
+    let mut continued_from = 0;
+    for w in map.vertices().windows(2) {
+        let (y, v) = (&w[0], &w[1]);
+        if v.depth == 0 {
+            continue;
+        }
+        continued_from += 1;
         assert_eq!(y.depth + 1, v.depth);
         assert_eq!(y.light, v.light);
-        let to_prev = y.at.p - p.position;
+        let to_prev = y.at.p - v.at.p;
         let d = to_prev.length();
         // Positions carry absolute rounding ~1e-6 m plus the 1e-5 m spawn offset.
         assert!(
@@ -229,6 +238,7 @@ fn photons_point_back_to_their_previous_vertex() {
         assert!(v.at.n.dot(v.incoming) > 0.0);
         assert!(y.at.n.dot(-v.incoming) > 0.0);
     }
+    assert!(continued_from > 1_000, "{continued_from}");
     for v in map.vertices() {
         let frame = bdpm_geometry::Frame::from_normal(v.at.n);
         let q = survival_probability(scene.bdf(v.at.material), frame.to_local(v.incoming));
@@ -289,21 +299,25 @@ fn light_visibility_bits_match_analytic_shadows() {
 }
 
 /// In a closed box every path ends by absorption at its last vertex, which is nobody's previous
-/// vertex: it gets no shadow rays, while the vertices paths continue from do.
+/// vertex: the map keeps exactly the vertices paths went on from, one per stored photon, each
+/// with its shadow rays, and the arrivals where paths ended got none.
 #[test]
-fn light_visibility_is_recorded_only_where_paths_continue() {
+fn the_map_keeps_the_vertices_paths_continue_from() {
     let scene = lambert_box(Vec3::splat(0.5), &[(Vec3::splat(0.5), Vec3::ONE)]);
     let mut options = TraceOptions::new(5_000, 3, 0);
     options.light_visibility = true;
     let map = PhotonMap::trace(&scene, &options, 0.02);
-    let last: Vec<_> = map
-        .vertices()
-        .windows(2)
-        .filter(|w| w[1].depth == 0)
-        .map(|w| w[0])
-        .collect();
-    assert!(last.len() > 1_000, "{}", last.len());
-    assert!(last.iter().all(|v| v.at.lights == 0));
+    assert_eq!(map.vertices().len(), map.photons().len());
+    use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
+    let (ended, ended_lit) = (AtomicUsize::new(0), AtomicUsize::new(0));
+    bdpm_photon::for_each_arrival(&scene, &options, |a| {
+        if !a.continued {
+            ended.fetch_add(1, Relaxed);
+            ended_lit.fetch_add(usize::from(a.vertex.at.lights != 0), Relaxed);
+        }
+    });
+    assert_eq!(ended.into_inner(), 5_000);
+    assert_eq!(ended_lit.into_inner(), 0);
     let prev_lit = map
         .photons()
         .iter()
@@ -322,13 +336,18 @@ fn depth_cap_ends_non_absorbing_paths() {
     let mut options = TraceOptions::new(5_000, 1, 0);
     options.max_depth = 3;
     let map = PhotonMap::trace(&scene, &options, 0.05);
-    let max = map.vertices().iter().map(|v| v.depth).max().unwrap();
-    assert_eq!(max, 3);
+    // The deepest photons arrive at depth 3 and go no further.
+    let max = map
+        .photons()
+        .iter()
+        .map(|p| map.vertex(p.prev).depth + 1)
+        .max();
+    assert_eq!(max, Some(3));
     // White walls: roulette alone (q = 0.95) ends paths; powers are Φ/(N·0.95^depth).
     options.max_depth = 1024;
     let map = PhotonMap::trace(&scene, &options, 0.05);
     for p in map.photons() {
-        let d = map.vertex(p.vertex).depth as i32;
+        let d = map.vertex(p.prev).depth as i32 + 1;
         let want = 1.0 / (5_000.0 * 0.95f32.powi(d));
         assert!((p.power.x - want).abs() < 1e-4 * want);
     }
