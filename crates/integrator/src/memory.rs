@@ -3,9 +3,9 @@
 //!
 //! Per-pixel and per-photon costs were measured as peak resident memory of `bdpm render` on
 //! the Cornell box (docs/robustness.md, "Memory"): 171 B per pixel for the film, the pass
-//! estimate and the output files being encoded (1024² and 2048², path mode), and 2.2 times
-//! the finished photon map's bytes at the peak of its build (thread-local parts, the merged
-//! copy and the grid's sort arrays, 1 and 4 million photons). The photons stored per emitted
+//! estimate and the output files being encoded (1024² and 2048², path mode), and 1.6–1.9 times
+//! the finished photon map's bytes at the peak of its build (thread-local parts and the merged
+//! copy, then the grid's sort arrays; `--stage-memory`, 1 and 4 million photons, docs/performance.md). The photons stored per emitted
 //! photon and the bytes per stored photon depend on the scene, so a pilot of
 //! [`PILOT_PHOTONS`] photons is traced to measure them.
 
@@ -26,8 +26,9 @@ const BYTES_PER_PIXEL: u64 = 180;
 /// Extra peak bytes per pixel with technique layers: five RGB f64 layers per pass and their
 /// sums (240 B), and their f32 EXR channels and means (180 B).
 const TECHNIQUE_BYTES_PER_PIXEL: u64 = 2 * size_of::<Techniques>() as u64 + 180;
-/// Peak of a photon map's build over its finished size (measured 2.2), rounded up.
-const PHOTON_MAP_PEAK_FACTOR: f64 = 2.3;
+/// Peak of a photon map's build over its finished size (measured 1.61 at 10⁶ and 1.88 at
+/// 4·10⁶ photons on the Lambert Cornell box), rounded up.
+const PHOTON_MAP_PEAK_FACTOR: f64 = 2.0;
 /// Bytes per record while the radiance cache or a light pass collects arrivals: a 12–16 B
 /// record in thread-local parts and their merged copy.
 const ARRIVAL_RECORD_BYTES: f64 = 32.0;
