@@ -21,6 +21,10 @@
 //!   albedos) and, to trace the cache's own photons, [`PhotonScene`]. bdpm's `Scene`
 //!   implements both; another renderer implements them for its own scene type.
 //! - **Lambert-only scenes** get one bin per cell and no b (b = (kd/π)·L_d there, method.md §7).
+//! - **Storage** is sparse where that is smaller: cell sides that no photon reached (about half
+//!   of them in a closed box: the outer faces) share one block of zero bins instead of a block
+//!   each, and read the zeros they read in a dense table. A glossy Cornell box at paper
+//!   settings (100 bins, L_d and b) takes 21 MB instead of 43 MB.
 //!
 //! Values are luminances (the weights use luminance): L_d in W·m⁻²·sr⁻¹, b in W·m⁻²·sr⁻².
 //!
@@ -642,7 +646,8 @@ impl RadianceCache {
                 for side in 0..2 {
                     let cs = cell * 2 + side;
                     let start = self.block_start(cs);
-                    let bins = (start..start + self.side_bins).map(|k| self.values[k * self.stride]);
+                    let bins =
+                        (start..start + self.side_bins).map(|k| self.values[k * self.stride]);
                     out.push(CellSummary {
                         prim: prim as u32,
                         side: side as u8,
@@ -776,7 +781,8 @@ mod tests {
             // The per-cell summaries agree too.
             for (cs, c) in cache.cells().iter().enumerate() {
                 let bins = cs * cache.side_bins..(cs + 1) * cache.side_bins;
-                let mean = bins.map(|k| reference(k).0 as f64).sum::<f64>() / cache.side_bins as f64;
+                let mean =
+                    bins.map(|k| reference(k).0 as f64).sum::<f64>() / cache.side_bins as f64;
                 assert_eq!(c.mean_ld.to_bits(), mean.to_bits());
             }
         }
