@@ -123,9 +123,15 @@ impl Bdf {
         if !(above(wo) && above(wi)) {
             return Vec3::ZERO;
         }
+        self.mix_value(self.lobe.as_ref().map(|lobe| lobe.value(wo, wi)))
+    }
+
+    /// kd/π + gr·G from G (`None` without a lobe): the one expression of f, shared by
+    /// [`Self::eval`] and [`Self::sample_at`] so that their results agree bit for bit.
+    fn mix_value(&self, lobe_value: Option<f32>) -> Vec3 {
         let diffuse = self.kd * FRAC_1_PI;
-        match &self.lobe {
-            Some(lobe) => diffuse + self.gr * lobe.value(wo, wi),
+        match lobe_value {
+            Some(g) => diffuse + self.gr * g,
             None => diffuse,
         }
     }
@@ -160,11 +166,11 @@ impl Bdf {
         let Some(p_lobe) = self.lobe_probability(o) else {
             return 0.0;
         };
-        let diffuse = (1.0 - p_lobe) * wi.z * FRAC_1_PI;
-        match &self.lobe {
-            Some(lobe) if p_lobe > 0.0 => diffuse + p_lobe * lobe.pdf(wo, wi),
-            _ => diffuse,
-        }
+        let lobe_pdf = match &self.lobe {
+            Some(lobe) if p_lobe > 0.0 => Some(lobe.pdf(wo, wi)),
+            _ => None,
+        };
+        mix_pdf(p_lobe, wi, lobe_pdf)
     }
 
     /// Samples an incident direction for `wo` from `u` uniform in [0, 1)³.
@@ -193,12 +199,20 @@ impl Bdf {
         if !above(wi) {
             return None;
         }
-        // pdf and f come from the same functions callers use, so they agree bit for bit.
-        let pdf = self.pdf_at(o, wi);
+        // pdf and f are what pdf_at and eval return (the same expressions, with the lobe's
+        // exponential computed once for both), so they agree bit for bit.
+        let (lobe_value, lobe_pdf) = match &self.lobe {
+            Some(lobe) => {
+                let (g, p) = lobe.value_and_pdf(wo, wi);
+                (Some(g), (p_lobe > 0.0).then_some(p))
+            }
+            None => (None, None),
+        };
+        let pdf = mix_pdf(p_lobe, wi, lobe_pdf);
         if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
         }
-        let f = self.eval(wo, wi);
+        let f = self.mix_value(lobe_value);
         Some(BdfSample {
             wi,
             f,
@@ -252,6 +266,16 @@ fn check_albedo(which: &'static str, value: Vec3) -> Result<(), BdfError> {
         Err(BdfError::AlbedoOutOfRange { which, value })
     } else {
         Ok(())
+    }
+}
+
+/// The mixture pdf `(1 − P_G)·cos θᵢ/π + P_G·p_G(wi)` from the lobe's pdf (`None` when the
+/// lobe is not sampled): the one expression shared by [`Bdf::pdf_at`] and [`Bdf::sample_at`].
+fn mix_pdf(p_lobe: f32, wi: Vec3, lobe_pdf: Option<f32>) -> f32 {
+    let diffuse = (1.0 - p_lobe) * wi.z * FRAC_1_PI;
+    match lobe_pdf {
+        Some(p) => diffuse + p_lobe * p,
+        None => diffuse,
     }
 }
 
