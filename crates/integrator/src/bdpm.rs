@@ -66,7 +66,7 @@ pub(crate) const BATCH: usize = 16;
 
 /// Rounds of [`PhotonMap::advance_query`] between a batch's rays and its gathers: one per
 /// stage of a query, so that every read of a gather has been fetched.
-const QUERY_STAGES: usize = 4;
+const QUERY_STAGES: usize = 3;
 
 /// One camera sample to take: its image point (pixels, x right and y down from the top-left
 /// corner), its random stream, and where its value goes.

@@ -36,34 +36,32 @@ use rayon::prelude::*;
 /// of [`HashGrid::advance`] (each hints the CPU to fetch what the next reads), then
 /// [`HashGrid::visit`], which reports the candidate ranges of the sorted points.
 ///
-/// A bit filter of occupied cells sits in front of the table: most cells a query touches are
-/// empty (photons lie on surfaces, and a gather finds well under one photon at the preprint's
-/// radius), and one filter bit per touched cell spares most of the bucket table's random
-/// reads (and the points of the other cells sharing those buckets). It has no false negatives,
-/// so skipping a bucket whose cells it calls empty never loses a point, and the order in which points are reported is unchanged.
+/// Each bucket's entry holds, beside where its points start, an occupancy filter: 32 tag bits,
+/// bit t set when a point of a cell whose hash has tag t (its top five bits) lies in the
+/// bucket. Most cells a query touches are empty (photons lie on surfaces, and a gather finds
+/// well under one photon at the preprint's radius), and the tag spares reading the points of
+/// the other cells sharing the bucket. Start and filter share one 8-byte entry, so a query
+/// waits for one random read per bucket before it knows which points to fetch. The filter has
+/// no false negatives, so skipping a bucket whose touched cells it calls empty never loses a
+/// point, and the order in which points are reported does not depend on it.
 #[derive(Clone, Debug, Default)]
 pub struct HashGrid {
     /// 1 / cell edge, m⁻¹.
     inv_cell: f32,
-    /// Bucket b holds sorted points `starts[b]..starts[b + 1]`; length = buckets + 1.
-    starts: Vec<u32>,
+    /// Entry b: low 32 bits the first sorted point of bucket b (its points are
+    /// `start(b)..start(b + 1)`), high 32 bits its tag filter. Length = buckets + 1.
+    table: Vec<u64>,
     /// `buckets − 1` (the table size is a power of two).
     mask: u64,
-    /// Occupied-cell filter: bit `filter_bit(hash)` is set for the cell of every point.
-    filter: Vec<u64>,
-    /// Filter bits − 1 (a power of two).
-    filter_mask: u64,
 }
 
 /// How far a [`GridQuery`] has got.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 enum Stage {
-    /// Cells and buckets known; filter bits requested.
+    /// Cells and buckets known; their table entries requested.
     #[default]
-    Filter,
-    /// Live buckets known; their bounds requested.
-    Live,
-    /// Bounds read; ready to visit.
+    Entries,
+    /// Live buckets and their bounds read; ready to visit.
     Bounds,
 }
 
@@ -74,12 +72,10 @@ enum Stage {
 pub struct GridQuery {
     /// Distinct buckets, in visiting order: `buckets[..n]`.
     buckets: [u32; 8],
-    /// Bucket bounds `starts[b]..starts[b + 1]`, read in [`Stage::Live`].
+    /// Tag bits of the touched cells of each bucket.
+    tags: [u32; 8],
+    /// Bucket bounds `start(b)..start(b + 1)`, read in [`Stage::Entries`] for live buckets.
     ranges: [(u32, u32); 8],
-    /// Filter bit of each touched cell, and the index in `buckets` of its bucket.
-    cell_bits: [u64; 8],
-    cell_slot: [u8; 8],
-    cells: u8,
     n: u8,
     /// Bit k set: some touched cell of bucket k may hold a point.
     live: u8,
@@ -104,16 +100,120 @@ impl GridQuery {
     }
 }
 
-/// Filter bits per bucket: 32 (as many bytes as the bucket table; 4 MB for a million points)
-/// sets ~1 bit in 50, so few empty cells pass. Measured on the Lambert paper run's camera stage
-/// (2 threads): 4 bits 5.10 s, 16 bits 4.90 s, 32 bits 4.79 s for two passes; 2 bits is slower.
-const FILTER_BITS_PER_BUCKET: usize = 32;
-
-/// The filter bit of a cell hash: bits from the high half, so that it is nearly independent of
-/// the bucket index (the low bits) and two cells sharing a bucket rarely share a bit.
+/// The tag bit of a cell hash: its top five bits, which the bucket index (the low bits) does
+/// not use, so that two cells sharing a bucket share a tag one time in 32.
 #[inline]
-fn filter_bit(h: u64, filter_mask: u64) -> u64 {
-    h.rotate_right(32) & filter_mask
+fn tag_bit(h: u64) -> u32 {
+    1 << (h >> 59)
+}
+
+/// Super-buckets of the parallel sort (see [`sort_into_buckets`]): groups of consecutive
+/// buckets sorted independently, small enough that a group's counters stay in L1.
+const SUPER_BITS: u32 = 8;
+
+/// Points per chunk of the first pass of [`sort_into_buckets`].
+const SORT_CHUNK: usize = 1 << 15;
+
+/// Stable counting sort of the point indices by bucket `hashes[i] & (buckets − 1)`, with each
+/// bucket's tag filter: returns the table of [`HashGrid`] and the permutation (`order[k]` =
+/// index of the k-th sorted point). `buckets` is a power of two.
+///
+/// A one-thread counting sort of a million points scatters into a 4 MB table and was a serial
+/// stretch of every photon pass (docs/performance.md). Here it runs in two stable parallel
+/// passes: each chunk of the input sorts its indices by super-bucket (the bucket's high
+/// bits); then each super-bucket takes its runs from the chunks, in input order, and sorts
+/// them by the low bits into its own slice of the table and of the permutation. Both passes
+/// keep input order within a bucket, so the result is the one-thread sort's, on any thread
+/// count.
+fn sort_into_buckets(hashes: &[u64], buckets: usize) -> (Vec<u64>, Vec<u32>) {
+    debug_assert!(buckets.is_power_of_two());
+    let mask = buckets as u64 - 1;
+    let bucket_bits = buckets.trailing_zeros();
+    let super_bits = SUPER_BITS.min(bucket_bits);
+    let low_bits = bucket_bits - super_bits;
+    let supers = 1usize << super_bits;
+    let per_super = 1usize << low_bits;
+    let super_of = |h: u64| ((h & mask) >> low_bits) as usize;
+
+    // Pass 1: per chunk, its indices grouped by super-bucket, and where each group starts.
+    let runs: Vec<(Vec<u32>, Vec<u32>)> = hashes
+        .par_chunks(SORT_CHUNK)
+        .enumerate()
+        .map(|(c, chunk)| {
+            let base = (c * SORT_CHUNK) as u32;
+            let mut first = vec![0u32; supers + 1];
+            for &h in chunk {
+                first[super_of(h) + 1] += 1;
+            }
+            for s in 0..supers {
+                first[s + 1] += first[s];
+            }
+            let mut next = first.clone();
+            let mut sorted = vec![0u32; chunk.len()];
+            for (i, &h) in chunk.iter().enumerate() {
+                let s = super_of(h);
+                sorted[next[s] as usize] = base + i as u32;
+                next[s] += 1;
+            }
+            (sorted, first)
+        })
+        .collect();
+
+    // Where each super-bucket's points start in the sorted order.
+    let mut group_start = vec![0usize; supers + 1];
+    for s in 0..supers {
+        let size: usize = runs
+            .iter()
+            .map(|(_, first)| (first[s + 1] - first[s]) as usize)
+            .sum();
+        group_start[s + 1] = group_start[s] + size;
+    }
+
+    // Pass 2: each super-bucket fills its buckets' entries and its part of the permutation.
+    let n = hashes.len();
+    let mut table = vec![0u64; buckets + 1];
+    let mut order = vec![0u32; n];
+    let mut parts = Vec::with_capacity(supers);
+    let mut rest = order.as_mut_slice();
+    for s in 0..supers {
+        let (head, tail) = rest.split_at_mut(group_start[s + 1] - group_start[s]);
+        parts.push(head);
+        rest = tail;
+    }
+    let low_mask = per_super - 1;
+    table[..buckets]
+        .par_chunks_mut(per_super)
+        .zip(parts)
+        .enumerate()
+        .for_each(|(s, (entries, out))| {
+            let group = || {
+                runs.iter().flat_map(move |(sorted, first)| {
+                    &sorted[first[s] as usize..first[s + 1] as usize]
+                })
+            };
+            let mut counts = vec![0u32; per_super];
+            let mut tags = vec![0u32; per_super];
+            for &i in group() {
+                let h = hashes[i as usize];
+                let b = (h & mask) as usize & low_mask;
+                counts[b] += 1;
+                tags[b] |= tag_bit(h);
+            }
+            let mut at = 0u32;
+            for b in 0..per_super {
+                entries[b] = u64::from(group_start[s] as u32 + at) | u64::from(tags[b]) << 32;
+                let size = counts[b];
+                counts[b] = at;
+                at += size;
+            }
+            for &i in group() {
+                let b = (hashes[i as usize] & mask) as usize & low_mask;
+                out[counts[b] as usize] = i;
+                counts[b] += 1;
+            }
+        });
+    table[buckets] = n as u64;
+    (table, order)
 }
 
 /// Integer cell coordinates of `p`. `as` saturates, so absurd radii only merge cells.
@@ -152,7 +252,7 @@ fn hash(c: [i64; 3]) -> u64 {
 impl HashGrid {
     /// Builds the grid for `points` with cell edge `2·radius` and returns it with the
     /// permutation that sorts the points by bucket (`order[k]` = index of the k-th sorted
-    /// point). The sort is stable, so the result is deterministic.
+    /// point). The sort is stable, so the result is deterministic, on any thread count.
     pub fn build(points: &[Vec3], radius: f32) -> (HashGrid, Vec<u32>) {
         assert!(
             points.len() < u32::MAX as usize,
@@ -163,43 +263,31 @@ impl HashGrid {
         // loader rejects such radii; this keeps the grid sound for any positive radius.
         let inv_cell = (0.5 / radius).min(f32::MAX);
         let buckets = points.len().max(1).next_power_of_two();
-        let mask = buckets as u64 - 1;
-        // Hashing is the only per-point arithmetic worth spreading over threads; the counting
-        // passes are memory-bound and sequential keeps them stable and simple.
         let hashes: Vec<u64> = points
             .par_iter()
             .map(|&p| hash(cell_of(p, inv_cell)))
             .collect();
-        let filter_bits = buckets * FILTER_BITS_PER_BUCKET;
-        let filter_mask = filter_bits as u64 - 1;
-        let mut filter = vec![0u64; filter_bits.div_ceil(64)];
-        let mut starts = vec![0u32; buckets + 1];
-        let keys: Vec<u32> = hashes.iter().map(|&h| (h & mask) as u32).collect();
-        for (&k, &h) in keys.iter().zip(&hashes) {
-            starts[k as usize + 1] += 1;
-            let bit = filter_bit(h, filter_mask);
-            filter[(bit >> 6) as usize] |= 1 << (bit & 63);
-        }
-        for b in 0..buckets {
-            starts[b + 1] += starts[b];
-        }
-        let mut next = starts.clone();
-        let mut order = vec![0u32; points.len()];
-        for (i, &k) in keys.iter().enumerate() {
-            let slot = &mut next[k as usize];
-            order[*slot as usize] = i as u32;
-            *slot += 1;
-        }
+        let (table, order) = sort_into_buckets(&hashes, buckets);
         (
             HashGrid {
                 inv_cell,
-                starts,
-                mask,
-                filter,
-                filter_mask,
+                table,
+                mask: buckets as u64 - 1,
             },
             order,
         )
+    }
+
+    /// First sorted point of bucket `b` (`b` ≤ buckets).
+    #[inline]
+    fn start_of(&self, b: usize) -> u32 {
+        self.table[b] as u32
+    }
+
+    /// True if the tag filter of bucket `b` has any of `tags`.
+    #[inline]
+    fn has_tags(&self, b: usize, tags: u32) -> bool {
+        (self.table[b] >> 32) as u32 & tags != 0
     }
 
     /// The distinct buckets that a sphere of radius `radius` (the build radius) around `x` can
@@ -218,7 +306,7 @@ impl HashGrid {
                 for cz in lo[2]..=hi[2].min(lo[2].saturating_add(2)) {
                     let h = hash([cx, cy, cz]);
                     let b = (h & self.mask) as u32;
-                    let occupied = self.filter_has(filter_bit(h, self.filter_mask));
+                    let occupied = self.has_tags(b as usize, tag_bit(h));
                     // Two touched cells may share a bucket; visit it once (or its points would
                     // be reported twice), at its first place in the order.
                     if let Some(k) = buckets[..n].iter().position(|&c| c == b) {
@@ -234,26 +322,20 @@ impl HashGrid {
         (buckets, live, n)
     }
 
-    #[inline]
-    fn filter_has(&self, bit: u64) -> bool {
-        self.filter[(bit >> 6) as usize] & (1 << (bit & 63)) != 0
-    }
-
     /// Starts a range query for a sphere of radius `radius` (the build radius) around `x`:
-    /// finds the touched cells and their buckets and hints the CPU to fetch their filter bits.
-    /// [`Self::advance`] moves it on, [`Self::visit`] finishes it.
+    /// finds the touched cells and their buckets and hints the CPU to fetch their table
+    /// entries. [`Self::advance`] moves it on, [`Self::visit`] finishes it.
     /// `q` is overwritten in place (a query is a few hundred bytes; callers keep theirs in
     /// fixed slots rather than moving them).
     #[inline]
     pub fn start(&self, q: &mut GridQuery, x: Vec3, radius: f32) {
-        // The arrays need no reset: only their first `cells`/`n` entries are read, and
-        // `ranges[k]` only once bucket k is live.
+        // The arrays need no reset: only their first `n` entries are read, and `ranges[k]`
+        // only once bucket k is live.
         q.live = 0;
         q.n = 0;
-        q.cells = 0;
         q.general = None;
-        q.stage = Stage::Filter;
-        if self.starts.len() < 2 {
+        q.stage = Stage::Entries;
+        if self.table.len() < 2 {
             q.stage = Stage::Bounds;
             return;
         }
@@ -265,75 +347,54 @@ impl HashGrid {
             q.general = Some((x, radius));
             return;
         }
-        let mut cells = 0;
         let mut n = 0;
         for cx in lo[0]..=hi[0] {
             for cy in lo[1]..=hi[1] {
                 for cz in lo[2]..=hi[2] {
                     let h = hash([cx, cy, cz]);
                     let b = (h & self.mask) as u32;
-                    let bit = filter_bit(h, self.filter_mask);
-                    bdpm_geometry::prefetch(&self.filter[(bit >> 6) as usize]);
                     // Cells that share a bucket: the bucket is visited once, at its first place.
-                    let slot = match q.buckets[..n].iter().position(|&c| c == b) {
-                        Some(k) => k,
+                    match q.buckets[..n].iter().position(|&c| c == b) {
+                        Some(k) => q.tags[k] |= tag_bit(h),
                         None => {
+                            let entry = &self.table[b as usize];
+                            bdpm_geometry::prefetch(entry);
+                            // The bucket's end is the next entry's start, in the next
+                            // cache line when this entry is its line's last.
+                            if (entry as *const u64 as usize) % 64 == 56 {
+                                bdpm_geometry::prefetch(&self.table[b as usize + 1]);
+                            }
                             q.buckets[n] = b;
+                            q.tags[n] = tag_bit(h);
                             n += 1;
-                            n - 1
                         }
-                    };
-                    q.cell_bits[cells] = bit;
-                    q.cell_slot[cells] = slot as u8;
-                    cells += 1;
+                    }
                 }
             }
         }
-        q.cells = cells as u8;
         q.n = n as u8;
     }
 
-    /// Moves `q` one stage on, hinting the CPU to fetch what the next stage reads: the filter
-    /// bits decide which buckets are live (and their bounds are fetched), then the bounds are
-    /// read (and `hint(first point index)` is called for each non-empty bucket, so the caller
-    /// can fetch its points). Results do not depend on how often this is called.
+    /// Moves `q` one stage on, hinting the CPU to fetch what the next stage reads: the table
+    /// entries decide which buckets are live and give their bounds (and `hint(first point
+    /// index)` is called for each non-empty live bucket, so the caller can fetch its points).
+    /// Results do not depend on how often this is called.
     #[inline]
     pub fn advance(&self, q: &mut GridQuery, hint: impl Fn(usize)) {
-        match q.stage {
-            Stage::Filter => {
-                for c in 0..q.cells as usize {
-                    if self.filter_has(q.cell_bits[c]) {
-                        q.live |= 1 << q.cell_slot[c];
-                    }
-                }
-                if q.live == 0 {
-                    // Nothing to read: most queries end here.
-                    q.stage = Stage::Bounds;
-                    return;
-                }
-                for k in 0..q.n as usize {
-                    if q.live & (1 << k) != 0 {
-                        bdpm_geometry::prefetch(&self.starts[q.buckets[k] as usize]);
-                    }
-                }
-                q.stage = Stage::Live;
-            }
-            Stage::Live => {
-                // All bounds are read before any point: the reads are independent, so their
-                // misses overlap.
-                for k in 0..q.n as usize {
-                    if q.live & (1 << k) != 0 {
-                        let b = q.buckets[k] as usize;
-                        q.ranges[k] = (self.starts[b], self.starts[b + 1]);
-                        if q.ranges[k].0 < q.ranges[k].1 {
-                            hint(q.ranges[k].0 as usize);
-                        }
-                    }
-                }
-                q.stage = Stage::Bounds;
-            }
-            Stage::Bounds => {}
+        if q.stage == Stage::Bounds {
+            return;
         }
+        for k in 0..q.n as usize {
+            let b = q.buckets[k] as usize;
+            if self.has_tags(b, q.tags[k]) {
+                q.live |= 1 << k;
+                q.ranges[k] = (self.start_of(b), self.start_of(b + 1));
+                if q.ranges[k].0 < q.ranges[k].1 {
+                    hint(q.ranges[k].0 as usize);
+                }
+            }
+        }
+        q.stage = Stage::Bounds;
     }
 
     /// Finishes `q`: calls `f(range)` once for each distinct non-empty bucket the query
@@ -345,7 +406,7 @@ impl HashGrid {
             let (buckets, live, n) = self.buckets_near(x, radius);
             for k in 0..n {
                 let b = buckets[k] as usize;
-                let (s, e) = (self.starts[b], self.starts[b + 1]);
+                let (s, e) = (self.start_of(b), self.start_of(b + 1));
                 if live[k] && s < e {
                     f(s as usize..e as usize);
                 }
@@ -354,9 +415,7 @@ impl HashGrid {
         }
         if q.stage != Stage::Bounds {
             let mut q = *q;
-            while q.stage != Stage::Bounds {
-                self.advance(&mut q, |_| {});
-            }
+            self.advance(&mut q, |_| {});
             return self.visit(&q, f);
         }
         for k in 0..q.n as usize {
@@ -369,8 +428,7 @@ impl HashGrid {
 
     /// Heap bytes held.
     pub fn memory_bytes(&self) -> u64 {
-        (self.starts.capacity() * size_of::<u32>() + self.filter.capacity() * size_of::<u64>())
-            as u64
+        (self.table.capacity() * size_of::<u64>()) as u64
     }
 }
 
@@ -492,6 +550,79 @@ mod tests {
                     found |= order[range].contains(&(k as u32));
                 });
                 assert!(found, "radius {radius:e}: point {k} not found");
+            }
+        }
+    }
+
+    /// The one-thread counting sort the parallel one must equal: buckets in order, input
+    /// order within a bucket, tags ORed per bucket.
+    fn sort_reference(hashes: &[u64], buckets: usize) -> (Vec<u64>, Vec<u32>) {
+        let mask = buckets as u64 - 1;
+        let mut counts = vec![0u32; buckets];
+        let mut tags = vec![0u32; buckets];
+        for &h in hashes {
+            counts[(h & mask) as usize] += 1;
+            tags[(h & mask) as usize] |= tag_bit(h);
+        }
+        let mut table = Vec::with_capacity(buckets + 1);
+        let mut next = Vec::with_capacity(buckets);
+        let mut at = 0u32;
+        for b in 0..buckets {
+            table.push(u64::from(at) | u64::from(tags[b]) << 32);
+            next.push(at);
+            at += counts[b];
+        }
+        table.push(u64::from(at));
+        let mut order = vec![0u32; hashes.len()];
+        for (i, &h) in hashes.iter().enumerate() {
+            let slot = &mut next[(h & mask) as usize];
+            order[*slot as usize] = i as u32;
+            *slot += 1;
+        }
+        (table, order)
+    }
+
+    /// The parallel two-pass sort gives the one-thread sort's table and permutation, for sizes
+    /// below, at and above one chunk and one super-bucket, with crowded buckets, on 1 and 3
+    /// threads.
+    #[test]
+    fn parallel_sort_equals_the_one_thread_sort() {
+        let mut rng = bdpm_geometry::Rng::new(7, bdpm_geometry::Domain::Other, [0; 3]);
+        let mut random = || rng.next_u64();
+        for (n, distinct) in [
+            (0usize, 1u64),
+            (1, 1),
+            (5, 3),
+            (300, 1000),
+            (SORT_CHUNK - 1, 50),
+            (SORT_CHUNK + 17, u64::MAX),
+            (3 * SORT_CHUNK + 5, 100_000),
+        ] {
+            let pool: Vec<u64> = (0..distinct.min(4096)).map(|_| random()).collect();
+            let hashes: Vec<u64> = (0..n)
+                .map(|_| {
+                    let h = random();
+                    // Few distinct cells crowd their buckets; otherwise every hash is fresh.
+                    if distinct < n as u64 {
+                        pool[(h % pool.len() as u64) as usize]
+                    } else {
+                        h
+                    }
+                })
+                .collect();
+            for buckets in [1usize, 64, 256, 1024, n.max(1).next_power_of_two()] {
+                let expected = sort_reference(&hashes, buckets);
+                for threads in [1, 3] {
+                    let got = rayon::ThreadPoolBuilder::new()
+                        .num_threads(threads)
+                        .build()
+                        .unwrap()
+                        .install(|| sort_into_buckets(&hashes, buckets));
+                    assert!(
+                        got == expected,
+                        "n {n}, {buckets} buckets, {threads} threads: sorts differ"
+                    );
+                }
             }
         }
     }

@@ -243,8 +243,8 @@ impl PhotonMap {
     }
 
     /// Moves `q` one stage on, each time asking the CPU to fetch what the next stage reads.
-    /// Four stages: the cell filter (then the bucket bounds are fetched), the bounds (then the
-    /// candidates' positions), the range test (then the photons found), the photons (then
+    /// Three stages: the buckets' table entries (filter and bounds; then the candidates'
+    /// positions are fetched), the range test (then the photons found), the photons (then
     /// their previous vertices, which the weights read). Further calls do nothing.
     #[inline]
     pub fn advance_query(&self, q: &mut PhotonQuery) {

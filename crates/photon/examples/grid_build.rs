@@ -1,0 +1,58 @@
+//! Times `HashGrid::build` alone on 1 and 2 threads: N points (default 640,000, what a Lambert
+//! paper pass stores) spread uniformly over five walls of a 5.5 m box, merge radius 1.75 mm,
+//! median and fastest of 21 builds each, in milliseconds. The grid's counting sort used to be a
+//! serial stretch of every photon pass (docs/performance.md).
+//!
+//! Run: `cargo run --release -p bdpm-photon --example grid_build [-- N]`
+
+use bdpm_geometry::{Domain, Rng};
+use bdpm_photon::grid::HashGrid;
+use glam::Vec3;
+
+fn main() {
+    let n: usize = match std::env::args().nth(1).map(|s| s.parse()) {
+        None => 640_000,
+        Some(Ok(n)) => n,
+        Some(Err(e)) => {
+            eprintln!("grid_build: N must be a count of points: {e}");
+            std::process::exit(2);
+        }
+    };
+    let side = 5.5;
+    let mut rng = Rng::new(1, Domain::Other, [0; 3]);
+    let points: Vec<Vec3> = (0..n)
+        .map(|_| {
+            let [a, b, w] = rng.uniform3();
+            let (a, b) = (a * side, b * side);
+            match (w * 5.0) as u32 {
+                0 => Vec3::new(a, b, 0.0),
+                1 => Vec3::new(a, 0.0, b),
+                2 => Vec3::new(0.0, a, b),
+                3 => Vec3::new(a, b, side),
+                _ => Vec3::new(side, a, b),
+            }
+        })
+        .collect();
+    for threads in [1, 2] {
+        let pool = match rayon::ThreadPoolBuilder::new().num_threads(threads).build() {
+            Ok(pool) => pool,
+            Err(e) => {
+                eprintln!("grid_build: cannot start {threads} threads: {e}");
+                std::process::exit(1);
+            }
+        };
+        let mut ms: Vec<f64> = (0..21)
+            .map(|_| {
+                let t = std::time::Instant::now();
+                std::hint::black_box(pool.install(|| HashGrid::build(&points, 0.00175)));
+                t.elapsed().as_secs_f64() * 1e3
+            })
+            .collect();
+        ms.sort_by(f64::total_cmp);
+        println!(
+            "{n} points, {threads} thread(s): median {:.2} ms, fastest {:.2} ms",
+            ms[ms.len() / 2],
+            ms[0]
+        );
+    }
+}
