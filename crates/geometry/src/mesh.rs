@@ -248,7 +248,8 @@ enum Accel {
 /// [`Geometry::degenerate_count`]; exact duplicates likewise, in [`Geometry::duplicate_count`].
 pub struct Geometry {
     tris: Vec<Tri>,
-    /// Triangles in BVH leaf order, so leaf index → intersector without indirection.
+    /// Triangles in BVH leaf order, so leaf index → intersector without indirection (`Cwbvh`
+    /// only; empty for `Bvh4`).
     rt: Vec<LeafTri>,
     /// Leaf index → original triangle index.
     leaf_to_prim: Vec<u32>,
@@ -601,10 +602,15 @@ impl Geometry {
             .iter()
             .map(|&j| if j == PADDING { 0 } else { live[j as usize] })
             .collect();
-        let rt = leaf_to_prim
-            .iter()
-            .map(|&prim| LeafTri::new(tris[prim as usize].v))
-            .collect();
+        // Only obvhs's kernel reads these (the 4-wide leaves hold their own copies): 48 bytes
+        // a triangle that a `Bvh4` geometry would hold for nothing.
+        let rt = match kernel {
+            Kernel::Bvh4 => Vec::new(),
+            Kernel::Cwbvh => leaf_to_prim
+                .iter()
+                .map(|&prim| LeafTri::new(tris[prim as usize].v))
+                .collect(),
+        };
         let mut area_cdf = Vec::with_capacity(tris.len());
         let mut acc = 0.0f64;
         for t in &tris {
