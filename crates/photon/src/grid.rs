@@ -119,14 +119,58 @@ const SORT_CHUNK: usize = 1 << 15;
 /// index of the k-th sorted point). `buckets` is a power of two.
 ///
 /// A one-thread counting sort of a million points scatters into a 4 MB table and was a serial
-/// stretch of every photon pass (docs/performance.md). Here it runs in two stable parallel
-/// passes: each chunk of the input sorts its indices by super-bucket (the bucket's high
-/// bits); then each super-bucket takes its runs from the chunks, in input order, and sorts
-/// them by the low bits into its own slice of the table and of the permutation. Both passes
-/// keep input order within a bucket, so the result is the one-thread sort's, on any thread
-/// count.
+/// stretch of every photon pass (docs/performance.md). With more than one thread and at least
+/// [`PARALLEL_SORT_MIN`] points it runs in two stable parallel passes: each chunk of the input
+/// sorts its indices by super-bucket (the bucket's high bits); then each super-bucket takes its
+/// runs from the chunks, in input order, and sorts them by the low bits into its own slice of
+/// the table and of the permutation. Both passes keep input order within a bucket, so the
+/// result is the one-thread sort's, on any thread count (unit test).
 fn sort_into_buckets(hashes: &[u64], buckets: usize) -> (Vec<u64>, Vec<u32>) {
     debug_assert!(buckets.is_power_of_two());
+    if hashes.len() < PARALLEL_SORT_MIN || rayon::current_num_threads() == 1 {
+        sort_serial(hashes, buckets)
+    } else {
+        sort_parallel(hashes, buckets)
+    }
+}
+
+/// Points below which [`sort_into_buckets`] sorts on one thread. Measured (`measure_sort_paths`
+/// below, medians): on two threads the two-pass sort took 1.35 ms against 0.79 ms at 128,000
+/// points and 8.7 ms against 11.4 ms at 640,000; on one thread it is always slower (15.3 ms
+/// against 9.3 ms at 640,000).
+const PARALLEL_SORT_MIN: usize = 1 << 18;
+
+/// [`sort_into_buckets`] on one thread: one counting pass, then one scatter. Faster than the
+/// two-pass sort on one thread, and below [`PARALLEL_SORT_MIN`] points on two.
+fn sort_serial(hashes: &[u64], buckets: usize) -> (Vec<u64>, Vec<u32>) {
+    let mask = buckets as u64 - 1;
+    // Each entry counts its points in the low half (fewer than 2³² points) and collects its
+    // tags in the high half, then the counts become starts.
+    let mut table = vec![0u64; buckets + 1];
+    for &h in hashes {
+        let e = &mut table[(h & mask) as usize];
+        *e = (*e + 1) | u64::from(tag_bit(h)) << 32;
+    }
+    let mut next = Vec::with_capacity(buckets);
+    let mut at = 0u32;
+    for e in &mut table[..buckets] {
+        let count = *e as u32;
+        *e = (*e & !u64::from(u32::MAX)) | u64::from(at);
+        next.push(at);
+        at += count;
+    }
+    table[buckets] = u64::from(at);
+    let mut order = vec![0u32; hashes.len()];
+    for (i, &h) in hashes.iter().enumerate() {
+        let slot = &mut next[(h & mask) as usize];
+        order[*slot as usize] = i as u32;
+        *slot += 1;
+    }
+    (table, order)
+}
+
+/// The two-pass parallel form of [`sort_into_buckets`].
+fn sort_parallel(hashes: &[u64], buckets: usize) -> (Vec<u64>, Vec<u32>) {
     let mask = buckets as u64 - 1;
     let bucket_bits = buckets.trailing_zeros();
     let super_bits = SUPER_BITS.min(bucket_bits);
@@ -566,34 +610,6 @@ mod tests {
         }
     }
 
-    /// The one-thread counting sort the parallel one must equal: buckets in order, input
-    /// order within a bucket, tags ORed per bucket.
-    fn sort_reference(hashes: &[u64], buckets: usize) -> (Vec<u64>, Vec<u32>) {
-        let mask = buckets as u64 - 1;
-        let mut counts = vec![0u32; buckets];
-        let mut tags = vec![0u32; buckets];
-        for &h in hashes {
-            counts[(h & mask) as usize] += 1;
-            tags[(h & mask) as usize] |= tag_bit(h);
-        }
-        let mut table = Vec::with_capacity(buckets + 1);
-        let mut next = Vec::with_capacity(buckets);
-        let mut at = 0u32;
-        for b in 0..buckets {
-            table.push(u64::from(at) | u64::from(tags[b]) << 32);
-            next.push(at);
-            at += counts[b];
-        }
-        table.push(u64::from(at));
-        let mut order = vec![0u32; hashes.len()];
-        for (i, &h) in hashes.iter().enumerate() {
-            let slot = &mut next[(h & mask) as usize];
-            order[*slot as usize] = i as u32;
-            *slot += 1;
-        }
-        (table, order)
-    }
-
     /// The parallel two-pass sort gives the one-thread sort's table and permutation, for sizes
     /// below, at and above one chunk and one super-bucket, with crowded buckets, on 1 and 3
     /// threads.
@@ -623,13 +639,13 @@ mod tests {
                 })
                 .collect();
             for buckets in [1usize, 64, 256, 1024, n.max(1).next_power_of_two()] {
-                let expected = sort_reference(&hashes, buckets);
+                let expected = sort_serial(&hashes, buckets);
                 for threads in [1, 3] {
                     let got = rayon::ThreadPoolBuilder::new()
                         .num_threads(threads)
                         .build()
                         .unwrap()
-                        .install(|| sort_into_buckets(&hashes, buckets));
+                        .install(|| sort_parallel(&hashes, buckets));
                     assert!(
                         got == expected,
                         "n {n}, {buckets} buckets, {threads} threads: sorts differ"
@@ -682,6 +698,62 @@ mod tests {
                 .filter(|&i| (points[i] - x).length_squared() <= radius * radius)
                 .collect();
             assert_eq!(found, brute);
+        }
+    }
+}
+
+/// A measurement, not a test: the two sort paths timed side by side (interleaved, medians and
+/// fastest of 25), which sets [`PARALLEL_SORT_MIN`] and the one-thread rule. Run:
+/// `cargo test --release -p bdpm-photon --lib measure_sort_paths -- --ignored --nocapture`.
+#[cfg(test)]
+mod measure {
+    use super::*;
+
+    #[test]
+    #[ignore = "a timing for docs/performance.md, not a check"]
+    fn measure_sort_paths() {
+        let mut rng = bdpm_geometry::Rng::new(1, bdpm_geometry::Domain::Other, [0; 3]);
+        for n in [128_000usize, 640_000] {
+            let side = 5.5;
+            let points: Vec<Vec3> = (0..n)
+                .map(|_| {
+                    let [a, b, w] = rng.uniform3();
+                    let (a, b) = (a * side, b * side);
+                    match (w * 5.0) as u32 {
+                        0 => Vec3::new(a, b, 0.0),
+                        1 => Vec3::new(a, 0.0, b),
+                        2 => Vec3::new(0.0, a, b),
+                        3 => Vec3::new(a, b, side),
+                        _ => Vec3::new(side, a, b),
+                    }
+                })
+                .collect();
+            let hashes: Vec<u64> = points
+                .iter()
+                .map(|&p| cell_hash(cell_of(p, 0.5 / 0.00175)))
+                .collect();
+            let buckets = n.next_power_of_two();
+            for threads in [1, 2] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let (mut ts, mut tp) = (vec![], vec![]);
+                for _ in 0..25 {
+                    let t = std::time::Instant::now();
+                    std::hint::black_box(sort_serial(&hashes, buckets));
+                    ts.push(t.elapsed().as_secs_f64() * 1e3);
+                    let t = std::time::Instant::now();
+                    std::hint::black_box(pool.install(|| sort_parallel(&hashes, buckets)));
+                    tp.push(t.elapsed().as_secs_f64() * 1e3);
+                }
+                ts.sort_by(f64::total_cmp);
+                tp.sort_by(f64::total_cmp);
+                println!(
+                    "n {n} threads {threads}: serial median {:.2} min {:.2}; parallel median {:.2} min {:.2}",
+                    ts[12], ts[0], tp[12], tp[0]
+                );
+            }
         }
     }
 }
