@@ -5,9 +5,10 @@
 //!
 //! Run: `cargo run --release -p bdpm-photon --example grid_build [-- N]`
 
-use bdpm_geometry::{Domain, Rng};
+#[path = "common/walls.rs"]
+mod walls;
+
 use bdpm_photon::grid::HashGrid;
-use glam::Vec3;
 
 fn main() {
     let n: usize = match std::env::args().nth(1).map(|s| s.parse()) {
@@ -18,21 +19,7 @@ fn main() {
             std::process::exit(2);
         }
     };
-    let side = 5.5;
-    let mut rng = Rng::new(1, Domain::Other, [0; 3]);
-    let points: Vec<Vec3> = (0..n)
-        .map(|_| {
-            let [a, b, w] = rng.uniform3();
-            let (a, b) = (a * side, b * side);
-            match (w * 5.0) as u32 {
-                0 => Vec3::new(a, b, 0.0),
-                1 => Vec3::new(a, 0.0, b),
-                2 => Vec3::new(0.0, a, b),
-                3 => Vec3::new(a, b, side),
-                _ => Vec3::new(side, a, b),
-            }
-        })
-        .collect();
+    let points = walls::wall_points(n);
     for threads in [1, 2] {
         let pool = match rayon::ThreadPoolBuilder::new().num_threads(threads).build() {
             Ok(pool) => pool,

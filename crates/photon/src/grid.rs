@@ -709,25 +709,18 @@ mod tests {
 mod measure {
     use super::*;
 
+    mod walls {
+        include!(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/examples/common/walls.rs"
+        ));
+    }
+
     #[test]
     #[ignore = "a timing for docs/performance.md, not a check"]
     fn measure_sort_paths() {
-        let mut rng = bdpm_geometry::Rng::new(1, bdpm_geometry::Domain::Other, [0; 3]);
         for n in [128_000usize, 640_000] {
-            let side = 5.5;
-            let points: Vec<Vec3> = (0..n)
-                .map(|_| {
-                    let [a, b, w] = rng.uniform3();
-                    let (a, b) = (a * side, b * side);
-                    match (w * 5.0) as u32 {
-                        0 => Vec3::new(a, b, 0.0),
-                        1 => Vec3::new(a, 0.0, b),
-                        2 => Vec3::new(0.0, a, b),
-                        3 => Vec3::new(a, b, side),
-                        _ => Vec3::new(side, a, b),
-                    }
-                })
-                .collect();
+            let points = walls::wall_points(n);
             let hashes: Vec<u64> = points
                 .iter()
                 .map(|&p| cell_hash(cell_of(p, 0.5 / 0.00175)))
