@@ -16,6 +16,9 @@ pub enum Domain {
     PixelTable = 4,
     /// Anything else (tests, tools).
     Other = 5,
+    /// The per-pass layout of a pixel's camera samples (the stratified sampler's strata and
+    /// permutations), apart from each sample's own camera stream.
+    PixelPattern = 6,
 }
 
 /// A deterministic random stream: a PCG (128-bit MCG, XSL-RR output) whose state is a hash of

@@ -75,6 +75,8 @@ pub(crate) struct Job {
     pub(crate) x: f32,
     pub(crate) y: f32,
     pub(crate) rng: Rng,
+    /// The numbers of the BDF sample at x₀ when the sampler fixes them (`None`: from `rng`).
+    pub(crate) bdf: Option<[f32; 3]>,
     pub(crate) out: Techniques,
 }
 
@@ -557,7 +559,9 @@ impl<'a> Mix<'a> {
             map.restart_query(&mut slot.query0, x0.sh.p);
         }
         if self.needs.second_vertex {
-            slot.second = self.start_second(&x0, map, &mut job.rng, pixel, stats, &mut slot.query1);
+            let drawn = job.rng.uniform3();
+            let bdf_u = job.bdf.unwrap_or(drawn);
+            slot.second = self.start_second(&x0, map, bdf_u, pixel, stats, &mut slot.query1);
         }
         slot.x0 = Some(x0);
     }
@@ -568,13 +572,13 @@ impl<'a> Mix<'a> {
         &self,
         x0: &FirstVertex<'_>,
         map: &PhotonMap,
-        rng: &mut Rng,
+        u: [f32; 3],
         pixel: Option<&PixelWeights>,
         stats: &mut WeightStats,
         query: &mut PhotonQuery,
     ) -> Option<Second> {
         let scene = self.scene;
-        let s = x0.bdf.sample_at(&x0.out, rng.uniform3())?;
+        let s = x0.bdf.sample_at(&x0.out, u)?;
         let v = x0.sh.frame.to_world(s.wi);
         if x0.sh.ng.dot(v) <= 0.0 {
             return None;

@@ -16,6 +16,7 @@ mod memory;
 pub mod path;
 mod predict;
 mod render;
+mod sampler;
 mod settings;
 mod table;
 mod weightmap;
@@ -33,7 +34,8 @@ pub use render::{
 // dependency.
 pub use bdpm_settings::{
     FOOTPRINT_TABLE_RAYS, MIN_RADIUS, Mode, PINHOLE_TABLE_RAYS, RadiusError, RenderSettings,
-    Setting, SettingsError, SettingsRecord, WeightClamp, check_radius, default_radius,
+    Sampler, Setting, SettingsError, SettingsRecord, WeightClamp, check_radius, default_radius,
 };
+pub use sampler::strata;
 pub use table::{PixelTable, PixelWeights};
 pub use weightmap::{WeightMap, WeightTarget};

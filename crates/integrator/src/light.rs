@@ -4,14 +4,14 @@
 //! bright secondary source (the Cornell ceiling spot) makes `path` slow (method.md §10).
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use bdpm_geometry::{Domain, Rng};
+use bdpm_geometry::Domain;
 use bdpm_photon::{TraceOptions, trace_photons};
 use bdpm_scene::Scene;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::render::{PassOutput, accumulate};
-use crate::settings::pixel_offset;
+use crate::sampler::PixelSamples;
 use bdpm_settings::RenderSettings;
 
 /// Renders one pass of the `light` reference.
@@ -31,17 +31,13 @@ pub(crate) fn render_light_pass(
         .enumerate()
         .for_each(|(y, row)| {
             let mut row_dropped = 0;
+            let mut layout = PixelSamples::new(settings);
             for (x, px) in row.iter_mut().enumerate() {
                 let pixel = (y * w + x) as u64;
                 let mut sum = DVec3::ZERO;
+                layout.start(pass, pixel);
                 for k in 0..settings.spp {
-                    let mut rng = Rng::new(
-                        settings.seed,
-                        Domain::Camera,
-                        [pass as u64, pixel, k as u64],
-                    );
-                    // The numbers are drawn either way, so the streams do not depend on the setting.
-                    let [jx, jy] = pixel_offset(rng.uniform2(), settings.pixel_jitter);
+                    let [jx, jy] = layout.sample(k).offset;
                     let dir = cam.ray_direction(x as f32 + jx, y as f32 + jy);
                     let l = match scene
                         .geometry()

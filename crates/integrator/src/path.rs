@@ -16,10 +16,23 @@ const MAX_SURVIVAL: f32 = 0.95;
 /// min(max throughput channel, 0.95).
 pub fn trace_path(
     scene: &Scene,
-    mut origin: Vec3,
-    mut dir: Vec3,
+    origin: Vec3,
+    dir: Vec3,
     rng: &mut Rng,
     roulette_depth: u32,
+) -> Vec3 {
+    trace_path_with_first(scene, (origin, dir), rng, roulette_depth, None)
+}
+
+/// [`trace_path`] whose first BDF sample takes the numbers `first` (a sampler's stratified
+/// numbers) instead of the stream's; the stream's three are drawn either way, so the rest of
+/// the path reads the same numbers.
+pub(crate) fn trace_path_with_first(
+    scene: &Scene,
+    (mut origin, mut dir): (Vec3, Vec3),
+    rng: &mut Rng,
+    roulette_depth: u32,
+    mut first: Option<[f32; 3]>,
 ) -> Vec3 {
     let mut radiance = Vec3::ZERO;
     let mut beta = Vec3::ONE;
@@ -34,7 +47,9 @@ pub fn trace_path(
         if wo_local.z <= 0.0 {
             break;
         }
-        let Some(s) = scene.bdf(sh.material).sample(wo_local, rng.uniform3()) else {
+        let u = rng.uniform3();
+        let u = first.take().unwrap_or(u);
+        let Some(s) = scene.bdf(sh.material).sample(wo_local, u) else {
             break;
         };
         let wi = sh.frame.to_world(s.wi);

@@ -23,6 +23,14 @@
 //! T_jitter the spread of the pixel's mean radiance over its footprint, which the functional of
 //! §12 leaves out (it is the same for every mode) but a measured V contains.
 //!
+//! **Stratified samples** (`--sampler stratified`, the default). The N_B samples of a pass take
+//! one cell each of an n_x × n_y grid (of the pixel, and of the BDF's two direction numbers at
+//! x₀), and the mean of one value per cell has variance (1/N_B)·mean over cells of σ²_cell,
+//! the variance within a cell. So Var_p in T1 and Var_{x₀ in pixel} in T_jitter become that
+//! mean within-cell variance, estimated from pairs of rays drawn in one random cell:
+//! σ²_cell ≈ ½(g_a − g_b)². T0's ρ is that of pairs of samples in distinct cells
+//! ([`bdpm_mis::overlap_factor_stratified`]); T0 and T2 are means over v and keep their form.
+//!
 //! **Which N_eff.** T0's N_eff = 1 + (N_B − 1)·ρ uses ρ from the pixel's footprint whenever the
 //! samples are jittered, whatever the noise model of the weights: it describes how the render
 //! shares photons, not what the weights assume. The weights themselves use the budget the
@@ -46,6 +54,7 @@ use rayon::prelude::*;
 
 use crate::bdpm::{FirstVertex, Mix};
 use crate::render::{RenderError, Renderer};
+use crate::sampler::{direction_strata, in_cell, pixel_strata, random_cell};
 use crate::table::footprint_overlap;
 use bdpm_settings::PINHOLE_TABLE_RAYS;
 
@@ -178,7 +187,7 @@ impl Renderer<'_> {
 
         let n_b = s.spp as f64;
         let overlap = if s.pixel_jitter {
-            footprint_overlap(scene, &x0.sh, centre.0, centre.1, self.radius())
+            footprint_overlap(scene, &x0.sh, centre, self.radius(), pixel_strata(s))
         } else {
             1.0
         };
@@ -195,21 +204,44 @@ impl Renderer<'_> {
         // a prediction does not get noisier where the table takes fewer.
         let rays = s.pixel_table_rays.unwrap_or(PINHOLE_TABLE_RAYS).max(2);
         let (mut sum, mut sum_sq, mut photons_x0, mut photons_x1) = (0.0, 0.0, 0.0, 0.0);
+        let grid = direction_strata(s);
+        // With stratified directions, rays 2i and 2i + 1 fall in one random cell of the
+        // sampler's grid: half their squared difference estimates that cell's variance.
+        let (mut cell, mut previous, mut within) = ((0, 0), 0.0, 0.0);
         for j in 0..rays {
             // Key slot 1: the A/B rays of table.rs use slot 0 with the same pixel and ray.
             let mut rng = Rng::new(s.seed, Domain::PixelTable, [pixel, j as u64, 1]);
-            let d = direction(mix, h, &budget, pixel_terms, &x0, &mut rng).unwrap_or_default();
+            let mut u = rng.uniform3();
+            if let Some(grid) = grid {
+                if j % 2 == 0 {
+                    // Key slot 3: the cell of pair j/2.
+                    let key = [pixel, j as u64 / 2, 3];
+                    cell = random_cell(grid, &mut Rng::new(s.seed, Domain::PixelTable, key));
+                }
+                let [a, b] = in_cell(cell, grid, [u[1], u[2]]);
+                u = [u[0], a, b];
+            }
+            let d = direction(mix, h, &budget, pixel_terms, &x0, u).unwrap_or_default();
             sum += d.value;
             sum_sq += d.value * d.value;
             photons_x0 += d.photons_x0;
             photons_x1 += d.photons_x1;
+            if j % 2 == 1 {
+                within += 0.5 * (d.value - previous).powi(2);
+            }
+            previous = d.value;
         }
         let n = rays as f64;
         let b = &mix.budget;
         // α = Φ/(N_F·S), W·m⁻².
         let alpha = b.flux / (b.photons * b.merge_area);
-        // Sample variance of the BDD=1 value (unbiased, divisor N − 1).
-        let jumps = ((sum_sq - sum * sum / n) / (n - 1.0)).max(0.0);
+        // The variance of one sample's BDD=1 value: the sample variance (unbiased, divisor
+        // N − 1) for independent directions; for stratified ones the mean variance within a
+        // cell, since the mean of N_B samples, one per cell, has variance Σ σ²_cell/N_B².
+        let jumps = match grid {
+            Some(_) => within / (rays / 2) as f64,
+            None => ((sum_sq - sum * sum / n) / (n - 1.0)).max(0.0),
+        };
         let jitter = if s.pixel_jitter {
             self.jitter_variance(mix, &x0, x, y, pixel) / n_b
         } else {
@@ -250,10 +282,21 @@ impl Renderer<'_> {
         let ld_centre = cache.map_or(0.0, |c| {
             c.lookup(centre.sh.prim, centre.sh.p, centre.u).0 as f64
         });
-        let (mut sum, mut sum_sq) = (0.0, 0.0);
+        let strata = pixel_strata(self.settings());
+        let (mut sum, mut sum_sq, mut within, mut previous, mut cell) =
+            (0.0, 0.0, 0.0, 0.0, (0, 0));
         for m in 0..JITTER_RAYS {
             let mut rng = Rng::new(seed, Domain::PixelTable, [pixel, m as u64, 2]);
-            let [jx, jy] = rng.uniform2();
+            let mut jitter = rng.uniform2();
+            // Stratified samples: rays 2i and 2i + 1 in one random cell of the pixel's grid.
+            if let Some(grid) = strata {
+                if m % 2 == 0 {
+                    let key = [pixel, m as u64 / 2, 4];
+                    cell = random_cell(grid, &mut Rng::new(seed, Domain::PixelTable, key));
+                }
+                jitter = in_cell(cell, grid, jitter);
+            }
+            let [jx, jy] = jitter;
             let dir = cam.ray_direction(x as f32 + jx, y as f32 + jy);
             let value = scene
                 .geometry()
@@ -275,9 +318,19 @@ impl Renderer<'_> {
                 });
             sum += value;
             sum_sq += value * value;
+            if m % 2 == 1 {
+                within += 0.5 * (value - previous).powi(2);
+            }
+            previous = value;
         }
         let m = JITTER_RAYS as f64;
-        ((sum_sq - sum * sum / m) / (m - 1.0)).max(0.0)
+        match strata {
+            // The mean variance within a cell: N_B stratified samples, one per cell, have a
+            // mean whose variance is that over N_B (falling faster than 1/N_B at an edge,
+            // which crosses few cells).
+            Some(_) => within / (m / 2.0),
+            None => ((sum_sq - sum * sum / m) / (m - 1.0)).max(0.0),
+        }
     }
 }
 
@@ -289,10 +342,10 @@ fn direction(
     budget: &Budget,
     terms: Option<&bdpm_mis::PixelTerms>,
     x0: &FirstVertex<'_>,
-    rng: &mut Rng,
+    u: [f32; 3],
 ) -> Option<Direction> {
     let scene = mix.scene;
-    let s = x0.bdf.sample_at(&x0.out, rng.uniform3())?;
+    let s = x0.bdf.sample_at(&x0.out, u)?;
     let v = x0.sh.frame.to_world(s.wi);
     if x0.sh.ng.dot(v) <= 0.0 || s.pdf <= 0.0 {
         return None;

@@ -1,6 +1,6 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use bdpm_geometry::{Domain, Rng};
+use bdpm_geometry::Domain;
 use bdpm_scene::Scene;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -11,8 +11,7 @@ use bdpm_mis::{Budget, Heuristic, NoiseModel};
 use bdpm_photon::{PhotonMap, TraceOptions};
 
 use crate::bdpm::{BATCH, Job, Mix, Slots, Techniques, WeightStats, scene_default_radius};
-use crate::path::trace_path;
-use crate::settings::pixel_offset;
+use crate::sampler::PixelSamples;
 use crate::table::{self, PixelTable, TableSpec};
 use bdpm_settings::{Mode, RadiusError, RenderSettings, SettingsError, check_radius};
 
@@ -196,6 +195,7 @@ impl<'a> Renderer<'a> {
             let spec = TableSpec {
                 rays: needs.pixel_table.then_some(s.table_rays()),
                 footprint,
+                strata: crate::sampler::pixel_strata(s),
                 radius: self.radius,
                 seed: s.seed,
             };
@@ -470,24 +470,24 @@ impl Renderer<'_> {
             let mut row_dropped = 0;
             let mut row_stats = WeightStats::default();
             let mut slots = Slots::default();
+            let mut layout = PixelSamples::new(s);
             for (x, px) in row.iter_mut().enumerate() {
                 let pixel = (y * w + x) as u64;
                 let mut sum = DVec3::ZERO;
                 let mut tsum = Techniques::default();
                 let terms = table.map(|t| t.get(x as u32, y as u32));
+                layout.start(pass, pixel);
                 for first in (0..s.spp).step_by(BATCH) {
                     let count = (s.spp - first).min(BATCH as u32);
                     let mut jobs: [Job; BATCH] = std::array::from_fn(|i| {
-                        let k = first + i as u32;
-                        let mut rng =
-                            Rng::new(s.seed, Domain::Camera, [pass as u64, pixel, k as u64]);
-                        // The numbers are drawn either way, so the streams do not depend on
-                        // the setting.
-                        let [jx, jy] = pixel_offset(rng.uniform2(), s.pixel_jitter);
+                        // Past N_B the slot is unused; sample 0's numbers fill it.
+                        let k = (first + i as u32).min(s.spp - 1);
+                        let c = layout.sample(k);
                         Job {
-                            x: x as f32 + jx,
-                            y: y as f32 + jy,
-                            rng,
+                            x: x as f32 + c.offset[0],
+                            y: y as f32 + c.offset[1],
+                            rng: c.rng,
+                            bdf: c.bdf,
                             out: Techniques::default(),
                         }
                     });
@@ -610,24 +610,20 @@ pub fn render_path_pass(
         .enumerate()
         .for_each(|(y, row)| {
             let mut row_dropped = 0;
+            let mut layout = PixelSamples::new(settings);
             for (x, px) in row.iter_mut().enumerate() {
                 let pixel = (y * w as usize + x) as u64;
                 let mut sum = DVec3::ZERO;
+                layout.start(pass, pixel);
                 for s in 0..settings.spp {
-                    let mut rng = Rng::new(
-                        settings.seed,
-                        Domain::Camera,
-                        [pass as u64, pixel, s as u64],
-                    );
-                    // The numbers are drawn either way, so the streams do not depend on the setting.
-                    let [jx, jy] = pixel_offset(rng.uniform2(), settings.pixel_jitter);
-                    let dir = cam.ray_direction(x as f32 + jx, y as f32 + jy);
-                    let l = trace_path(
+                    let mut c = layout.sample(s);
+                    let dir = cam.ray_direction(x as f32 + c.offset[0], y as f32 + c.offset[1]);
+                    let l = crate::path::trace_path_with_first(
                         scene,
-                        cam.position(),
-                        dir,
-                        &mut rng,
+                        (cam.position(), dir),
+                        &mut c.rng,
                         settings.roulette_depth,
+                        c.bdf,
                     );
                     accumulate(&mut sum, l, &mut row_dropped);
                 }
@@ -670,12 +666,13 @@ pub fn first_hit_layers(scene: &Scene, settings: &RenderSettings) -> FirstHitLay
     let spp = settings.spp.max(1);
     let mut pixels = vec![(DVec3::ZERO, DVec3::ZERO); w * h];
     pixels.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        let mut layout = PixelSamples::new(settings);
         for (x, px) in row.iter_mut().enumerate() {
             let pixel = (y * w + x) as u64;
             let (mut albedo, mut normal) = (DVec3::ZERO, DVec3::ZERO);
+            layout.start(0, pixel);
             for s in 0..spp {
-                let mut rng = Rng::new(settings.seed, Domain::Camera, [0, pixel, s as u64]);
-                let [jx, jy] = pixel_offset(rng.uniform2(), settings.pixel_jitter);
+                let [jx, jy] = layout.sample(s).offset;
                 let dir = cam.ray_direction(x as f32 + jx, y as f32 + jy);
                 let Some(hit) = scene
                     .geometry()

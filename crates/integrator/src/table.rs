@@ -4,7 +4,8 @@
 //! second vertex of the partial weight W₁ (computed with the pixel's N_eff).
 use bdpm_geometry::{Domain, Rng};
 use bdpm_mis::{
-    Budget, PixelTerms, effective_samples, overlap_factor, split_weighted_radiance, w1_partial,
+    Budget, PixelTerms, effective_samples, overlap_factor, overlap_factor_stratified,
+    split_weighted_radiance, w1_partial,
 };
 use bdpm_scene::{Scene, Shading};
 use rayon::prelude::*;
@@ -114,7 +115,16 @@ pub(crate) fn pixel_terms(
 /// side share more; for footprints much larger than the merge disk the two effects cancel
 /// (ρ ≈ S/|F| either way), and for small ones ρ ≈ 1 either way. A footprint that reaches the
 /// horizon of the plane gives ρ = 0.
-pub(crate) fn footprint_overlap(scene: &Scene, sh: &Shading, x: f32, y: f32, radius: f32) -> f64 {
+///
+/// `strata`: the sampler's grid of the pixel when its samples are stratified
+/// ([`overlap_factor_stratified`]), `None` for independent samples.
+pub(crate) fn footprint_overlap(
+    scene: &Scene,
+    sh: &Shading,
+    (x, y): (f32, f32),
+    radius: f32,
+    strata: Option<(u32, u32)>,
+) -> f64 {
     let cam = &scene.camera();
     let n = sh.ng.as_dvec3();
     let origin = cam.position().as_dvec3();
@@ -131,7 +141,11 @@ pub(crate) fn footprint_overlap(scene: &Scene, sh: &Shading, x: f32, y: f32, rad
     };
     let edge_x = cross(x + 0.5, y) - cross(x - 0.5, y);
     let edge_y = cross(x, y + 0.5) - cross(x, y - 0.5);
-    overlap_factor(edge_x.to_array(), edge_y.to_array(), radius as f64)
+    let (edge_x, edge_y, radius) = (edge_x.to_array(), edge_y.to_array(), radius as f64);
+    match strata {
+        Some(strata) => overlap_factor_stratified(edge_x, edge_y, radius, strata),
+        None => overlap_factor(edge_x, edge_y, radius),
+    }
 }
 
 /// How the table is built.
@@ -141,6 +155,8 @@ pub(crate) struct TableSpec {
     /// Compute ρ from the footprint (footprint noise model with jittered samples); otherwise
     /// ρ = 1 and N_eff = N_B.
     pub(crate) footprint: bool,
+    /// The sampler's strata of the pixel when its samples are stratified (for ρ).
+    pub(crate) strata: Option<(u32, u32)>,
     /// Merge radius r, metres.
     pub(crate) radius: f32,
     /// Master seed.
@@ -158,7 +174,7 @@ pub(crate) fn pixel_weights(
 ) -> PixelWeights {
     let n_b = mix.budget.camera_samples;
     let overlap = if spec.footprint {
-        footprint_overlap(mix.scene, &x0.sh, x, y, spec.radius)
+        footprint_overlap(mix.scene, &x0.sh, (x, y), spec.radius, spec.strata)
     } else {
         1.0
     };

@@ -81,6 +81,7 @@ impl Renderer<'_> {
             let spec = TableSpec {
                 rays: needs.pixel_table.then_some(s.table_rays()),
                 footprint,
+                strata: crate::sampler::pixel_strata(s),
                 radius: self.radius(),
                 seed: s.seed,
             };

@@ -120,6 +120,7 @@ fn check_settings(
         ("photons_per_pass", s.photons.to_string()),
         ("pixel_jitter", s.pixel_jitter.to_string()),
         ("noise_model", s.noise_model.name().to_string()),
+        ("sampler", s.sampler.name().to_string()),
         ("radius_m", r.radius().to_string()),
     ];
     let mismatches: Vec<String> = expected
@@ -178,6 +179,7 @@ struct Report<'a> {
     photons_per_pass: u64,
     pixel_jitter: bool,
     noise_model: &'a str,
+    sampler: &'a str,
     radius_m: f32,
     pixel_table_rays: u32,
     /// Passes K of the measured render.
@@ -448,6 +450,7 @@ pub(crate) fn run(args: PredictArgs) -> CliResult<()> {
         photons_per_pass: settings.photons,
         pixel_jitter: settings.pixel_jitter,
         noise_model: settings.noise_model.name(),
+        sampler: settings.sampler.name(),
         radius_m: renderer.radius(),
         pixel_table_rays: settings
             .pixel_table_rays

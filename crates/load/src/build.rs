@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use bdpm_bdf::Bdf;
 use bdpm_geometry::{Geometry, GeometryError, TriangleMesh};
 use bdpm_scene::{Camera, CameraError, Material, PointLight, Scene, SceneError};
-use bdpm_settings::{Mode, NoiseModel, RenderSettings, check_radius, default_radius};
+use bdpm_settings::{Mode, NoiseModel, RenderSettings, Sampler, check_radius, default_radius};
 use glam::{Mat4, Vec3};
 
 use crate::gltf_mesh::{Origin, load_gltf};
@@ -621,6 +621,18 @@ fn render_settings(
             )
         })?,
     };
+    let sampler = match r.sampler {
+        None => d.sampler,
+        Some(name) => Sampler::parse(&name).ok_or_else(|| {
+            ctx.bad(
+                "render.sampler",
+                format!(
+                    "unknown sampler '{name}'; expected one of {}",
+                    Sampler::ALL_NAMES.join(", ")
+                ),
+            )
+        })?,
+    };
     // The values as written are checked here (a number beyond f32 is reported as written);
     // every range is checked once, by `RenderSettings::validate`.
     let radius = match r.radius {
@@ -647,6 +659,7 @@ fn render_settings(
         clamp_weights: r.clamp_weights.unwrap_or(d.clamp_weights),
         pixel_jitter: r.pixel_jitter.unwrap_or(d.pixel_jitter),
         noise_model,
+        sampler,
         roulette_depth: r.roulette_depth.unwrap_or(d.roulette_depth),
     };
     // The file's `threshold_radius` is the threshold mode's radius.

@@ -46,6 +46,7 @@ pub(crate) struct RenderDef {
     pub(crate) clamp_weights: Option<bool>,
     pub(crate) pixel_jitter: Option<bool>,
     pub(crate) noise_model: Option<String>,
+    pub(crate) sampler: Option<String>,
     pub(crate) roulette_depth: Option<u32>,
 }
 

@@ -47,7 +47,9 @@
 use std::fmt;
 
 mod overlap;
-pub use overlap::{NoiseModel, effective_samples, lens_fraction, overlap_factor};
+pub use overlap::{
+    NoiseModel, effective_samples, lens_fraction, overlap_factor, overlap_factor_stratified,
+};
 
 /// The per-pass budget and merge settings shared by every weight of one render.
 ///

@@ -167,6 +167,33 @@ pub fn overlap_factor(edge_x: [f64; 3], edge_y: [f64; 3], radius: f64) -> f64 {
     }
 }
 
+/// The overlap factor ρ for N = n_x·n_y camera samples stratified over the pixel: one
+/// uniformly jittered sample in each cell of an n_x × n_y grid (`strata`), the footprint and
+/// radius as in [`overlap_factor`]. ρ is the mean over pairs of *distinct* samples.
+///
+/// Over all N² ordered pairs of cells, a displacement has the density of two independent
+/// uniform points of the pixel; the N pairs of a cell with itself have that of two uniform
+/// points of one cell, whose footprint is spanned by edge_x/n_x and edge_y/n_y. So the
+/// N(N − 1) pairs of distinct cells give ρ_strat = (N·ρ(F) − ρ(F_cell))/(N − 1), exactly.
+/// Samples in different cells lie further apart than independent ones, so ρ_strat ≤ ρ(F)
+/// (clamped to [0, 1] against the quadrature's ≈ 1 % error). With N ≤ 1 no pair exists and
+/// ρ(F) is returned (N_eff = 1 either way).
+pub fn overlap_factor_stratified(
+    edge_x: [f64; 3],
+    edge_y: [f64; 3],
+    radius: f64,
+    strata: (u32, u32),
+) -> f64 {
+    let (nx, ny) = (strata.0.max(1) as f64, strata.1.max(1) as f64);
+    let n = nx * ny;
+    let full = overlap_factor(edge_x, edge_y, radius);
+    if n <= 1.0 {
+        return full;
+    }
+    let cell = overlap_factor(edge_x.map(|c| c / nx), edge_y.map(|c| c / ny), radius);
+    ((n * full - cell) / (n - 1.0)).clamp(0.0, 1.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -262,6 +289,57 @@ mod tests {
         // A footprint collapsed to a segment still overlaps along it.
         let seg = overlap_factor([4.0, 0.0, 0.0], [8.0, 0.0, 0.0], 1.0);
         assert!(seg > 0.0 && seg < 1.0);
+    }
+
+    /// ρ of a stratified layout against brute force: the mean lens fraction over pairs of
+    /// points of a fine grid in two *different* cells.
+    #[test]
+    fn stratified_overlap_matches_brute_force() {
+        let r = 1.0;
+        let m = 10; // points per cell side
+        for &(ex, ey, strata) in &[
+            ([2.0, 0.0, 0.0], [0.0, 3.0, 0.0], (2u32, 3u32)),
+            ([1.0, 0.0, 0.0], [0.3, 1.2, 0.0], (5, 6)),
+            ([6.0, 0.0, 0.0], [0.0, 6.0, 0.0], (4, 4)),
+            ([0.4, 0.0, 0.0], [0.0, 0.4, 0.0], (1, 7)),
+        ] {
+            let (nx, ny) = strata;
+            let points: Vec<(usize, f64, f64)> = (0..nx * ny)
+                .flat_map(|c| {
+                    (0..m * m).map(move |p| {
+                        let s = ((c % nx) as f64 + ((p % m) as f64 + 0.5) / m as f64) / nx as f64;
+                        let t = ((c / nx) as f64 + ((p / m) as f64 + 0.5) / m as f64) / ny as f64;
+                        (c as usize, s, t)
+                    })
+                })
+                .collect();
+            let (mut sum, mut count) = (0.0, 0.0);
+            for &(c0, s0, t0) in &points {
+                for &(c1, s1, t1) in &points {
+                    if c0 == c1 {
+                        continue;
+                    }
+                    let (s, t) = (s0 - s1, t0 - t1);
+                    let d = [0, 1, 2].map(|k| s * ex[k] + t * ey[k]);
+                    sum += lens_fraction((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt(), r);
+                    count += 1.0;
+                }
+            }
+            let brute = sum / count;
+            let formula = overlap_factor_stratified(ex, ey, r, strata);
+            let independent = overlap_factor(ex, ey, r);
+            assert!(
+                (formula - brute).abs() <= 0.03 * brute + 2e-3,
+                "strata {strata:?}: formula {formula}, brute force {brute}"
+            );
+            assert!(formula <= independent + 1e-12);
+        }
+        // One sample: no pair, the plain factor.
+        let e = ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+        assert_eq!(
+            overlap_factor_stratified(e.0, e.1, 1.0, (1, 1)),
+            overlap_factor(e.0, e.1, 1.0)
+        );
     }
 
     #[test]

@@ -4,7 +4,7 @@
 //! progress bar and the facts about the machine that reports record.
 use std::path::{Path, PathBuf};
 
-use bdpm_integrator::{Mode, NoiseModel, RenderSettings, Setting, StageProbe};
+use bdpm_integrator::{Mode, NoiseModel, RenderSettings, Sampler, Setting, StageProbe};
 use bdpm_load::{LoadReport, load_scene};
 use bdpm_scene::Scene;
 use clap::Args;
@@ -60,6 +60,11 @@ pub struct Overrides {
     /// N_B; its weights assume every sample of a pixel shares x0).
     #[arg(long)]
     pub noise_model: Option<String>,
+    /// How a pixel's camera samples are placed within a pass: stratified (default; one
+    /// jittered sample per stratum of the pixel and of the direction at x0) or independent
+    /// (every sample uniform, the preprint's layout).
+    #[arg(long)]
+    pub sampler: Option<String>,
     /// Worker threads (default: all cores; at most 8 per core, and at least 64 allowed).
     #[arg(long, allow_negative_numbers = true, value_parser = whole::<usize>)]
     pub threads: Option<usize>,
@@ -154,6 +159,14 @@ pub fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> CliResul
             format!(
                 "--noise-model: unknown model '{name}'; expected one of {}",
                 NoiseModel::ALL_NAMES.join(", ")
+            )
+        })?;
+    }
+    if let Some(name) = &o.sampler {
+        settings.sampler = Sampler::parse(name).ok_or_else(|| {
+            format!(
+                "--sampler: unknown sampler '{name}'; expected one of {}",
+                Sampler::ALL_NAMES.join(", ")
             )
         })?;
     }
@@ -262,6 +275,9 @@ impl Overrides {
         }
         if let Some(m) = &o.noise_model {
             push("--noise-model", m.clone());
+        }
+        if let Some(m) = &o.sampler {
+            push("--sampler", m.clone());
         }
         if o.no_jitter {
             v.push("--no-jitter".into());
@@ -454,6 +470,7 @@ mod tests {
             radius: Some(0.1),
             seed: Some(7),
             no_jitter: true,
+            sampler: Some("independent".into()),
             ..Default::default()
         };
         let back = Overrides::from_args(&o.to_args()).unwrap();

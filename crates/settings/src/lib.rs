@@ -94,6 +94,49 @@ impl fmt::Display for Mode {
     }
 }
 
+/// How the N_B camera samples of one pixel in one pass are placed: over the pixel's area and
+/// over the BDF direction sampled at x₀ (the integrator's `sampler` module owns the layouts).
+/// Every pass draws its own layout, independently of every other pass, so the passes stay
+/// independent and identically distributed whatever the sampler.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Sampler {
+    /// Every sample independent and uniform (the layout of the preprint's runs).
+    Independent,
+    /// Stratified within the pass: the pixel cut into an n_x × n_y grid of N_B strata with one
+    /// jittered sample in each, and the direction at x₀ likewise on a second grid, its strata
+    /// assigned to the samples by a random permutation (pbrt's stratified sampler with padding).
+    #[default]
+    Stratified,
+}
+
+impl Sampler {
+    /// Every name [`Sampler::parse`] accepts.
+    pub const ALL_NAMES: &'static [&'static str] = &["independent", "stratified"];
+
+    /// The sampler's name as used in settings and reports.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Sampler::Independent => "independent",
+            Sampler::Stratified => "stratified",
+        }
+    }
+
+    /// The inverse of [`Sampler::name`]; unknown names give `None`.
+    pub fn parse(name: &str) -> Option<Sampler> {
+        match name {
+            "independent" => Some(Sampler::Independent),
+            "stratified" => Some(Sampler::Stratified),
+            _ => None,
+        }
+    }
+}
+
+impl fmt::Display for Sampler {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// Everything a render needs besides the scene. Defaults live in [`RenderSettings::default`];
 /// [`RenderSettings::validate`] checks a value before use.
 #[derive(Clone, Debug, PartialEq)]
@@ -141,6 +184,8 @@ pub struct RenderSettings {
     /// share at x₀ (method.md §12): `Footprint` (default) uses N_eff per pixel, `Pinhole` the
     /// preprint's N_B. Without jitter both give N_eff = N_B.
     pub noise_model: NoiseModel,
+    /// How a pixel's camera samples are placed within a pass ([`Sampler`]).
+    pub sampler: Sampler,
 }
 
 /// A/B rays per pixel when the footprint noise model weighs jittered samples: there N_eff is
@@ -448,6 +493,7 @@ impl RenderSettings {
             clamp_weights_requested: self.weight_clamp().requested,
             pixel_jitter: self.pixel_jitter,
             noise_model: self.noise_model.name(),
+            sampler: self.sampler.name(),
         }
     }
 }
@@ -473,6 +519,7 @@ impl Default for RenderSettings {
             roulette_depth: 3,
             pixel_jitter: true,
             noise_model: NoiseModel::Footprint,
+            sampler: Sampler::Stratified,
         }
     }
 }

@@ -42,6 +42,8 @@ pub struct SettingsRecord {
     pub pixel_jitter: bool,
     /// `pinhole` or `footprint` (method.md §12).
     pub noise_model: &'static str,
+    /// `independent` or `stratified` ([`crate::Sampler`]).
+    pub sampler: &'static str,
 }
 
 impl SettingsRecord {
@@ -56,6 +58,7 @@ impl SettingsRecord {
             ("spp", self.spp.to_string()),
             ("pixel_jitter", self.pixel_jitter.to_string()),
             ("noise_model", self.noise_model.into()),
+            ("sampler", self.sampler.into()),
             ("radius_m", self.radius_m.to_string()),
             (
                 "radius_source",

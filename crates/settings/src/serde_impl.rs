@@ -4,7 +4,7 @@
 use serde::de::Error as _;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-use crate::{Mode, NoiseModel, RenderSettings};
+use crate::{Mode, NoiseModel, RenderSettings, Sampler};
 
 /// The serialised form: the fields of [`RenderSettings`], names for the enums.
 #[derive(Serialize, Deserialize)]
@@ -26,6 +26,7 @@ struct Repr {
     roulette_depth: u32,
     pixel_jitter: bool,
     noise_model: String,
+    sampler: String,
 }
 
 impl Serialize for RenderSettings {
@@ -47,6 +48,7 @@ impl Serialize for RenderSettings {
             roulette_depth: self.roulette_depth,
             pixel_jitter: self.pixel_jitter,
             noise_model: self.noise_model.name().into(),
+            sampler: self.sampler.name().into(),
         }
         .serialize(s)
     }
@@ -61,6 +63,8 @@ impl<'de> Deserialize<'de> for RenderSettings {
             .ok_or_else(|| D::Error::custom(format!("unknown mode '{}'", r.mode)))?;
         let noise_model = NoiseModel::parse(&r.noise_model)
             .ok_or_else(|| D::Error::custom(format!("unknown noise model '{}'", r.noise_model)))?;
+        let sampler = Sampler::parse(&r.sampler)
+            .ok_or_else(|| D::Error::custom(format!("unknown sampler '{}'", r.sampler)))?;
         let mut s = RenderSettings {
             width: r.width,
             height: r.height,
@@ -78,6 +82,7 @@ impl<'de> Deserialize<'de> for RenderSettings {
             roulette_depth: r.roulette_depth,
             pixel_jitter: r.pixel_jitter,
             noise_model,
+            sampler,
         };
         s.select(mode);
         Ok(s)
