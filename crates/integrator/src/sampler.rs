@@ -91,8 +91,8 @@ pub(crate) struct PixelSamples {
     pass: u32,
     pixel: u64,
     positions: Vec<[f32; 2]>,
-    bdf: Vec<[f32; 3]>,
-    permutation: Vec<u32>,
+    directions: Vec<[f32; 2]>,
+    lobe: Vec<f32>,
 }
 
 impl PixelSamples {
@@ -107,8 +107,8 @@ impl PixelSamples {
             pass: 0,
             pixel: 0,
             positions: Vec::new(),
-            bdf: Vec::new(),
-            permutation: Vec::new(),
+            directions: Vec::new(),
+            lobe: Vec::new(),
         }
     }
 
@@ -120,23 +120,22 @@ impl PixelSamples {
             return;
         }
         let n = self.spp as usize;
-        let (nx, ny) = self.grid;
         let mut rng = Rng::new(self.seed, Domain::PixelPattern, [pass as u64, pixel, 0]);
-        self.positions.clear();
-        self.positions.extend((0..n).map(|k| {
-            let (i, j) = (k as u32 % nx, k as u32 / nx);
-            jittered(i, nx, j, ny, rng.uniform2())
-        }));
-        self.bdf.clear();
-        shuffle(&mut self.permutation, n, &mut rng);
-        self.bdf.extend(self.permutation.iter().map(|&s| {
-            let [u, v] = jittered(s % nx, nx, s / nx, ny, rng.uniform2());
-            [0.0, u, v]
-        }));
-        shuffle(&mut self.permutation, n, &mut rng);
-        for (b, &s) in self.bdf.iter_mut().zip(&self.permutation) {
-            b[0] = ((s as f32 + rng.uniform()) / n as f32).min(ONE_MINUS_EPSILON);
+        // Cells in raster order (sample k takes pixel cell k), then the direction's points
+        // and the lobe numbers shuffled: a random pairing of the three stratifications.
+        fill_grid(&mut self.positions, self.grid, &mut rng);
+        fill_grid(&mut self.directions, self.grid, &mut rng);
+        shuffle(&mut self.directions, &mut rng);
+        let inv_n = 1.0 / n as f32;
+        self.lobe.clear();
+        for k in (0..n).step_by(2) {
+            let u = two_uniforms(&mut rng);
+            for (c, u) in (k..n.min(k + 2)).zip(u) {
+                self.lobe
+                    .push(((c as f32 + u) * inv_n).min(ONE_MINUS_EPSILON));
+            }
         }
+        shuffle(&mut self.lobe, &mut rng);
     }
 
     /// Sample `k` (< N_B) of the pixel and pass given to [`Self::start`].
@@ -156,11 +155,15 @@ impl PixelSamples {
                 rng,
                 bdf: None,
             },
-            _ => CameraSample {
-                offset: pixel_offset(self.positions[k as usize], self.jitter),
-                rng,
-                bdf: Some(self.bdf[k as usize]),
-            },
+            _ => {
+                let k = k as usize;
+                let [u, v] = self.directions[k];
+                CameraSample {
+                    offset: pixel_offset(self.positions[k], self.jitter),
+                    rng,
+                    bdf: Some([self.lobe[k], u, v]),
+                }
+            }
         }
     }
 }
@@ -174,14 +177,45 @@ fn jittered(i: u32, nx: u32, j: u32, ny: u32, [u, v]: [f32; 2]) -> [f32; 2] {
     ]
 }
 
-/// A uniformly random permutation of 0..n into `out` (Fisher–Yates; the bounded integers by
-/// Lemire's multiply-shift, whose bias of at most n/2⁶⁴ is far below anything a render sees).
-fn shuffle(out: &mut Vec<u32>, n: usize, rng: &mut Rng) {
+/// Two uniforms in [0, 1) with 24 bits each from one 64-bit output (the layout draws a few
+/// numbers per sample; one generator step for two of them halves its cost).
+#[inline]
+fn two_uniforms(rng: &mut Rng) -> [f32; 2] {
+    const SCALE: f32 = 1.0 / 16_777_216.0;
+    let x = rng.next_u64();
+    [
+        (x >> 40) as f32 * SCALE,
+        ((x >> 8) & 0xff_ffff) as f32 * SCALE,
+    ]
+}
+
+/// One uniform point in each cell of `grid`, cells in raster order, into `out`.
+fn fill_grid(out: &mut Vec<[f32; 2]>, (nx, ny): (u32, u32), rng: &mut Rng) {
+    let (sx, sy) = (1.0 / nx as f32, 1.0 / ny as f32);
     out.clear();
-    out.extend(0..n as u32);
-    for i in (1..n).rev() {
-        let j = ((rng.next_u64() as u128 * (i as u128 + 1)) >> 64) as usize;
-        out.swap(i, j);
+    for j in 0..ny {
+        for i in 0..nx {
+            let [u, v] = two_uniforms(rng);
+            out.push([
+                ((i as f32 + u) * sx).min(ONE_MINUS_EPSILON),
+                ((j as f32 + v) * sy).min(ONE_MINUS_EPSILON),
+            ]);
+        }
+    }
+}
+
+/// Shuffles `items` uniformly (Fisher–Yates; each bounded integer by Lemire's multiply-shift
+/// from 32 random bits, whose bias of at most n/2³² is far below anything a render sees).
+fn shuffle<T>(items: &mut [T], rng: &mut Rng) {
+    let mut bits = 0u64;
+    for (step, i) in (1..items.len()).rev().enumerate() {
+        if step % 2 == 0 {
+            bits = rng.next_u64();
+        } else {
+            bits <<= 32;
+        }
+        let j = (((bits >> 32) * (i as u64 + 1)) >> 32) as usize;
+        items.swap(i, j);
     }
 }
 

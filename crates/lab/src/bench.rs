@@ -181,7 +181,7 @@ pub(crate) fn run(args: BenchArgs) -> CliResult<()> {
     if threads_list.contains(&0) {
         return Err("--threads-list: thread counts must be at least 1".into());
     }
-    let (names, modes) = crate::parse_modes(&args.modes)?;
+    let variants = crate::parse_modes(&args.modes)?;
     let overrides = Overrides {
         resolution: args.resolution,
         photons: args.photons,
@@ -196,9 +196,9 @@ pub(crate) fn run(args: BenchArgs) -> CliResult<()> {
     let started = Instant::now();
     let mut cells = Vec::new();
     for &threads in &threads_list {
-        for (name, mode) in names.iter().zip(&modes) {
-            let mut s = base.clone();
-            s.select(*mode);
+        for variant in &variants {
+            let name = &variant.name;
+            let s = variant.settings(&base)?;
             let cell = time_cell(&scene, &s, name, threads, args.passes, args.repeats)?;
             eprintln!(
                 "{name:>16} {threads} thread(s): {} M photons/s, {} M samples/s, {:.3} s/pass",
@@ -268,7 +268,7 @@ pub(crate) fn run(args: BenchArgs) -> CliResult<()> {
         );
         let _ = writeln!(md, "| mode | photons | camera samples | pass time |");
         let _ = writeln!(md, "|---|---:|---:|---:|");
-        for name in &names {
+        for name in variants.iter().map(|v| &v.name) {
             let find = |t: usize| cells.iter().find(|c| &c.mode == name && c.threads == t);
             if let (Some(a), Some(b)) = (find(t1), find(tn)) {
                 let ratio = |x: f64, y: f64| {

@@ -10,7 +10,7 @@
 use std::path::Path;
 use std::process::ExitCode;
 
-use bdpm_integrator::Mode;
+use bdpm_integrator::{Mode, RenderSettings, Sampler};
 use bdpm_output::cli::CliResult;
 use bdpm_output::files::write_atomic;
 use clap::Subcommand;
@@ -54,29 +54,162 @@ pub fn run(command: Command) -> Result<ExitCode, String> {
     }
 }
 
-/// The modes of `--modes` (names as given, trimmed) and what they parse to; every BDPM weight
-/// mode when the list is empty. Study and bench compare the same default set.
-fn parse_modes(list: &[String]) -> CliResult<(Vec<String>, Vec<Mode>)> {
-    let names: Vec<String> = if list.is_empty() {
-        bdpm_mis::Heuristic::ALL_NAMES
+/// One entry of `--modes`: a mode, and settings of its own on top of the shared ones
+/// (`MODE[:KEY=VALUE]…` with KEY one of `sampler`, `radius` (metres), `spp`, `photons`), so
+/// that configurations are compared side by side in one run, e.g.
+/// `balance:sampler=independent,balance,optimal-path:radius=0.01`.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Variant {
+    /// The entry as given (trimmed): its name in tables, plots and files.
+    pub(crate) name: String,
+    /// The weight or reference mode.
+    pub(crate) mode: Mode,
+    sampler: Option<Sampler>,
+    radius: Option<f32>,
+    spp: Option<u32>,
+    photons: Option<u64>,
+}
+
+impl Variant {
+    /// Parses one entry; the error names the entry and what is wrong with it.
+    fn parse(entry: &str) -> CliResult<Variant> {
+        let name = entry.trim().to_string();
+        let mut parts = name.split(':');
+        let mode_name = parts.next().unwrap_or_default();
+        let mode = Mode::parse(mode_name).ok_or_else(|| {
+            format!(
+                "--modes: unknown mode '{mode_name}' in '{name}'; expected some of {}",
+                Mode::names().join(", ")
+            )
+        })?;
+        let mut v = Variant {
+            name: name.clone(),
+            mode,
+            sampler: None,
+            radius: None,
+            spp: None,
+            photons: None,
+        };
+        for part in parts {
+            let bad = |why: &str| format!("--modes: '{part}' in '{name}': {why}");
+            let (key, value) = part
+                .split_once('=')
+                .ok_or_else(|| bad("expected KEY=VALUE (sampler, radius, spp, photons)"))?;
+            match key {
+                "sampler" => {
+                    v.sampler = Some(Sampler::parse(value).ok_or_else(|| {
+                        bad(&format!(
+                            "expected one of {}",
+                            Sampler::ALL_NAMES.join(", ")
+                        ))
+                    })?)
+                }
+                "radius" => {
+                    let r: f32 = value
+                        .parse()
+                        .map_err(|_| bad("the radius is a number of metres"))?;
+                    v.radius = Some(r);
+                }
+                "spp" => {
+                    v.spp = Some(
+                        value
+                            .parse()
+                            .map_err(|_| bad("a whole number of samples"))?,
+                    )
+                }
+                "photons" => {
+                    v.photons = Some(
+                        value
+                            .parse()
+                            .map_err(|_| bad("a whole number of photons"))?,
+                    )
+                }
+                _ => return Err(bad("unknown key; expected sampler, radius, spp or photons")),
+            }
+        }
+        Ok(v)
+    }
+
+    /// The shared settings with this entry's mode and its own settings, validated.
+    pub(crate) fn settings(&self, shared: &RenderSettings) -> CliResult<RenderSettings> {
+        let mut s = shared.clone();
+        s.select(self.mode);
+        if let Some(x) = self.sampler {
+            s.sampler = x;
+        }
+        if let Some(r) = self.radius {
+            s.radius = Some(r);
+        }
+        if let Some(n) = self.spp {
+            s.spp = n;
+        }
+        if let Some(n) = self.photons {
+            s.photons = n;
+        }
+        s.validate()
+            .map_err(|e| format!("--modes: '{}': {}: {e}", self.name, e.setting()))?;
+        Ok(s)
+    }
+}
+
+/// The entries of `--modes` ([`Variant`]); every BDPM weight mode when the list is empty.
+/// Study and bench compare the same default set.
+fn parse_modes(list: &[String]) -> CliResult<Vec<Variant>> {
+    if list.is_empty() {
+        return bdpm_mis::Heuristic::ALL_NAMES
             .iter()
-            .map(|s| s.to_string())
-            .collect()
-    } else {
-        list.iter().map(|s| s.trim().to_string()).collect()
-    };
-    let modes = names
+            .map(|n| Variant::parse(n))
+            .collect();
+    }
+    let variants: Vec<Variant> = list
         .iter()
-        .map(|n| {
-            Mode::parse(n).ok_or_else(|| {
-                format!(
-                    "--modes: unknown mode '{n}'; expected some of {}",
-                    Mode::names().join(", ")
-                )
-            })
-        })
+        .map(|e| Variant::parse(e))
         .collect::<CliResult<_>>()?;
-    Ok((names, modes))
+    for (i, v) in variants.iter().enumerate() {
+        if variants[..i].iter().any(|w| w.name == v.name) {
+            return Err(format!("--modes: '{}' is given twice", v.name));
+        }
+    }
+    Ok(variants)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn variants_parse_and_apply_their_settings() {
+        let v = parse_modes(&["balance:sampler=independent:radius=0.01:spp=1:photons=5000".into()])
+            .unwrap();
+        let s = v[0].settings(&RenderSettings::default()).unwrap();
+        assert_eq!(s.mode, Mode::parse("balance").unwrap());
+        assert_eq!(s.sampler, Sampler::Independent);
+        assert_eq!((s.radius, s.spp, s.photons), (Some(0.01), 1, 5000));
+        let plain = parse_modes(&["optimal-path".into()]).unwrap();
+        assert_eq!(
+            plain[0].settings(&RenderSettings::default()).unwrap().spp,
+            4
+        );
+        for bad in [
+            "nope",
+            "balance:sampler=sobol",
+            "balance:radius",
+            "balance:colour=red",
+            "balance:spp=-1",
+        ] {
+            assert!(parse_modes(&[bad.into()]).is_err(), "{bad}");
+        }
+        assert!(
+            parse_modes(&["balance:spp=0".into()]).unwrap()[0]
+                .settings(&RenderSettings::default())
+                .is_err()
+        );
+        assert!(parse_modes(&["balance".into(), "balance".into()]).is_err());
+        assert_eq!(
+            parse_modes(&[]).unwrap().len(),
+            bdpm_mis::Heuristic::ALL_NAMES.len()
+        );
+    }
 }
 
 /// Writes a markdown report to `path` and prints it, then where it went.

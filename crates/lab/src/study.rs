@@ -75,6 +75,37 @@ pub(crate) fn rmse(a: &[f64], b: &[f64]) -> f64 {
     (sum / a.len() as f64).sqrt()
 }
 
+/// ε of the relative metrics: 0.01 × the squared image-mean luminance of the reference, so
+/// that black pixels neither divide by zero nor dominate (the convention of the rendering
+/// literature's relMSE).
+pub(crate) fn rel_epsilon(reference: &[f64]) -> f64 {
+    0.01 * mean(reference).powi(2)
+}
+
+/// relMSE of `image` against `reference`: the mean over pixels of (I − R)²/(R² + ε), ε from
+/// [`rel_epsilon`]. Dimensionless. The same with per-pixel variances V in place of (I − R)² is
+/// relV ([`rel_mean`]).
+pub(crate) fn rel_mse(image: &[f64], reference: &[f64]) -> f64 {
+    let sq: Vec<f64> = image
+        .iter()
+        .zip(reference)
+        .map(|(i, r)| (i - r).powi(2))
+        .collect();
+    rel_mean(&sq, reference)
+}
+
+/// The mean over pixels of q/(R² + ε) for a per-pixel squared quantity q (W²·m⁻⁴·sr⁻²).
+pub(crate) fn rel_mean(q: &[f64], reference: &[f64]) -> f64 {
+    assert_eq!(q.len(), reference.len(), "images differ in size");
+    let eps = rel_epsilon(reference);
+    mean(
+        &q.iter()
+            .zip(reference)
+            .map(|(q, r)| q / (r * r + eps))
+            .collect::<Vec<_>>(),
+    )
+}
+
 /// Mean of a slice (0 for an empty one).
 pub(crate) fn mean(v: &[f64]) -> f64 {
     if v.is_empty() {
@@ -124,6 +155,8 @@ pub(crate) struct PassPoint {
     pub(crate) cpu_s: f64,
     pub(crate) rmse: f64,
     pub(crate) rel_rmse: f64,
+    /// relMSE: mean over pixels of (I − R)²/(R² + ε), ε = 0.01·mean(R)² ([`rel_mse`]).
+    pub(crate) rel_mse: f64,
     /// Mean over pixels of √V; NaN after the first pass.
     pub(crate) mean_sqrt_v: f64,
     /// Mean over pixels of √V / reference (pixels where the reference is positive); NaN after
@@ -140,6 +173,8 @@ pub(crate) struct ModeRun {
     pub(crate) points: Vec<PassPoint>,
     /// Mean over pixels of V after the last pass.
     pub(crate) mean_v: f64,
+    /// relV: mean over pixels of V/(R² + ε) after the last pass ([`rel_mse`]'s ε).
+    pub(crate) rel_v: f64,
     pub(crate) dropped: u64,
 }
 
@@ -188,10 +223,16 @@ pub(crate) fn rel_rmse_at(run: &ModeRun, t: f64) -> Option<f64> {
     interpolate_loglog(&pts, t)
 }
 
+/// A mode's relMSE at time `t` (log-log interpolation), `None` before its first pass.
+pub(crate) fn rel_mse_at(run: &ModeRun, t: f64) -> Option<f64> {
+    let pts: Vec<(f64, f64)> = run.points.iter().map(|p| (p.time, p.rel_mse)).collect();
+    interpolate_loglog(&pts, t)
+}
+
 /// The CSV of all pass records.
 pub(crate) fn csv(runs: &[ModeRun]) -> String {
     let mut s = String::from(
-        "mode,pass,wall_time_s,rmse,rel_rmse,mean_sqrt_v,cpu_time_s,mean_rel_sqrt_v\n",
+        "mode,pass,wall_time_s,rmse,rel_rmse,mean_sqrt_v,cpu_time_s,mean_rel_sqrt_v,rel_mse\n",
     );
     let opt = |v: f64, digits: usize| {
         if v.is_finite() {
@@ -209,7 +250,7 @@ pub(crate) fn csv(runs: &[ModeRun]) -> String {
             };
             let _ = writeln!(
                 s,
-                "{},{},{:.4},{:.6e},{:.6e},{},{},{}",
+                "{},{},{:.4},{:.6e},{:.6e},{},{},{},{:.6e}",
                 r.name,
                 p.pass,
                 p.wall_s,
@@ -217,7 +258,8 @@ pub(crate) fn csv(runs: &[ModeRun]) -> String {
                 p.rel_rmse,
                 opt(p.mean_sqrt_v, 6),
                 cpu,
-                opt(p.mean_rel_sqrt_v, 6)
+                opt(p.mean_rel_sqrt_v, 6),
+                p.rel_mse
             );
         }
     }
@@ -264,20 +306,26 @@ fn markdown(
         s,
         "Errors are over pixel luminance. Times include the preparatory stages (radiance \
          cache, A/B table; their wall time is the \"prep\" column) spread over the passes. \
-         The comparison clock is **{clock}** time: \"rel. RMSE at {t_eq:.2} s\" is each \
-         mode's relative-RMSE curve interpolated in log-log at the smallest final {clock} time \
-         of all modes, and efficiency is 1/(mean V · {clock} time per pass) relative to \
-         `{baseline}`. Mean √V/L is the mean over pixels of √V divided by the reference.\n"
+         V is the per-pass variance of a pixel; relV and relMSE divide each pixel's V and \
+         squared error by R² + ε (R the reference, ε = 0.01·mean(R)²) before the mean over \
+         pixels, so that a few bright or edge pixels do not dominate them as they dominate \
+         mean V and rel. RMSE. The comparison clock is **{clock}** time: the \"at {t_eq:.2} s\" \
+         columns interpolate each mode's curve in log-log at the smallest final {clock} time \
+         of all modes; efficiency is 1/(mean V · {clock} time per pass), and in relV \
+         1/(relV · {clock} time per pass), relative to `{baseline}`. Without bias, relMSE after \
+         K passes is relV/K plus the reference's own error.\n"
     );
     let _ = writeln!(
         s,
-        "| mode | passes | prep (s) | wall s/pass | CPU s/pass | mean √V | mean √V/L | RMSE | rel. RMSE | rel. RMSE at {t_eq:.2} s | efficiency vs {baseline} |"
+        "| mode | passes | prep (s) | wall s/pass | CPU s/pass | mean V | relV | rel. RMSE | relMSE | rel. RMSE at {t_eq:.2} s | relMSE at {t_eq:.2} s | efficiency vs {baseline} | efficiency in relV |"
     );
-    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
-    let base = runs
-        .iter()
-        .find(|r| r.name == baseline)
-        .map(|r| efficiency(r.mean_v, r.seconds_per_pass()));
+    let _ = writeln!(
+        s,
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    );
+    let baseline_run = runs.iter().find(|r| r.name == baseline);
+    let base = baseline_run.map(|r| efficiency(r.mean_v, r.seconds_per_pass()));
+    let base_rel = baseline_run.map(|r| efficiency(r.rel_v, r.seconds_per_pass()));
     let sci = |v: f64| {
         if v.is_finite() {
             format!("{v:.4e}")
@@ -285,42 +333,38 @@ fn markdown(
             "—".into()
         }
     };
+    let ratio = |v: f64, base: Option<f64>, spp: f64| match base {
+        Some(b) if v > 0.0 => format!("{:.2}", efficiency(v, spp) / b),
+        _ => "—".into(),
+    };
     for r in runs {
         let Some(last) = r.final_point() else {
             continue;
         };
         let k = r.points.len() as f64;
         let at = rel_rmse_at(r, t_eq).map_or("—".into(), |v| format!("{:.3}%", 100.0 * v));
-        let eff = match base {
-            Some(b) if r.mean_v > 0.0 => {
-                format!("{:.2}", efficiency(r.mean_v, r.seconds_per_pass()) / b)
-            }
-            _ => "—".into(),
-        };
+        let mse_at = rel_mse_at(r, t_eq).map_or("—".into(), sci);
         let cpu = if last.cpu_s.is_finite() {
             format!("{:.3}", last.cpu_s / k)
         } else {
             "—".into()
         };
-        let rel_v = if last.mean_rel_sqrt_v.is_finite() {
-            format!("{:.1}%", 100.0 * last.mean_rel_sqrt_v)
-        } else {
-            "—".into()
-        };
         let _ = writeln!(
             s,
-            "| {} | {} | {:.2} | {:.3} | {} | {} | {} | {:.4e} | {:.3}% | {} | {} |",
+            "| {} | {} | {:.2} | {:.3} | {} | {} | {} | {:.3}% | {} | {} | {} | {} | {} |",
             r.name,
             r.points.len(),
             r.prep_seconds(),
             last.wall_s / k,
             cpu,
-            sci(last.mean_sqrt_v),
-            rel_v,
-            last.rmse,
+            sci(r.mean_v),
+            sci(r.rel_v),
             100.0 * last.rel_rmse,
+            sci(last.rel_mse),
             at,
-            eff
+            mse_at,
+            ratio(r.mean_v, base, r.seconds_per_pass()),
+            ratio(r.rel_v, base_rel, r.seconds_per_pass()),
         );
     }
     let dropped: u64 = runs.iter().map(|r| r.dropped).sum();
@@ -343,7 +387,7 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
             "--time-budget must be a positive number of seconds, not {b}"
         ));
     }
-    let (names, modes) = crate::parse_modes(&args.modes)?;
+    let variants = crate::parse_modes(&args.modes)?;
     let loaded = prepare(&args.scene, &args.overrides)?;
     let (scene, settings) = (loaded.scene, loaded.settings);
     let pool = thread_pool(args.overrides.threads)?;
@@ -417,9 +461,9 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
     }
     let cpu_now = || process_cpu_seconds().unwrap_or(f64::NAN);
     let mut states = Vec::new();
-    for (name, mode) in names.iter().zip(&modes) {
-        let mut s = settings.clone();
-        s.select(*mode);
+    for variant in &variants {
+        let name = &variant.name;
+        let s = variant.settings(&settings)?;
         let (t0, c0) = (Instant::now(), cpu_now());
         let renderer = pool
             .install(|| Renderer::new(&scene, &s))
@@ -469,7 +513,8 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
             m.cpu += cpu_now() - c;
             m.film.add_pass(&out.estimates, out.dropped);
             m.lum.add_pass(&out.estimates);
-            let e = rmse(&m.lum.mean(), &ref_lum);
+            let image = m.lum.mean();
+            let e = rmse(&image, &ref_lum);
             let var = m.lum.variance();
             let sqrt_v = var.as_ref().map_or(f64::NAN, |v| {
                 mean(&v.iter().map(|x| x.sqrt()).collect::<Vec<_>>())
@@ -490,6 +535,7 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
                 cpu_s: m.cpu,
                 rmse: e,
                 rel_rmse: e / ref_mean,
+                rel_mse: rel_mse(&image, &ref_lum),
                 mean_sqrt_v: sqrt_v,
                 mean_rel_sqrt_v: rel_sqrt_v,
             });
@@ -499,8 +545,24 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
     let mut runs = Vec::new();
     let mut files = Vec::new();
     for m in states {
-        let mean_v = m.lum.variance().map_or(f64::NAN, |v| mean(&v));
-        let preview = dir.join(format!("{}.png", m.name));
+        let variance = m.lum.variance();
+        let mean_v = variance.as_ref().map_or(f64::NAN, |v| mean(v));
+        let rel_v = variance
+            .as_ref()
+            .map_or(f64::NAN, |v| rel_mean(v, &ref_lum));
+        // A variant's name has ':' and '=' (`balance:sampler=independent`): not in file names.
+        let file_name: String = m
+            .name
+            .chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || "._-".contains(c) {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect();
+        let preview = dir.join(format!("{file_name}.png"));
         write_png(&preview, &m.film).map_err(|e| format!("{}: {e}", preview.display()))?;
         files.push(preview.display().to_string());
         let run = ModeRun {
@@ -508,6 +570,7 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
             stages: m.stages,
             points: m.points,
             mean_v,
+            rel_v,
             dropped: m.film.dropped(),
         };
         if !args.quiet {
@@ -562,10 +625,10 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
     };
     let v_stem = dir.join("sqrt-v");
     plot::write_bars(&v_stem, &plot_v)?;
-    let baseline = if names.iter().any(|n| n == "bdd0") {
+    let baseline = if variants.iter().any(|v| v.name == "bdd0") {
         "bdd0".to_string()
     } else {
-        names[0].clone()
+        variants[0].name.clone()
     };
     let mut all_files = vec![csv_path.display().to_string()];
     for stem in [&err_stem, &v_stem] {
@@ -627,6 +690,17 @@ mod tests {
     }
 
     #[test]
+    fn relative_metrics_of_known_images() {
+        // Reference (0, 2): mean 1, ε = 0.01. Errors (1, 1): 1/0.01 and 1/4.01.
+        let r = [0.0, 2.0];
+        let expected = 0.5 * (1.0 / 0.01 + 1.0 / 4.01);
+        assert!((rel_mse(&[1.0, 3.0], &r) - expected).abs() < 1e-12);
+        assert!((rel_mean(&[1.0, 1.0], &r) - expected).abs() < 1e-12);
+        assert_eq!(rel_mse(&r, &r), 0.0);
+        assert!((rel_epsilon(&r) - 0.01).abs() < 1e-15);
+    }
+
+    #[test]
     fn efficiency_is_inverse_of_variance_times_time() {
         assert!((efficiency(0.5, 4.0) - 0.5).abs() < 1e-12);
         // Half the variance at twice the time: equally efficient.
@@ -649,10 +723,12 @@ mod tests {
                     mean_rel_sqrt_v: f64::NAN,
                     rmse: *e,
                     rel_rmse: *e,
+                    rel_mse: e * e,
                     mean_sqrt_v: f64::NAN,
                 })
                 .collect(),
             mean_v: 1.0,
+            rel_v: 1.0,
             dropped: 0,
         };
         let runs = [
@@ -666,6 +742,8 @@ mod tests {
         assert!((b - 0.08).abs() < 1e-12);
         assert!((runs[0].seconds_per_pass() - 2.0).abs() < 1e-12);
         assert_eq!(runs[0].prep_seconds(), 0.5);
+        let m = rel_mse_at(&runs[1], 3.0).expect("at its last point");
+        assert!((m - 0.0064).abs() < 1e-12);
         let text = csv(&runs);
         assert!(text.starts_with("mode,pass,wall_time_s,rmse,rel_rmse,mean_sqrt_v,"));
         assert_eq!(text.lines().count(), 5);
