@@ -42,6 +42,9 @@ pub(crate) fn reference_settings(
     s.passes = passes;
     s.photons = photons;
     s.seed = study.seed.wrapping_add(SEED_OFFSET);
+    // `light` merges nothing: the radius does not change it, so studies at several radii share
+    // one cached reference.
+    s.radius = None;
     s
 }
 

@@ -292,7 +292,8 @@ mod tests {
     }
 
     /// ρ of a stratified layout against brute force: the mean lens fraction over pairs of
-    /// points of a fine grid in two *different* cells.
+    /// points of a fine grid in two *different* cells (agreement within 0.3 % on these cases;
+    /// 1 % + 10⁻³ allowed).
     #[test]
     fn stratified_overlap_matches_brute_force() {
         let r = 1.0;
@@ -302,6 +303,8 @@ mod tests {
             ([1.0, 0.0, 0.0], [0.3, 1.2, 0.0], (5, 6)),
             ([6.0, 0.0, 0.0], [0.0, 6.0, 0.0], (4, 4)),
             ([0.4, 0.0, 0.0], [0.0, 0.4, 0.0], (1, 7)),
+            ([3.0, 0.0, 0.0], [0.5, 2.5, 0.0], (8, 8)),
+            ([1.5, 0.0, 0.0], [0.0, 1.5, 0.0], (2, 2)),
         ] {
             let (nx, ny) = strata;
             let points: Vec<(usize, f64, f64)> = (0..nx * ny)
@@ -329,7 +332,7 @@ mod tests {
             let formula = overlap_factor_stratified(ex, ey, r, strata);
             let independent = overlap_factor(ex, ey, r);
             assert!(
-                (formula - brute).abs() <= 0.03 * brute + 2e-3,
+                (formula - brute).abs() <= 0.01 * brute + 1e-3,
                 "strata {strata:?}: formula {formula}, brute force {brute}"
             );
             assert!(formula <= independent + 1e-12);

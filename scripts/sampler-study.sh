@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# The sampler's figures of docs/results.md ("Stratified camera samples"): for each Cornell scene,
+# resolution and radius, one `bdpm study` that runs `balance` and `optimal-path` with independent
+# and with stratified samples side by side (round-robin passes, CPU clock), against the study's
+# cached `light` reference. Usage:
+#   scripts/sampler-study.sh OUT_DIR [PASSES] [RESOLUTIONS] [RADII]
+# e.g. scripts/sampler-study.sh out/sampler 6 "128 256 512" "scene 0.01"
+# ("scene" = the scene file's radius, box/1600 = 1.75 mm). Prints one summary line per study.
+set -euo pipefail
+out=$1; passes=${2:-6}; resolutions=${3:-"128 256 512"}; radii=${4:-"scene 0.01"}
+bin=${BDPM:-$(cd "$(dirname "$0")/.." && pwd)/target/release/bdpm}
+mkdir -p "$out"
+for scene in cornell-lambert cornell-glossy; do
+  for res in $resolutions; do
+    for r in $radii; do
+      modes="balance:sampler=independent,balance,optimal-path:sampler=independent,optimal-path"
+      extra=()
+      [ "$r" != scene ] && extra=(--radius "$r")
+      dir="$out/$scene-$res-r$r"
+      # The reference: 8 x the study's passes of `light` (its own error is in study.md).
+      "$bin" study "scenes/$scene.toml" --modes "$modes" --passes "$passes" \
+        --resolution "${res}x${res}" "${extra[@]}" --clock cpu --quiet \
+        --reference-passes $((passes * 8)) -o "$dir" > "$dir.log"
+      echo "$dir/study.md"
+    done
+  done
+done
