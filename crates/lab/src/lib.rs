@@ -173,6 +173,14 @@ fn parse_modes(list: &[String]) -> CliResult<Vec<Variant>> {
     Ok(variants)
 }
 
+/// Writes a markdown report to `path` and prints it, then where it went.
+fn publish(path: &Path, md: &str) -> CliResult<()> {
+    write_atomic(path, md.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
+    println!("{md}");
+    println!("wrote {}", path.display());
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -210,12 +218,4 @@ mod tests {
             bdpm_mis::Heuristic::ALL_NAMES.len()
         );
     }
-}
-
-/// Writes a markdown report to `path` and prints it, then where it went.
-fn publish(path: &Path, md: &str) -> CliResult<()> {
-    write_atomic(path, md.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
-    println!("{md}");
-    println!("wrote {}", path.display());
-    Ok(())
 }
