@@ -55,7 +55,7 @@ fn without_times(csv: &str) -> Vec<String> {
     csv.lines()
         .map(|l| {
             let f: Vec<&str> = l.split(',').collect();
-            [0, 1, 3, 4, 5, 7].map(|i| f[i]).join(",")
+            [0, 1, 3, 4, 5, 7, 8].map(|i| f[i]).join(",")
         })
         .collect()
 }
@@ -69,7 +69,7 @@ fn study_writes_csv_plots_and_table_deterministically() {
     assert_eq!(lines.len(), 1 + 2 * 2, "{csv}");
     for line in &lines[1..] {
         let f: Vec<&str> = line.split(',').collect();
-        assert_eq!(f.len(), 8, "{line}");
+        assert_eq!(f.len(), 9, "{line}");
         assert!(f[0] == "bdd0" || f[0] == "optimal", "{line}");
         for v in &f[2..5] {
             let x: f64 = v.parse().expect("a number");
@@ -77,6 +77,9 @@ fn study_writes_csv_plots_and_table_deterministically() {
         }
         // √V is known from the second pass on.
         assert_eq!(f[5].is_empty(), f[1] == "1", "{line}");
+        // relMSE, from the first pass.
+        let rel_mse: f64 = f[8].parse().expect("relMSE");
+        assert!(rel_mse.is_finite() && rel_mse >= 0.0, "{line}");
     }
     for name in [
         "study.md",
