@@ -56,7 +56,7 @@ fn main() -> ExitCode {
     match result {
         Ok(code) => code,
         Err(message) => {
-            eprintln!("bdpm: error: {message}");
+            bdpm_output::say_err!("bdpm: error: {message}");
             ExitCode::FAILURE
         }
     }
@@ -80,6 +80,6 @@ fn usage_error(e: clap::Error) -> ExitCode {
         .unwrap_or("error: bad arguments")
         .trim_start_matches("error:")
         .trim();
-    eprintln!("bdpm: error: {line} (see bdpm --help)");
+    bdpm_output::say_err!("bdpm: error: {line} (see bdpm --help)");
     ExitCode::FAILURE
 }
