@@ -21,9 +21,9 @@ use bdpm_mis::Heuristic;
 use clap::Args;
 use serde::Serialize;
 
+use bdpm_output::accum::{check_scene_hash, estimator_hash, scene_hash};
 use bdpm_output::cli::{CliResult, Overrides, prepare, thread_pool};
 use bdpm_output::colormap::{Canvas, ColourMap, Legend, compose, format_value};
-use bdpm_output::accum::{check_scene_hash, estimator_hash, scene_hash};
 use bdpm_output::files::stem_of;
 use bdpm_output::{exr, files, say};
 

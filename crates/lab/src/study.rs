@@ -11,10 +11,10 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use bdpm_integrator::{Film, Renderer};
+use bdpm_output::accum::{check_scene_hash, scene_hash};
 use bdpm_output::cli::{
     CliResult, Overrides, load_average, prepare, process_cpu_seconds, progress_bar, thread_pool,
 };
-use bdpm_output::accum::{check_scene_hash, scene_hash};
 use bdpm_output::files::{refuse_inputs, stem_of, write_atomic};
 use bdpm_output::plot;
 use bdpm_output::preview::write_png;
@@ -358,7 +358,8 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
     // The reference.
     let hash = scene_hash(&args.scene, &loaded.report.gltf_files)?;
     if let Some(path) = &args.reference {
-        let mut members: Vec<PathBuf> = names.iter().map(|n| dir.join(format!("{n}.png"))).collect();
+        let mut members: Vec<PathBuf> =
+            names.iter().map(|n| dir.join(format!("{n}.png"))).collect();
         members.extend(["study.csv", "study.md"].map(|n| dir.join(n)));
         for stem in ["error-vs-time", "sqrt-v"] {
             members.extend(["png", "svg"].map(|e| dir.join(stem).with_extension(e)));

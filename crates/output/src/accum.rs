@@ -66,10 +66,9 @@ fn percent_decode(uri: &str) -> Option<String> {
 /// Feeds `bytes` into a running FNV-1a hash `h`, length first (so that moving bytes from one
 /// file to the next changes the hash).
 fn fnv1a_more(h: u64, bytes: &[u8]) -> u64 {
-    let h = (bytes.len() as u64)
-        .to_le_bytes()
-        .iter()
-        .fold(h, |h, b| (h ^ *b as u64).wrapping_mul(0x0000_0100_0000_01b3));
+    let h = (bytes.len() as u64).to_le_bytes().iter().fold(h, |h, b| {
+        (h ^ *b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+    });
     bytes.iter().fold(h, |h, b| {
         (h ^ *b as u64).wrapping_mul(0x0000_0100_0000_01b3)
     })
@@ -130,7 +129,10 @@ pub fn scene_hash(scene: &Path, gltf_files: &[PathBuf]) -> Result<String, String
 }
 
 fn combined_hash(scene_file: &str, assets: &str) -> String {
-    format!("{:016x}", fnv1a(format!("{scene_file}+{assets}").as_bytes()))
+    format!(
+        "{:016x}",
+        fnv1a(format!("{scene_file}+{assets}").as_bytes())
+    )
 }
 
 /// Checks that the image at `path`, whose header attributes are `attributes`, was rendered

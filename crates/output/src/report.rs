@@ -347,7 +347,10 @@ pub fn header_attributes(
     let mut v = vec![
         ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
         ("scene_hash".to_string(), scene_hash.to_string()),
-        ("estimator_hash".to_string(), crate::accum::estimator_hash(s)),
+        (
+            "estimator_hash".to_string(),
+            crate::accum::estimator_hash(s),
+        ),
     ];
     // The same record as the JSON report's, with the radius in use.
     v.extend(

@@ -135,12 +135,7 @@ fn slurm_render_quotes_and_validates_its_arguments() {
         let run = slurm_render(
             &dir,
             &fakebin,
-            &[
-                scene.to_str().unwrap(),
-                tasks,
-                per,
-                fresh.to_str().unwrap(),
-            ],
+            &[scene.to_str().unwrap(), tasks, per, fresh.to_str().unwrap()],
         );
         assert!(!run.status.success(), "{tasks} {per}: {}", text(&run));
         let err = String::from_utf8_lossy(&run.stderr);
