@@ -515,19 +515,16 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
     .map_err(named(&outputs.noise_png))?;
     let accum_path = args.accumulate.then(|| outputs.accum.clone());
     let accum_file = match &accum_path {
-        Some(path) => {
-            let refs: Vec<&PassRecord> = records.iter().collect();
-            Some(
-                accum::stage(
-                    path,
-                    (settings.width, settings.height),
-                    &identity,
-                    &refs,
-                    &header,
-                )
-                .map_err(named(path))?,
+        Some(path) => Some(
+            accum::stage(
+                path,
+                (settings.width, settings.height),
+                &identity,
+                std::mem::take(&mut records),
+                &header,
             )
-        }
+            .map_err(named(path))?,
+        ),
         None => None,
     };
     drop(records);

@@ -273,15 +273,18 @@ fn list<T: ToString>(values: impl Iterator<Item = T>) -> String {
 }
 
 /// Stages the accumulation file at `path`: the passes (in the order given, which the callers
-/// keep ascending) and the identity, plus `extra` header attributes.
+/// keep ascending) and the identity, plus `extra` header attributes. The passes are taken by
+/// value and each is freed once its channels are built, so that the records and the
+/// writer's copy of them are not both held whole.
 pub fn stage(
     path: &Path,
     size: (u32, u32),
     identity: &Identity,
-    passes: &[&PassRecord],
+    passes: Vec<PassRecord>,
     extra: &[(String, String)],
 ) -> Result<Staged, String> {
     let mut channels = Vec::with_capacity(passes.len() * 6);
+    let mut meta = Vec::with_capacity(passes.len());
     for p in passes {
         for (c, name) in ["R", "G", "B"].iter().enumerate() {
             let bits = || p.estimates.iter().map(move |e| e[c].to_bits());
@@ -297,6 +300,7 @@ pub fn stage(
                 FlatSamples::U32(lo),
             ));
         }
+        meta.push((p.index, p.dropped, p.samples, p.photons_stored));
     }
     let mut attrs = extra.to_vec();
     let overrides = serde_json::to_string(&identity.overrides).map_err(|e| e.to_string())?;
@@ -314,19 +318,10 @@ pub fn stage(
         ("accum.settings_hash".into(), identity.settings_hash.clone()),
         ("accum.seed".into(), identity.seed.to_string()),
         ("accum.overrides".into(), overrides),
-        ("accum.passes".into(), list(passes.iter().map(|p| p.index))),
-        (
-            "accum.dropped".into(),
-            list(passes.iter().map(|p| p.dropped)),
-        ),
-        (
-            "accum.samples".into(),
-            list(passes.iter().map(|p| p.samples)),
-        ),
-        (
-            "accum.photons_stored".into(),
-            list(passes.iter().map(|p| p.photons_stored)),
-        ),
+        ("accum.passes".into(), list(meta.iter().map(|p| p.0))),
+        ("accum.dropped".into(), list(meta.iter().map(|p| p.1))),
+        ("accum.samples".into(), list(meta.iter().map(|p| p.2))),
+        ("accum.photons_stored".into(), list(meta.iter().map(|p| p.3))),
     ]);
     stage_exr_channels(path, size, channels, &attrs)
 }
