@@ -319,7 +319,7 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
                 "--passes (or drop --accumulate)"
             },
         });
-        estimate.items.sort_by(|a, b| b.bytes.cmp(&a.bytes));
+        estimate.items.sort_by_key(|i| std::cmp::Reverse(i.bytes));
     }
     let (limit, limit_source) = match args.max_memory {
         Some(b) => (Some(b), "--max-memory"),

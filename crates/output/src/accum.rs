@@ -321,7 +321,10 @@ pub fn stage(
         ("accum.passes".into(), list(meta.iter().map(|p| p.0))),
         ("accum.dropped".into(), list(meta.iter().map(|p| p.1))),
         ("accum.samples".into(), list(meta.iter().map(|p| p.2))),
-        ("accum.photons_stored".into(), list(meta.iter().map(|p| p.3))),
+        (
+            "accum.photons_stored".into(),
+            list(meta.iter().map(|p| p.3)),
+        ),
     ]);
     stage_exr_channels(path, size, channels, &attrs)
 }

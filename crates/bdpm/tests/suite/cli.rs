@@ -1662,7 +1662,10 @@ fn damaged_accumulation_files_are_refused() {
     for (tag, edit, needles) in cases {
         let bad = dir.path(&format!("{tag}.accum.exr"));
         edit_accumulation(&good, &bad, edit);
-        let out = merge(&[bad.clone()], &dir.path(&format!("m-{tag}.exr")));
+        let out = merge(
+            std::slice::from_ref(&bad),
+            &dir.path(&format!("m-{tag}.exr")),
+        );
         let mut all = vec![bad.file_name().unwrap().to_str().unwrap()];
         all.extend(needles);
         assert_one_line_error(&out, &all);
@@ -1718,6 +1721,25 @@ fn predict_and_study_check_passes_done_and_the_scene() {
     render("cornell-lambert.toml", "three.exr", &["--passes", "3"]);
     assert_success(&predict("three.exr"));
     assert_eq!(read_json(&dir.path("p.json"))["passes"], 3);
+    // Without the scene hash or the estimator hash (an older bdpm's render): not checkable.
+    for (key, needle) in [
+        ("bdpm.scene_hash", "no bdpm.scene_hash"),
+        ("bdpm.estimator_hash", "estimator hash missing"),
+    ] {
+        use exr::prelude::WritableImage as _;
+        let mut image = exr::prelude::read_all_flat_layers_from_file(dir.path("three.exr"))
+            .expect("read render");
+        let attrs = &mut image.layer_data[0].attributes.other;
+        assert!(
+            attrs.remove(&exr::prelude::Text::from(key)).is_some(),
+            "{key}"
+        );
+        image
+            .write()
+            .to_file(dir.path("stripped.exr"))
+            .expect("write stripped render");
+        assert_one_line_error(&predict("stripped.exr"), &["stripped.exr", needle]);
+    }
     // The glossy box with the same settings: another scene.
     render("cornell-glossy.toml", "glossy.exr", &["--passes", "3"]);
     assert_one_line_error(&predict("glossy.exr"), &["glossy.exr", "another scene"]);

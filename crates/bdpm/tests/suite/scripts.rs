@@ -130,7 +130,15 @@ fn slurm_render_quotes_and_validates_its_arguments() {
     // command substitution in one is never run.
     let pwned = dir.join("PWNED");
     let hostile = format!("1$(touch '{}')", pwned.display());
-    for (tasks, per) in [("2", hostile.as_str()), ("0", "2"), ("x", "2"), ("2", "-1")] {
+    let cases = [
+        ("2", hostile.as_str(), "whole number"),
+        ("0", "2", "whole number"),
+        ("x", "2", "whole number"),
+        ("2", "-1", "whole number"),
+        ("08", "2", "whole number"),
+        ("65536", "65537", "exceeds 4294967296"),
+    ];
+    for (tasks, per, needle) in cases {
         let fresh = dir.join(format!("fresh-{tasks}"));
         let run = slurm_render(
             &dir,
@@ -139,7 +147,7 @@ fn slurm_render_quotes_and_validates_its_arguments() {
         );
         assert!(!run.status.success(), "{tasks} {per}: {}", text(&run));
         let err = String::from_utf8_lossy(&run.stderr);
-        assert!(err.contains("whole number"), "{tasks} {per}: {err}");
+        assert!(err.contains(needle), "{tasks} {per}: {err}");
         assert!(!pwned.exists(), "the pass count's $(…) ran");
         assert!(!fresh.join("merged.exr").exists());
     }
