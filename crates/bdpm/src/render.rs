@@ -113,6 +113,37 @@ pub(crate) struct MergeArgs {
     max_memory: Option<u64>,
 }
 
+/// Refuses to read accumulation files whose passes alone would exceed `max_memory` (default:
+/// the available memory), judged from their headers: the full estimate, with the renderer's
+/// part, follows once the scene is loaded, but reading comes first.
+fn refuse_to_read(paths: &[PathBuf], max_memory: Option<u64>, advice: &str) -> CliResult<()> {
+    let (limit, source) = match max_memory {
+        Some(b) => (Some(b), "--max-memory"),
+        None => (available_memory(), "available memory"),
+    };
+    let Some(limit) = limit else {
+        return Ok(());
+    };
+    let mut total = 0u64;
+    for p in paths {
+        total = total.saturating_add(accum::held_bytes(p)?);
+    }
+    if total > limit {
+        return Err(format!(
+            "{}: the passes to read need about {} ({} bytes per pixel per pass), more than the {source} of {}; {advice} (or raise --max-memory)",
+            paths
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", "),
+            human_bytes(total),
+            accum::BYTES_PER_PIXEL_PASS,
+            human_bytes(limit)
+        ));
+    }
+    Ok(())
+}
+
 /// What an interrupted merge does: nothing is written (the parts are unchanged, and a rerun
 /// of the same merge loses nothing); exit code [`signal::EXIT_INTERRUPTED`].
 fn merge_interrupted() -> ExitCode {
@@ -137,7 +168,14 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
         return Err("--techniques cannot be combined with --first-pass, --resume or --accumulate: the accumulation file does not keep the technique layers".into());
     }
     let held = match &args.resume {
-        Some(path) => Some(accum::read(path)?),
+        Some(path) => {
+            refuse_to_read(
+                &[path.clone()],
+                args.max_memory,
+                "resume from a file with fewer passes",
+            )?;
+            Some(accum::read(path)?)
+        }
         None => None,
     };
     run_job(Job {
@@ -165,6 +203,7 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
 /// (and a merged accumulation file), with the bits of one render of the union of the passes.
 pub(crate) fn merge(args: MergeArgs) -> CliResult<ExitCode> {
     signal::install(signal::Stop::WithoutWriting)?;
+    refuse_to_read(&args.parts, args.max_memory, "merge fewer parts at once")?;
     let mut parts = Vec::with_capacity(args.parts.len());
     for p in &args.parts {
         parts.push(accum::read(p)?);
@@ -195,11 +234,6 @@ pub(crate) fn merge(args: MergeArgs) -> CliResult<ExitCode> {
         merge: true,
     })
 }
-
-/// Bytes per pixel per pass that the accumulation file's passes take while a render, resume
-/// or merge runs: the pass records (3 × f64) and the writer's u32 copy of them (6 × u32), or,
-/// while reading, the decoded u32 samples and the records built from them.
-const ACCUM_BYTES_PER_PIXEL_PASS: u64 = 48;
 
 /// One run of the render driver: passes replayed from accumulation files, then passes
 /// rendered, then the outputs.
@@ -312,7 +346,7 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
         let kept = held.len() as u64 + u64::from(to_render);
         estimate.items.push(MemoryItem {
             name: "passes kept for the accumulation file",
-            bytes: kept * pixels as u64 * ACCUM_BYTES_PER_PIXEL_PASS,
+            bytes: kept * pixels as u64 * accum::BYTES_PER_PIXEL_PASS,
             lower: if args.merge {
                 "the passes merged at once (merge fewer parts, then merge the results)"
             } else {

@@ -1875,6 +1875,16 @@ fn held_passes_count_in_the_memory_estimate() {
         &out,
         &["passes kept for the accumulation file", "merge fewer parts"],
     );
+    // Below what the passes alone need (7.9 MB): refused from the header, before reading.
+    let out = run(bdpm()
+        .arg("merge")
+        .arg(&accum)
+        .args(["--quiet", "--max-memory", "4M", "-o"])
+        .arg(dir.path("m.exr")));
+    assert_one_line_error(
+        &out,
+        &["h.accum.exr", "passes to read", "merge fewer parts"],
+    );
     let out = run(bdpm()
         .arg("merge")
         .arg(&accum)
