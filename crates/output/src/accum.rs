@@ -65,7 +65,7 @@ pub fn held_bytes(path: &Path) -> Result<u64, String> {
         })
         .ok_or_else(|| {
             format!(
-                "{}: not a bdpm accumulation file (no accum.passes attribute)",
+                "{}: not a bdpm accumulation file (no accum.passes attribute; {GIVE})",
                 path.display()
             )
         })?;
@@ -74,6 +74,10 @@ pub fn held_bytes(path: &Path) -> Result<u64, String> {
         .saturating_mul(pixels)
         .saturating_mul(BYTES_PER_PIXEL_PASS))
 }
+
+/// What to give instead of a file that is not an accumulation file.
+const GIVE: &str =
+    "give the OUT.accum.exr that render --accumulate, --first-pass or --resume writes";
 
 /// One pass as stored: its global index and what the film and the report need of it.
 #[derive(Clone, Debug)]
@@ -266,14 +270,52 @@ impl Identity {
                 other.seed, self.seed
             ))
         } else if self.settings_hash != other.settings_hash {
+            let (theirs, ours) = (flags(&other.overrides), flags(&self.overrides));
+            let only = |a: &[String], b: &[String]| {
+                let v: Vec<&str> = a
+                    .iter()
+                    .filter(|x| !b.contains(x))
+                    .map(String::as_str)
+                    .collect();
+                if v.is_empty() {
+                    "no flag".to_string()
+                } else {
+                    v.join(" ")
+                }
+            };
+            let told = if theirs == ours {
+                String::new()
+            } else {
+                format!(
+                    ": it was rendered with {}, this run has {}",
+                    only(&theirs, &ours),
+                    only(&ours, &theirs)
+                )
+            };
             Some(format!(
-                "its settings differ (settings hash {} against {})",
+                "its settings differ (settings hash {} against {}){told}",
                 other.settings_hash, self.settings_hash
             ))
         } else {
             None
         }
     }
+}
+
+/// Command-line overrides as made by [`Overrides::to_args`], one flag with its value per
+/// item (`--resolution 32x32`, `--no-jitter`).
+fn flags(args: &[String]) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for a in args {
+        match out.last_mut() {
+            Some(last) if !a.starts_with("--") && !last.contains(' ') => {
+                last.push(' ');
+                last.push_str(a);
+            }
+            _ => out.push(a.clone()),
+        }
+    }
+    out
 }
 
 /// FNV-1a of the settings' debug form with the pass count zeroed: a part's pass count is not
@@ -419,7 +461,7 @@ pub fn read(path: &Path) -> Result<Accumulation, String> {
             .iter()
             .find(|(n, _)| n == k)
             .map(|(_, v)| v.as_str())
-            .ok_or_else(|| bad(&format!("no {k} attribute")))
+            .ok_or_else(|| bad(&format!("no {k} attribute; {GIVE}")))
     };
     let format = attr("accum.format")?;
     if format != FORMAT {
@@ -567,6 +609,17 @@ pub fn combine(parts: Vec<Accumulation>) -> Result<(Accumulation, Vec<PathBuf>),
                 reference.size.0,
                 reference.size.1,
                 reference.path.display()
+            ));
+        }
+    }
+    for (i, p) in parts.iter().enumerate() {
+        let same = |q: &Accumulation| {
+            std::fs::canonicalize(&q.path).ok() == std::fs::canonicalize(&p.path).ok()
+        };
+        if parts[..i].iter().any(same) {
+            return Err(format!(
+                "{}: given twice; name each part once",
+                p.path.display()
             ));
         }
     }

@@ -1951,3 +1951,40 @@ fn an_interrupted_merge_reports_what_it_did() {
         }
     }
 }
+
+/// Messages of `merge` and `--resume` that name the problem: a missing part list, an image
+/// given instead of its accumulation file, a part given twice, and settings that differ
+/// (named as the flags that differ, not only as hashes).
+#[test]
+fn merge_and_resume_messages_name_the_problem() {
+    let dir = TempDir::new("merge-messages");
+    small_render(&dir.path("a.exr"), &["--passes", "2", "--accumulate"]);
+    let accum = dir.path("a.accum.exr");
+    let out = run(bdpm().args(["merge", "-o"]).arg(dir.path("m.exr")));
+    assert_one_line_error(&out, &["not provided: <PART.accum.exr>"]);
+    assert_one_line_error(
+        &merge(&[dir.path("a.exr")], &dir.path("m.exr")),
+        &[
+            "a.exr",
+            "not a bdpm accumulation file",
+            "render --accumulate",
+        ],
+    );
+    let again = dir.path(".").join("a.accum.exr");
+    assert_one_line_error(
+        &merge(&[accum.clone(), again], &dir.path("m.exr")),
+        &["a.accum.exr", "given twice"],
+    );
+    let out = run(bdpm()
+        .arg("render")
+        .arg(scene("cornell-lambert.toml"))
+        .args(["--resolution", "8x8", "--photons", "2000", "--spp", "1"])
+        .args(["--mode", "optimal", "--quiet", "--resume"])
+        .arg(&accum)
+        .arg("-o")
+        .arg(dir.path("r.exr")));
+    assert_one_line_error(
+        &out,
+        &["settings differ", "--resolution 16x16", "--resolution 8x8"],
+    );
+}
