@@ -170,7 +170,7 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
     let held = match &args.resume {
         Some(path) => {
             refuse_to_read(
-                &[path.clone()],
+                std::slice::from_ref(path),
                 args.max_memory,
                 "resume from a file with fewer passes",
             )?;

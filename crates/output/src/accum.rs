@@ -50,9 +50,8 @@ pub fn held_bytes(path: &Path) -> Result<u64, String> {
     let passes = header
         .own_attributes
         .other
-        .iter()
-        .find(|(k, _)| k.to_string() == "bdpm.accum.passes")
-        .and_then(|(_, v)| match v {
+        .get(&exr::prelude::Text::from("bdpm.accum.passes"))
+        .and_then(|v| match v {
             exr::prelude::AttributeValue::Text(t) => Some(t.to_string()),
             _ => None,
         })
