@@ -5,6 +5,13 @@
 #   BDPM=/tmp/before/target/release/bdpm scripts/bit-check.sh render DIR   # another binary
 #   scripts/bit-check.sh compare DIR_A DIR_B # exits non-zero if any image differs
 set -euo pipefail
+# Folders and BDPM given relative are the caller's: resolve them before moving to the
+# repository root (where the scenes and the default binary are).
+abs() { case "$1" in /*) printf %s "$1" ;; *) printf %s "$PWD/$1" ;; esac; }
+if [ "${1:-}" = render ] && [ $# -ge 2 ]; then set -- "$1" "$(abs "$2")"; fi
+if [ "${1:-}" = compare ] && [ $# -ge 3 ]; then set -- "$1" "$(abs "$2")" "$(abs "$3")"; fi
+# A bare command name is looked up on PATH as before; a path is the caller's.
+case "${BDPM:-}" in */*) BDPM=$(abs "$BDPM") ;; esac
 cd "$(dirname "$0")/.."
 bin=${BDPM:-target/release/bdpm}
 # `compare` needs a binary that has the compare command, i.e. this checkout's.
@@ -12,11 +19,11 @@ compare_bin=target/release/bdpm
 modes="path light bdd0 bdd1 threshold algebraic-direct algebraic optimal optimal-split optimal-path balance power camis"
 case "${1:-}" in
   render)
-    dir=$2; mkdir -p "$dir"
+    dir=${2:?usage: $0 render DIR}; mkdir -p "$dir"
     for m in $modes; do
-      $bin render scenes/cornell-lambert.toml --mode "$m" --resolution 64x64 --passes 2 \
+      "$bin" render scenes/cornell-lambert.toml --mode "$m" --resolution 64x64 --passes 2 \
         --photons 200000 --spp 4 -o "$dir/lambert-$m.exr" --quiet > /dev/null
-      $bin render scenes/cornell-glossy.toml --mode "$m" --resolution 64x64 --passes 2 \
+      "$bin" render scenes/cornell-glossy.toml --mode "$m" --resolution 64x64 --passes 2 \
         --photons 100000 --spp 4 -o "$dir/glossy-$m.exr" --quiet > /dev/null
     done
     echo "rendered $(ls "$dir"/*.exr | wc -l) images into $dir" ;;

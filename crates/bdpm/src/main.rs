@@ -56,7 +56,7 @@ fn main() -> ExitCode {
     match result {
         Ok(code) => code,
         Err(message) => {
-            eprintln!("bdpm: error: {message}");
+            bdpm_output::say_err!("bdpm: error: {message}");
             ExitCode::FAILURE
         }
     }
@@ -74,12 +74,18 @@ fn usage_error(e: clap::Error) -> ExitCode {
         e.exit();
     }
     let text = e.render().to_string();
-    let line = text
-        .lines()
-        .find(|l| l.starts_with("error:"))
+    let mut lines = text.lines().skip_while(|l| !l.starts_with("error:"));
+    let mut line = lines
+        .next()
         .unwrap_or("error: bad arguments")
         .trim_start_matches("error:")
-        .trim();
-    eprintln!("bdpm: error: {line} (see bdpm --help)");
+        .trim()
+        .to_string();
+    // "the following required arguments were not provided:" lists them on the next lines.
+    if line.ends_with(':') {
+        let listed: Vec<&str> = lines.map(str::trim).take_while(|l| !l.is_empty()).collect();
+        line = format!("{line} {}", listed.join(", "));
+    }
+    bdpm_output::say_err!("bdpm: error: {line} (see bdpm --help)");
     ExitCode::FAILURE
 }

@@ -6,7 +6,8 @@ use std::process::ExitCode;
 use std::time::{Instant, SystemTime};
 
 use bdpm_integrator::{
-    Film, Mode, Renderer, StageProbe, WeightStats, estimate_memory, first_hit_layers, human_bytes,
+    Film, MemoryItem, Mode, Renderer, StageProbe, WeightStats, estimate_memory, first_hit_layers,
+    human_bytes,
 };
 use bdpm_output::accum::{self, Identity, PassRecord};
 use bdpm_output::cli::{
@@ -105,6 +106,49 @@ pub(crate) struct MergeArgs {
     /// Worker threads for preparing the renderer (default: all cores).
     #[arg(long, value_parser = whole::<usize>)]
     threads: Option<usize>,
+    /// Refuse to merge when the estimated peak memory (the renderer's, plus the parts'
+    /// passes held and written: 48 bytes per pixel per pass) exceeds this, e.g. 8G or 512M.
+    /// Default: the memory available on this machine.
+    #[arg(long, value_parser = parse_bytes)]
+    max_memory: Option<u64>,
+}
+
+/// Refuses to read accumulation files whose passes alone would exceed `max_memory` (default:
+/// the available memory), judged from their headers: the full estimate, with the renderer's
+/// part, follows once the scene is loaded, but reading comes first.
+fn refuse_to_read(paths: &[PathBuf], max_memory: Option<u64>, advice: &str) -> CliResult<()> {
+    let (limit, source) = match max_memory {
+        Some(b) => (Some(b), "--max-memory"),
+        None => (available_memory(), "available memory"),
+    };
+    let Some(limit) = limit else {
+        return Ok(());
+    };
+    let mut total = 0u64;
+    for p in paths {
+        total = total.saturating_add(accum::held_bytes(p)?);
+    }
+    if total > limit {
+        return Err(format!(
+            "{}: the passes to read need about {} ({} bytes per pixel per pass), more than the {source} of {}; {advice} (or raise --max-memory)",
+            paths
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", "),
+            human_bytes(total),
+            accum::BYTES_PER_PIXEL_PASS,
+            human_bytes(limit)
+        ));
+    }
+    Ok(())
+}
+
+/// What an interrupted merge does: nothing is written (the parts are unchanged, and a rerun
+/// of the same merge loses nothing); exit code [`signal::EXIT_INTERRUPTED`].
+fn merge_interrupted() -> ExitCode {
+    bdpm_output::say_err!("bdpm: merge interrupted: nothing was written");
+    ExitCode::from(signal::EXIT_INTERRUPTED)
 }
 
 /// Runs the subcommand. Exit code 0 after a complete render, [`signal::EXIT_INTERRUPTED`]
@@ -112,7 +156,7 @@ pub(crate) struct MergeArgs {
 pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
     // Installed first, so that an interrupt during loading and preparation also stops the
     // render cleanly (before its first pass) rather than killing it.
-    signal::install()?;
+    signal::install(signal::Stop::AfterPass)?;
     if args.resume.is_some() && args.first_pass.is_some() {
         return Err(
             "--resume continues after the passes the file holds; do not also give --first-pass"
@@ -124,7 +168,14 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
         return Err("--techniques cannot be combined with --first-pass, --resume or --accumulate: the accumulation file does not keep the technique layers".into());
     }
     let held = match &args.resume {
-        Some(path) => Some(accum::read(path)?),
+        Some(path) => {
+            refuse_to_read(
+                std::slice::from_ref(path),
+                args.max_memory,
+                "resume from a file with fewer passes",
+            )?;
+            Some(accum::read(path)?)
+        }
         None => None,
     };
     run_job(Job {
@@ -151,12 +202,15 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
 /// replays their passes in pass order into a fresh film and writes the outputs of `render`
 /// (and a merged accumulation file), with the bits of one render of the union of the passes.
 pub(crate) fn merge(args: MergeArgs) -> CliResult<ExitCode> {
-    signal::install()?;
-    let parts = args
-        .parts
-        .iter()
-        .map(|p| accum::read(p))
-        .collect::<Result<Vec<_>, _>>()?;
+    signal::install(signal::Stop::WithoutWriting)?;
+    refuse_to_read(&args.parts, args.max_memory, "merge fewer parts at once")?;
+    let mut parts = Vec::with_capacity(args.parts.len());
+    for p in &args.parts {
+        parts.push(accum::read(p)?);
+        if signal::requested() {
+            return Ok(merge_interrupted());
+        }
+    }
     let (held, sources) = accum::combine(parts)?;
     let mut overrides = Overrides::from_args(&held.identity.overrides)
         .map_err(|e| format!("{}: {e}", held.path.display()))?;
@@ -169,7 +223,7 @@ pub(crate) fn merge(args: MergeArgs) -> CliResult<ExitCode> {
         techniques: false,
         aov: false,
         precision: Precision::Float,
-        max_memory: None,
+        max_memory: args.max_memory,
         stage_memory: false,
         first_pass: None,
         held: Some(held),
@@ -215,7 +269,13 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
     let loaded = prepare(&args.scene, &args.overrides)?;
     let load_seconds = t_start.elapsed().as_secs_f64();
     let (scene, mut settings) = (loaded.scene, loaded.settings);
-    let identity = Identity::of(&args.scene, &settings, &args.overrides)?;
+    let identity = Identity::of(
+        &args.scene,
+        &loaded.report.gltf_files,
+        &settings,
+        &args.overrides,
+    )?;
+    let scene_hash = accum::scene_hash(&args.scene, &loaded.report.gltf_files)?;
     let (held, held_from) = match args.held {
         Some(h) => {
             if let Some(why) = identity.mismatch(&h.identity) {
@@ -262,6 +322,7 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
             settings.mode
         ));
     }
+    let pixels = settings.width as usize * settings.height as usize;
     let requested = args
         .output
         .or(loaded.output)
@@ -270,13 +331,30 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
     // directory or a device, or a second render to the same output is refused now, not after
     // the render. The lock is held until the files are in place.
     let outputs = Outputs::beside(&requested);
-    let _lock = files::claim(&requested, &outputs, started)?;
+    let mut inputs: Vec<&Path> = held_from.iter().map(PathBuf::as_path).collect();
+    inputs.push(&args.scene);
+    let _lock = files::claim(&requested, &outputs, args.accumulate, &inputs, started)?;
     let pool = thread_pool(args.overrides.threads)?;
     let threads = pool.current_num_threads();
 
     // Before the cache, the pixel table, the film or any photon map is allocated: a render
     // that would run out of memory after minutes of work is refused now, naming what to lower.
-    let estimate = pool.install(|| estimate_memory(&scene, &settings, args.techniques));
+    let mut estimate = pool.install(|| estimate_memory(&scene, &settings, args.techniques));
+    if args.accumulate {
+        // The passes of the accumulation file: held (read from files, or rendered and kept)
+        // until the file is written, plus the copy the writer encodes, or the reader decodes.
+        let kept = held.len() as u64 + u64::from(to_render);
+        estimate.items.push(MemoryItem {
+            name: "passes kept for the accumulation file",
+            bytes: kept * pixels as u64 * accum::BYTES_PER_PIXEL_PASS,
+            lower: if args.merge {
+                "the passes merged at once (merge fewer parts, then merge the results)"
+            } else {
+                "--passes (or drop --accumulate)"
+            },
+        });
+        estimate.items.sort_by_key(|i| std::cmp::Reverse(i.bytes));
+    }
     let (limit, limit_source) = match args.max_memory {
         Some(b) => (Some(b), "--max-memory"),
         None => (available_memory(), "available memory"),
@@ -326,7 +404,6 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
         Some(to_render as u64 * renderer.work_per_pass()),
         "{spinner} [{elapsed_precise}] {bar:40} {percent:>3}% pass {msg} (eta {eta})",
     );
-    let pixels = settings.width as usize * settings.height as usize;
     let mut film = Film::new(settings.width, settings.height);
     let mut luma = PixelStats::new(pixels);
     let mut techniques = args.techniques.then(|| TechniqueSums::new(pixels));
@@ -405,13 +482,18 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
     let render_seconds = t_render.elapsed().as_secs_f64();
     let rendered_samples = samples - replayed_samples;
     bar.finish_and_clear();
+    if args.merge && signal::requested() {
+        return Ok(merge_interrupted());
+    }
     signal::begin_writing();
-    let interrupted = signal::requested();
+    // A merge renders no pass: a signal from here on only waits for the files, and the merge
+    // is complete, not interrupted.
+    let interrupted = !args.merge && signal::requested();
     if interrupted {
         stop_reason = "interrupted";
     }
     if interrupted && film.passes() == 0 {
-        eprintln!(
+        bdpm_output::say_err!(
             "bdpm: interrupted before the first pass finished: nothing was written ({})",
             args.scene.display()
         );
@@ -436,7 +518,7 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
             film.dropped()
         ));
     }
-    let mut header = report::header_attributes(&settings, &renderer, radius_given);
+    let mut header = report::header_attributes(&settings, &renderer, radius_given, &scene_hash);
     header.push(("passes_done".into(), film.passes().to_string()));
     header.push(("interrupted".into(), interrupted.to_string()));
     header.push(("pass_list".into(), accum::ranges(&held_indices)));
@@ -465,21 +547,18 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
     )
     .and_then(|bytes| files::stage_bytes(&outputs.noise_png, &bytes))
     .map_err(named(&outputs.noise_png))?;
-    let accum_path = args.accumulate.then(|| accum::path_beside(&outputs.exr));
+    let accum_path = args.accumulate.then(|| outputs.accum.clone());
     let accum_file = match &accum_path {
-        Some(path) => {
-            let refs: Vec<&PassRecord> = records.iter().collect();
-            Some(
-                accum::stage(
-                    path,
-                    (settings.width, settings.height),
-                    &identity,
-                    &refs,
-                    &header,
-                )
-                .map_err(named(path))?,
+        Some(path) => Some(
+            accum::stage(
+                path,
+                (settings.width, settings.height),
+                &identity,
+                std::mem::take(&mut records),
+                &header,
             )
-        }
+            .map_err(named(path))?,
+        ),
         None => None,
     };
     drop(records);

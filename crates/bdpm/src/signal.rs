@@ -5,6 +5,7 @@
 //!
 //! The handler cannot tell the signals apart (the `ctrlc` crate does not say which arrived), so
 //! an interrupted render always exits with [`EXIT_INTERRUPTED`].
+use bdpm_output::say_err;
 use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 /// Exit code of an interrupted render: 128 + SIGINT, as shells report a Ctrl-C.
@@ -15,19 +16,40 @@ static SIGNALS: AtomicU32 = AtomicU32::new(0);
 /// Set once the render loop has ended and the outputs are being written.
 static WRITING: AtomicBool = AtomicBool::new(false);
 
+/// What an interrupt does to the running command, for the handler's message.
+#[derive(Clone, Copy)]
+pub(crate) enum Stop {
+    /// A render: stop after the pass in flight and write what was rendered.
+    AfterPass,
+    /// A merge: stop and write nothing (the parts hold every pass; a merge rerun from them
+    /// loses nothing).
+    WithoutWriting,
+}
+
 /// Installs the handler. Call once, before the work that a signal should be able to stop.
-pub(crate) fn install() -> Result<(), String> {
-    ctrlc::set_handler(|| {
+/// The handler writes through [`say_err!`], which drops its message on a closed standard
+/// error instead of panicking: a panic would end the handler's thread, and a second interrupt
+/// would then no longer quit.
+pub(crate) fn install(stop: Stop) -> Result<(), String> {
+    ctrlc::set_handler(move || {
         let n = SIGNALS.fetch_add(1, Ordering::SeqCst) + 1;
         if WRITING.load(Ordering::SeqCst) {
-            eprintln!("\nbdpm: interrupt: the outputs are being written, they will be complete in a moment");
-        } else if n == 1 {
-            eprintln!(
-                "\nbdpm: interrupt: stopping after the pass in flight and writing what was rendered \
-                 (interrupt again to quit without writing)"
+            say_err!(
+                "\nbdpm: interrupt: the outputs are being written, they will be complete in a moment"
             );
+        } else if n == 1 {
+            match stop {
+                Stop::AfterPass => say_err!(
+                    "\nbdpm: interrupt: stopping after the pass in flight and writing what was \
+                     rendered (interrupt again to quit without writing)"
+                ),
+                Stop::WithoutWriting => say_err!(
+                    "\nbdpm: interrupt: stopping the merge without writing any output (its parts \
+                     are unchanged)"
+                ),
+            }
         } else {
-            eprintln!("\nbdpm: second interrupt: quitting without writing any output");
+            say_err!("\nbdpm: second interrupt: quitting without writing any output");
             std::process::exit(EXIT_INTERRUPTED.into());
         }
     })

@@ -200,7 +200,7 @@ pub(crate) fn run(args: BenchArgs) -> CliResult<()> {
             let name = &variant.name;
             let s = variant.settings(&base)?;
             let cell = time_cell(&scene, &s, name, threads, args.passes, args.repeats)?;
-            eprintln!(
+            bdpm_output::say_err!(
                 "{name:>16} {threads} thread(s): {} M photons/s, {} M samples/s, {:.3} s/pass",
                 fmt_rate(cell.photons_per_s),
                 fmt_rate(cell.samples_per_s),

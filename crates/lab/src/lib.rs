@@ -176,8 +176,8 @@ fn parse_modes(list: &[String]) -> CliResult<Vec<Variant>> {
 /// Writes a markdown report to `path` and prints it, then where it went.
 fn publish(path: &Path, md: &str) -> CliResult<()> {
     write_atomic(path, md.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
-    println!("{md}");
-    println!("wrote {}", path.display());
+    bdpm_output::say!("{md}");
+    bdpm_output::say!("wrote {}", path.display());
     Ok(())
 }
 

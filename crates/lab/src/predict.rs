@@ -21,6 +21,7 @@ use bdpm_mis::Heuristic;
 use clap::Args;
 use serde::Serialize;
 
+use bdpm_output::accum::{check_scene_hash, estimator_hash, scene_hash};
 use bdpm_output::cli::{CliResult, Overrides, prepare, thread_pool};
 use bdpm_output::colormap::{Canvas, ColourMap, Legend, compose, format_value};
 use bdpm_output::files::stem_of;
@@ -322,28 +323,59 @@ pub(crate) fn run(args: PredictArgs) -> CliResult<()> {
             settings.height
         ));
     }
+    // The passes the render did, not the ones it was asked for: a render stopped by a budget
+    // or an interrupt measured V from fewer.
     let passes: u32 = measured
-        .attribute("passes")
+        .attribute("passes_done")
         .and_then(|p| p.parse().ok())
-        .ok_or_else(|| format!("{}: no bdpm.passes attribute", args.measured.display()))?;
+        .ok_or_else(|| {
+            format!(
+                "{}: no bdpm.passes_done attribute (not a render of this bdpm)",
+                args.measured.display()
+            )
+        })?;
     if passes < 2 {
         return Err(format!(
-            "{}: {passes} pass: V was not measured (need at least 2 passes)",
+            "{}: {passes} pass done: V was not measured (need at least 2 passes)",
             args.measured.display()
         ));
     }
+    let expected_hash = scene_hash(&args.scene, &loaded.report.gltf_files)?;
+    check_scene_hash(
+        &args.measured,
+        &measured.attributes,
+        &expected_hash,
+        "the measured render",
+        true,
+    )?;
     let exr_path = args
         .output
         .unwrap_or_else(|| default_output(&args.measured))
         .with_extension("exr");
     let png_path = exr_path.with_extension("png");
     let json_path = exr_path.with_extension("json");
+    let headroom_path = headroom_png_path(&exr_path);
+    let mut members = vec![exr_path.as_path(), &png_path, &json_path];
+    if args.headroom {
+        members.push(&headroom_path);
+    }
+    files::refuse_inputs(&members, &[&args.measured, &args.scene], &[])?;
     let pool = thread_pool(args.overrides.threads)?;
 
     let renderer = pool
         .install(|| Renderer::new(&scene, &settings).map(Renderer::with_model_inputs))
         .map_err(|e| format!("{}: {e}", args.scene.display()))?;
     check_settings(&measured, &settings, &renderer, &args.measured)?;
+    // Every other setting (depth, cache, table, clamp, …), which the header lists no field of.
+    let estimator = estimator_hash(&settings);
+    if measured.attribute("estimator_hash") != Some(estimator.as_str()) {
+        return Err(format!(
+            "{}: rendered with other settings (estimator hash {}, the prediction's is {estimator}): \
+             give predict the render's settings",
+            args.measured.display(),
+            measured.attribute("estimator_hash").unwrap_or("missing")
+        ));
+    }
     let prediction = pool
         .install(|| renderer.predict_variance())
         .map_err(|e| e.to_string())?;
@@ -476,6 +508,7 @@ pub(crate) fn run(args: PredictArgs) -> CliResult<()> {
     let attributes = vec![
         ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
         ("scene".into(), args.scene.display().to_string()),
+        ("scene_hash".into(), expected_hash.clone()),
         ("measured".into(), args.measured.display().to_string()),
         ("mode".into(), mode.name().into()),
         ("passes".into(), passes.to_string()),
@@ -510,7 +543,7 @@ pub(crate) fn run(args: PredictArgs) -> CliResult<()> {
         .map_err(|e| format!("{}: {e}", png_path.display()))?;
     let mut written = vec![exr_path.clone(), png_path, json_path.clone()];
     if let Some(h) = &headroom_ratio {
-        let path = headroom_png_path(&exr_path);
+        let path = headroom_path;
         ratio_png(p, h, HEADROOM_LOG2_RANGE, "predicted V / floor")
             .and_then(|c| c.write_png(&path))
             .map_err(|e| format!("{}: {e}", path.display()))?;

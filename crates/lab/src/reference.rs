@@ -29,6 +29,8 @@ pub(crate) struct Reference {
     pub(crate) path: PathBuf,
     /// How it was made ("read from …", "rendered …", "cached …").
     pub(crate) origin: String,
+    /// The file's `bdpm.*` text attributes (empty for a fresh render).
+    pub(crate) attributes: Vec<(String, String)>,
 }
 
 /// The settings of the reference render for a study with `study` settings.
@@ -49,11 +51,14 @@ pub(crate) fn reference_settings(
 }
 
 /// The cache path of a reference: `out/reference-<stem>-<W>x<H>-<hash>.exr`, the hash over the
-/// scene file's bytes and every reference setting.
-pub(crate) fn cache_path(scene_path: &Path, settings: &RenderSettings) -> Result<PathBuf, String> {
-    let bytes = std::fs::read(scene_path)
-        .map_err(|e| format!("{}: cannot read: {e}", scene_path.display()))?;
-    let mut key = bytes;
+/// scene hash (the scene file and the meshes, buffers and images it references,
+/// [`bdpm_output::accum::scene_hash`]) and every reference setting.
+pub(crate) fn cache_path(
+    scene_path: &Path,
+    scene_hash: &str,
+    settings: &RenderSettings,
+) -> Result<PathBuf, String> {
+    let mut key = scene_hash.as_bytes().to_vec();
     key.extend_from_slice(format!("{settings:?}").as_bytes());
     let stem = stem_of(scene_path, "scene");
     Ok(PathBuf::from("out").join(format!(
@@ -100,6 +105,7 @@ pub(crate) fn read_exr(path: &Path) -> Result<Reference, String> {
         stderr: rgb("stderr."),
         path: path.to_path_buf(),
         origin: String::new(),
+        attributes: layer.attributes.clone(),
     })
 }
 
@@ -107,6 +113,7 @@ pub(crate) fn read_exr(path: &Path) -> Result<Reference, String> {
 /// written there.
 pub(crate) fn cached_or_render(
     scene: &Scene,
+    scene_hash: &str,
     settings: &RenderSettings,
     path: &Path,
     pool: &rayon::ThreadPool,
@@ -141,6 +148,7 @@ pub(crate) fn cached_or_render(
         ("spp".to_string(), settings.spp.to_string()),
         ("seed".to_string(), settings.seed.to_string()),
         ("seconds".to_string(), format!("{seconds:.1}")),
+        ("scene_hash".to_string(), scene_hash.to_string()),
     ];
     write_exr(path, &film, &attrs).map_err(|e| format!("{}: {e}", path.display()))?;
     Ok(Reference {
@@ -159,5 +167,6 @@ pub(crate) fn cached_or_render(
             "rendered in {seconds:.0} s and cached as {}",
             path.display()
         ),
+        attributes: attrs,
     })
 }

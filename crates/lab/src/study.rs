@@ -7,14 +7,15 @@
 //! **luminance** (Rec. 709 weights). It writes `study.csv`, `study.md`, log-log plots of error
 //! against time and a bar chart of mean √V (PNG and SVG), and a preview PNG per mode.
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use bdpm_integrator::{Film, Renderer};
+use bdpm_output::accum::{check_scene_hash, scene_hash};
 use bdpm_output::cli::{
     CliResult, Overrides, load_average, prepare, process_cpu_seconds, progress_bar, thread_pool,
 };
-use bdpm_output::files::{stem_of, write_atomic};
+use bdpm_output::files::{refuse_inputs, stem_of, write_atomic};
 use bdpm_output::plot;
 use bdpm_output::preview::write_png;
 use bdpm_output::stats::{PixelStats, luminance};
@@ -399,9 +400,23 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
     let (w, h) = (settings.width, settings.height);
 
     // The reference.
+    let hash = scene_hash(&args.scene, &loaded.report.gltf_files)?;
+    if let Some(path) = &args.reference {
+        let mut members: Vec<PathBuf> =
+            names.iter().map(|n| dir.join(format!("{n}.png"))).collect();
+        members.extend(["study.csv", "study.md"].map(|n| dir.join(n)));
+        for stem in ["error-vs-time", "sqrt-v"] {
+            members.extend(["png", "svg"].map(|e| dir.join(stem).with_extension(e)));
+        }
+        let members: Vec<&Path> = members.iter().map(PathBuf::as_path).collect();
+        refuse_inputs(&members, &[path], &[])?;
+    }
     let reference = match &args.reference {
         Some(path) => {
             let mut r = reference::read_exr(path)?;
+            // A reference of another scene gives errors that mean nothing; one made by
+            // another program (no attribute) is taken on trust.
+            check_scene_hash(path, &r.attributes, &hash, "the reference", false)?;
             r.origin = format!("read from {}", path.display());
             r
         }
@@ -417,8 +432,8 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
                 None => settings.photons,
             };
             let rs = reference::reference_settings(&settings, passes, photons);
-            let path = reference::cache_path(&args.scene, &rs)?;
-            let mut r = reference::cached_or_render(&scene, &rs, &path, &pool, args.quiet)?;
+            let path = reference::cache_path(&args.scene, &hash, &rs)?;
+            let mut r = reference::cached_or_render(&scene, &hash, &rs, &path, &pool, args.quiet)?;
             r.origin = format!(
                 "`light` mode, {passes} passes of N_F = {photons}, N_B = {}, seed {}; {}",
                 rs.spp, rs.seed, r.origin
@@ -575,7 +590,7 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
         };
         if !args.quiet {
             let last = run.final_point().map(|p| p.rel_rmse).unwrap_or(f64::NAN);
-            eprintln!(
+            bdpm_output::say_err!(
                 "{:>16}: {} passes in {:.1} s, rel. RMSE {:.3}%",
                 run.name,
                 run.points.len(),

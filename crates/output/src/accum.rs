@@ -16,7 +16,7 @@ use exr::prelude::{AnyChannel, FlatSamples};
 use glam::DVec3;
 
 use crate::cli::Overrides;
-use crate::exr::{ExrLayer, stage_exr_channels};
+use crate::exr::stage_exr_channels;
 use crate::files::Staged;
 
 /// 64-bit FNV-1a: a stable hash (unlike `DefaultHasher`, whose output may change between Rust
@@ -29,6 +29,54 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
 
 /// The value of `bdpm.accum.format`: bumped when the layout changes.
 pub const FORMAT: &str = "bdpm-accumulation-1";
+
+/// Bytes per pixel per pass that an accumulation file's passes take in memory while a
+/// command holds them: the pass records (3 × f64) and the copy the writer encodes (6 × u32),
+/// or, while reading, the decoded u32 samples and the records built from them. Measured: a
+/// merge of 45 passes at 256² peaks at 131.6 MB, 41 B per pixel per pass above a plain render
+/// (docs/robustness.md, "Memory of held passes").
+pub const BYTES_PER_PIXEL_PASS: u64 = 48;
+
+/// The memory that reading the accumulation file at `path` will take
+/// ([`BYTES_PER_PIXEL_PASS`] per pixel per listed pass), from its header alone, so that a
+/// merge or resume too large for the memory is refused before it reads.
+pub fn held_bytes(path: &Path) -> Result<u64, String> {
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| format!("{}: cannot read EXR: {e}", path.display()))?;
+    let header = meta
+        .headers
+        .first()
+        .ok_or_else(|| format!("{}: EXR has no layer", path.display()))?;
+    let passes = header
+        .own_attributes
+        .other
+        .get(&exr::prelude::Text::from("bdpm.accum.passes"))
+        .and_then(|v| match v {
+            exr::prelude::AttributeValue::Text(t) => Some(t.to_string()),
+            _ => None,
+        })
+        .map(|t| {
+            if t.is_empty() {
+                0
+            } else {
+                t.split(',').count() as u64
+            }
+        })
+        .ok_or_else(|| {
+            format!(
+                "{}: not a bdpm accumulation file (no accum.passes attribute; {GIVE})",
+                path.display()
+            )
+        })?;
+    let pixels = (header.layer_size.width() * header.layer_size.height()) as u64;
+    Ok(passes
+        .saturating_mul(pixels)
+        .saturating_mul(BYTES_PER_PIXEL_PASS))
+}
+
+/// What to give instead of a file that is not an accumulation file.
+const GIVE: &str =
+    "give the OUT.accum.exr that render --accumulate, --first-pass or --resume writes";
 
 /// One pass as stored: its global index and what the film and the report need of it.
 #[derive(Clone, Debug)]
@@ -45,6 +93,123 @@ pub struct PassRecord {
     pub photons_stored: u64,
 }
 
+/// Decodes `%XX` escapes of a glTF URI (RFC 3986), as the loader does; `None` if malformed.
+fn percent_decode(uri: &str) -> Option<String> {
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        if bytes[i] == b'%' {
+            let hex = std::str::from_utf8(bytes.get(i + 1..i + 3)?).ok()?;
+            out.push(u8::from_str_radix(hex, 16).ok()?);
+            i += 3;
+        } else {
+            out.push(bytes[i]);
+            i += 1;
+        }
+    }
+    String::from_utf8(out).ok()
+}
+
+/// Feeds `bytes` into a running FNV-1a hash `h`, length first (so that moving bytes from one
+/// file to the next changes the hash).
+fn fnv1a_more(h: u64, bytes: &[u8]) -> u64 {
+    let h = (bytes.len() as u64).to_le_bytes().iter().fold(h, |h, b| {
+        (h ^ *b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+    });
+    bytes.iter().fold(h, |h, b| {
+        (h ^ *b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+/// FNV-1a over the bytes of the files a scene references: each glTF file (as the loader
+/// opened it, [`bdpm_load::LoadReport::gltf_files`]) and the external buffers and images it
+/// names (resolved against its directory), in order; hex. A file that cannot be read is
+/// hashed as its name and "unreadable", so that it still differs from any content.
+pub fn assets_hash(gltf_files: &[PathBuf]) -> String {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    for file in gltf_files {
+        let Ok(bytes) = std::fs::read(file) else {
+            h = fnv1a_more(h, file.to_string_lossy().as_bytes());
+            h = fnv1a_more(h, b"unreadable");
+            continue;
+        };
+        h = fnv1a_more(h, &bytes);
+        let Ok(doc) = gltf::Gltf::from_slice(&bytes) else {
+            continue;
+        };
+        let dir = file.parent().unwrap_or(Path::new("."));
+        let buffers = doc.buffers().filter_map(|b| match b.source() {
+            gltf::buffer::Source::Uri(uri) => Some(uri.to_string()),
+            gltf::buffer::Source::Bin => None,
+        });
+        let images = doc.images().filter_map(|i| match i.source() {
+            gltf::image::Source::Uri { uri, .. } => Some(uri.to_string()),
+            gltf::image::Source::View { .. } => None,
+        });
+        for uri in buffers.chain(images) {
+            if uri.starts_with("data:") {
+                continue;
+            }
+            let path = dir.join(percent_decode(&uri).unwrap_or_else(|| uri.clone()));
+            match std::fs::read(&path) {
+                Ok(b) => h = fnv1a_more(h, &b),
+                Err(_) => {
+                    h = fnv1a_more(h, uri.as_bytes());
+                    h = fnv1a_more(h, b"unreadable");
+                }
+            }
+        }
+    }
+    format!("{h:016x}")
+}
+
+/// The scene identity that every image header carries (`bdpm.scene_hash`): FNV-1a of the
+/// scene file's hash and the [`assets_hash`] of the files it references, hex. Two renders with
+/// the same scene hash rendered the same scene content, wherever its files were.
+pub fn scene_hash(scene: &Path, gltf_files: &[PathBuf]) -> Result<String, String> {
+    let bytes =
+        std::fs::read(scene).map_err(|e| format!("{}: cannot read: {e}", scene.display()))?;
+    Ok(combined_hash(
+        &format!("{:016x}", fnv1a(&bytes)),
+        &assets_hash(gltf_files),
+    ))
+}
+
+fn combined_hash(scene_file: &str, assets: &str) -> String {
+    format!(
+        "{:016x}",
+        fnv1a(format!("{scene_file}+{assets}").as_bytes())
+    )
+}
+
+/// Checks that the image at `path`, whose header attributes are `attributes`, was rendered
+/// from the scene whose [`scene_hash`] is `expected`; `what` names the image's role in the
+/// message ("the measured render", "the reference"). An image without the attribute (made by
+/// an older bdpm or another program) is refused too when `required`.
+pub fn check_scene_hash(
+    path: &Path,
+    attributes: &[(String, String)],
+    expected: &str,
+    what: &str,
+    required: bool,
+) -> Result<(), String> {
+    match attributes.iter().find(|(k, _)| k == "scene_hash") {
+        Some((_, got)) if got == expected => Ok(()),
+        Some((_, got)) => Err(format!(
+            "{}: {what} was rendered from another scene (scene hash {got}, this scene's is \
+             {expected}: the scene file or a mesh, buffer or image it references differs)",
+            path.display()
+        )),
+        None if required => Err(format!(
+            "{}: {what} has no bdpm.scene_hash attribute, so it cannot be checked to be of this \
+             scene; render it again with this bdpm",
+            path.display()
+        )),
+        None => Ok(()),
+    }
+}
+
 /// What makes two partial renders parts of the same render.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Identity {
@@ -52,6 +217,9 @@ pub struct Identity {
     pub scene: PathBuf,
     /// FNV-1a of the scene file's bytes, hex.
     pub scene_hash: String,
+    /// [`assets_hash`] of the files the scene references; `None` when read from a file of an
+    /// older bdpm that did not record it.
+    pub assets_hash: Option<String>,
     /// FNV-1a of the settings (pass count excluded), hex; covers seed, resolution, mode, ….
     pub settings_hash: String,
     /// Master seed (also inside the settings hash; kept readable for error messages).
@@ -62,8 +230,10 @@ pub struct Identity {
 
 impl Identity {
     /// The identity of a render of `scene` with `settings` made with `overrides`.
+    /// `gltf_files` are the glTF files the scene loaded ([`bdpm_load::LoadReport::gltf_files`]).
     pub fn of(
         scene: &Path,
+        gltf_files: &[PathBuf],
         settings: &bdpm_integrator::RenderSettings,
         overrides: &Overrides,
     ) -> Result<Identity, String> {
@@ -72,6 +242,7 @@ impl Identity {
         Ok(Identity {
             scene: std::fs::canonicalize(scene).unwrap_or_else(|_| scene.to_path_buf()),
             scene_hash: format!("{:016x}", fnv1a(&bytes)),
+            assets_hash: Some(assets_hash(gltf_files)),
             settings_hash: settings_hash(settings),
             seed: settings.seed,
             overrides: overrides.to_args(),
@@ -85,20 +256,65 @@ impl Identity {
                 "its scene file differs (hash {} against {})",
                 other.scene_hash, self.scene_hash
             ))
+        } else if let (Some(a), Some(b)) = (&self.assets_hash, &other.assets_hash)
+            && a != b
+        {
+            Some(format!(
+                "a mesh, buffer or image file its scene references has changed (assets hash {b} \
+                 against {a})"
+            ))
         } else if self.seed != other.seed {
             Some(format!(
                 "its seed differs ({} against {})",
                 other.seed, self.seed
             ))
         } else if self.settings_hash != other.settings_hash {
+            let (theirs, ours) = (flags(&other.overrides), flags(&self.overrides));
+            let only = |a: &[String], b: &[String]| {
+                let v: Vec<&str> = a
+                    .iter()
+                    .filter(|x| !b.contains(x))
+                    .map(String::as_str)
+                    .collect();
+                if v.is_empty() {
+                    "no flag".to_string()
+                } else {
+                    v.join(" ")
+                }
+            };
+            let told = if theirs == ours {
+                String::new()
+            } else {
+                format!(
+                    ": it was rendered with {}, this run has {}",
+                    only(&theirs, &ours),
+                    only(&ours, &theirs)
+                )
+            };
             Some(format!(
-                "its settings differ (settings hash {} against {})",
+                "its settings differ (settings hash {} against {}){told}",
                 other.settings_hash, self.settings_hash
             ))
         } else {
             None
         }
     }
+}
+
+/// Command-line overrides as made by [`Overrides::to_args`], one flag with its value per
+/// item (`--resolution 32x32`, `--no-jitter`).
+fn flags(args: &[String]) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for a in args {
+        match out.last_mut() {
+            Some(last) if !a.starts_with("--") && !last.contains(' ') => {
+                last.push(' ');
+                last.push_str(a);
+            }
+            _ => out.push(a.clone()),
+        }
+    }
+    out
 }
 
 /// FNV-1a of the settings' debug form with the pass count zeroed: a part's pass count is not
@@ -109,9 +325,14 @@ pub fn settings_hash(settings: &bdpm_integrator::RenderSettings) -> String {
     format!("{:016x}", fnv1a(format!("{s:?}").as_bytes()))
 }
 
-/// The accumulation file beside the render's EXR `exr`: `OUT.accum.exr`.
-pub fn path_beside(exr: &Path) -> PathBuf {
-    exr.with_extension("accum.exr")
+/// FNV-1a of the settings with the pass count and the seed zeroed, hex: the same for two
+/// renders that estimate the same image with the same estimator (header attribute
+/// `bdpm.estimator_hash`, checked by `predict --measured`).
+pub fn estimator_hash(settings: &bdpm_integrator::RenderSettings) -> String {
+    let mut s = settings.clone();
+    s.passes = 0;
+    s.seed = 0;
+    format!("{:016x}", fnv1a(format!("{s:?}").as_bytes()))
 }
 
 /// Pass indices as ranges, e.g. `0-3,6,8-9`.
@@ -138,15 +359,18 @@ fn list<T: ToString>(values: impl Iterator<Item = T>) -> String {
 }
 
 /// Stages the accumulation file at `path`: the passes (in the order given, which the callers
-/// keep ascending) and the identity, plus `extra` header attributes.
+/// keep ascending) and the identity, plus `extra` header attributes. The passes are taken by
+/// value and each is freed once its channels are built, so that the records and the
+/// writer's copy of them are not both held whole.
 pub fn stage(
     path: &Path,
     size: (u32, u32),
     identity: &Identity,
-    passes: &[&PassRecord],
+    passes: Vec<PassRecord>,
     extra: &[(String, String)],
 ) -> Result<Staged, String> {
     let mut channels = Vec::with_capacity(passes.len() * 6);
+    let mut meta = Vec::with_capacity(passes.len());
     for p in passes {
         for (c, name) in ["R", "G", "B"].iter().enumerate() {
             let bits = || p.estimates.iter().map(move |e| e[c].to_bits());
@@ -162,6 +386,7 @@ pub fn stage(
                 FlatSamples::U32(lo),
             ));
         }
+        meta.push((p.index, p.dropped, p.samples, p.photons_stored));
     }
     let mut attrs = extra.to_vec();
     let overrides = serde_json::to_string(&identity.overrides).map_err(|e| e.to_string())?;
@@ -172,21 +397,19 @@ pub fn stage(
             identity.scene.to_string_lossy().into_owned(),
         ),
         ("accum.scene_hash".into(), identity.scene_hash.clone()),
+        (
+            "accum.assets_hash".into(),
+            identity.assets_hash.clone().unwrap_or_default(),
+        ),
         ("accum.settings_hash".into(), identity.settings_hash.clone()),
         ("accum.seed".into(), identity.seed.to_string()),
         ("accum.overrides".into(), overrides),
-        ("accum.passes".into(), list(passes.iter().map(|p| p.index))),
-        (
-            "accum.dropped".into(),
-            list(passes.iter().map(|p| p.dropped)),
-        ),
-        (
-            "accum.samples".into(),
-            list(passes.iter().map(|p| p.samples)),
-        ),
+        ("accum.passes".into(), list(meta.iter().map(|p| p.0))),
+        ("accum.dropped".into(), list(meta.iter().map(|p| p.1))),
+        ("accum.samples".into(), list(meta.iter().map(|p| p.2))),
         (
             "accum.photons_stored".into(),
-            list(passes.iter().map(|p| p.photons_stored)),
+            list(meta.iter().map(|p| p.3)),
         ),
     ]);
     stage_exr_channels(path, size, channels, &attrs)
@@ -204,17 +427,40 @@ pub struct Accumulation {
     pub passes: Vec<PassRecord>,
 }
 
-/// Reads an accumulation file; every error is one line naming the file.
+/// Reads an accumulation file; every error is one line naming the file. Besides the
+/// attributes, the channels are checked: exactly the six u32 channels of each listed pass
+/// (a channel re-saved as float or half has lost the f64's bits, and a merge of it would not
+/// be the render it claims to be), and every estimate finite (a NaN or infinite bit pattern
+/// is refused naming the pass and the pixel; the renderer drops non-finite samples, so none
+/// is ever written).
 pub fn read(path: &Path) -> Result<Accumulation, String> {
-    let layer = ExrLayer::read(path)?;
+    let image = exr::prelude::read_all_flat_layers_from_file(path)
+        .map_err(|e| format!("{}: cannot read EXR: {e}", path.display()))?;
     let bad = |what: &str| format!("{}: not a bdpm accumulation file ({what})", path.display());
+    let mut layers = image.layer_data.into_iter();
+    let layer = layers.next().ok_or_else(|| bad("no layer"))?;
+    if layers.next().is_some() {
+        return Err(bad("more than one layer"));
+    }
+    let attributes: Vec<(String, String)> = layer
+        .attributes
+        .other
+        .iter()
+        .filter_map(|(k, v)| match v {
+            exr::prelude::AttributeValue::Text(t) => Some((
+                k.to_string().trim_start_matches("bdpm.").to_string(),
+                t.to_string(),
+            )),
+            _ => None,
+        })
+        .collect();
+    let (width, height) = (layer.size.width(), layer.size.height());
     let attr = |k: &str| {
-        layer
-            .attributes
+        attributes
             .iter()
             .find(|(n, _)| n == k)
             .map(|(_, v)| v.as_str())
-            .ok_or_else(|| bad(&format!("no {k} attribute")))
+            .ok_or_else(|| bad(&format!("no {k} attribute; {GIVE}")))
     };
     let format = attr("accum.format")?;
     if format != FORMAT {
@@ -252,10 +498,39 @@ pub fn read(path: &Path) -> Result<Accumulation, String> {
     let identity = Identity {
         scene: PathBuf::from(attr("accum.scene")?),
         scene_hash: attr("accum.scene_hash")?.to_string(),
+        assets_hash: attr("accum.assets_hash")
+            .ok()
+            .filter(|h| !h.is_empty())
+            .map(str::to_string),
         settings_hash: attr("accum.settings_hash")?.to_string(),
         seed,
         overrides,
     };
+    // The channels by name, as u32 words; each is moved out once into its pass, so that the
+    // decoded file and the records built from it are not both held whole.
+    let expected = indices.len() * 6;
+    let found = layer.channel_data.list.len();
+    if found != expected {
+        return Err(bad(&format!(
+            "{found} channels for {} passes, which have {expected}",
+            indices.len()
+        )));
+    }
+    let mut words: std::collections::HashMap<String, Vec<u32>> = Default::default();
+    for c in layer.channel_data.list {
+        let name = c.name.to_string();
+        match c.sample_data {
+            FlatSamples::U32(v) => {
+                let _ = words.insert(name, v);
+            }
+            FlatSamples::F16(_) | FlatSamples::F32(_) => {
+                return Err(bad(&format!(
+                    "channel {name} holds floating-point samples, not the u32 halves of an f64 \
+                     (was the file re-saved by another program?)"
+                )));
+            }
+        }
+    }
     let mut passes = Vec::with_capacity(indices.len());
     for (i, &index) in indices.iter().enumerate() {
         let mut channels = Vec::with_capacity(6);
@@ -263,19 +538,33 @@ pub fn read(path: &Path) -> Result<Accumulation, String> {
             for half in ["hi", "lo"] {
                 let c = format!("p{index:06}.{name}.{half}");
                 channels.push(
-                    layer
-                        .channel(&c)
+                    words
+                        .remove(&c)
                         .ok_or_else(|| bad(&format!("pass {index} has no channel {c}")))?,
                 );
             }
         }
-        // The u32 samples come back as exact f64 integers.
         let word = |c: usize, px: usize| {
             f64::from_bits(((channels[2 * c][px] as u64) << 32) | channels[2 * c + 1][px] as u64)
         };
-        let estimates = (0..channels[0].len())
-            .map(|px| DVec3::new(word(0, px), word(1, px), word(2, px)))
-            .collect();
+        let mut estimates = Vec::with_capacity(width * height);
+        for px in 0..width * height {
+            let e = DVec3::new(word(0, px), word(1, px), word(2, px));
+            if !e.is_finite() {
+                return Err(format!(
+                    "{}: pass {index} holds a non-finite estimate ({}, {}, {}) at pixel ({}, {}) \
+                     (x, y from the top left): the file is damaged",
+                    path.display(),
+                    e.x,
+                    e.y,
+                    e.z,
+                    px % width,
+                    px / width
+                ));
+            }
+            estimates.push(e);
+        }
+        drop(channels);
         passes.push(PassRecord {
             index,
             estimates,
@@ -286,7 +575,7 @@ pub fn read(path: &Path) -> Result<Accumulation, String> {
     }
     Ok(Accumulation {
         path: path.to_path_buf(),
-        size: (layer.width, layer.height),
+        size: (width as u32, height as u32),
         identity,
         passes,
     })
@@ -319,6 +608,17 @@ pub fn combine(parts: Vec<Accumulation>) -> Result<(Accumulation, Vec<PathBuf>),
                 reference.size.0,
                 reference.size.1,
                 reference.path.display()
+            ));
+        }
+    }
+    for (i, p) in parts.iter().enumerate() {
+        let same = |q: &Accumulation| {
+            std::fs::canonicalize(&q.path).ok() == std::fs::canonicalize(&p.path).ok()
+        };
+        if parts[..i].iter().any(same) {
+            return Err(format!(
+                "{}: given twice; name each part once",
+                p.path.display()
             ));
         }
     }

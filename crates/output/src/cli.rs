@@ -22,6 +22,18 @@ macro_rules! say {
     }};
 }
 
+/// `eprintln!` that ignores a closed or failing standard error instead of panicking: the
+/// message is dropped and the command's exit code still tells what happened. The one way the
+/// driver, the lab and the signal handler write to standard error (a panic in the signal
+/// handler's thread would leave a second interrupt without effect).
+#[macro_export]
+macro_rules! say_err {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+
 /// An error for the user: one line, no backtrace.
 pub type CliResult<T> = Result<T, String>;
 

@@ -16,10 +16,13 @@ pub struct Outputs {
     pub noise_png: PathBuf,
     /// OUT.json: the run report.
     pub json: PathBuf,
+    /// OUT.accum.exr: the accumulation file, written only with `--accumulate`,
+    /// `--first-pass`, `--resume` and by `bdpm merge`.
+    pub accum: PathBuf,
 }
 
 impl Outputs {
-    /// OUT.exr, OUT.png, OUT-noise.png and OUT.json for a requested OUT(.exr).
+    /// OUT.exr, OUT.png, OUT-noise.png, OUT.json and OUT.accum.exr for a requested OUT(.exr).
     pub fn beside(exr: &Path) -> Outputs {
         let exr = exr.with_extension("exr");
         let stem = stem_of(&exr, "");
@@ -27,13 +30,24 @@ impl Outputs {
             png: exr.with_extension("png"),
             noise_png: exr.with_file_name(format!("{stem}-noise.png")),
             json: exr.with_extension("json"),
+            accum: exr.with_extension("accum.exr"),
             exr,
         }
     }
 
-    /// Every path, in the order the render writes them.
+    /// The four files every render writes, in the order the render writes them.
     pub fn all(&self) -> [&Path; 4] {
         [&self.exr, &self.png, &self.noise_png, &self.json]
+    }
+
+    /// The files this render writes: [`Outputs::all`], and the accumulation file when
+    /// `accumulate`.
+    pub fn members(&self, accumulate: bool) -> Vec<&Path> {
+        let mut v = self.all().to_vec();
+        if accumulate {
+            v.push(&self.accum);
+        }
+        v
     }
 }
 
@@ -253,15 +267,16 @@ fn same_file(_file: &fs::File, path: &Path) -> bool {
 }
 
 /// Removes the temporary files of `outputs` (our naming pattern, regular files only) that
-/// are older than `started`: leftovers of a render killed while writing. Called with the
-/// output's lock held, so no live render of this output owns them.
+/// are older than `started`: leftovers of a render killed while writing, the accumulation
+/// file's included (a render without `--accumulate` still cleans what an earlier one with it
+/// left). Called with the output's lock held, so no live render of this output owns them.
 fn remove_stale_temps(outputs: &Outputs, started: SystemTime) {
     let dir = dir_of(&outputs.exr);
     let Ok(entries) = fs::read_dir(dir) else {
         return;
     };
     let prefixes: Vec<String> = outputs
-        .all()
+        .members(true)
         .iter()
         .map(|p| format!(".{}.", file_name_of(p)))
         .collect();
@@ -279,14 +294,98 @@ fn remove_stale_temps(outputs: &Outputs, started: SystemTime) {
     }
 }
 
+/// The directory entry a rename to `path` replaces: the canonical directory joined with the
+/// file name (the last component is not followed: a rename replaces a symlink, not its
+/// target). `None` when the directory does not exist yet.
+fn entry_of(path: &Path) -> Option<PathBuf> {
+    let dir = fs::canonicalize(dir_of(path)).ok()?;
+    Some(dir.join(path.file_name()?))
+}
+
+/// Whether writing `member` (by a rename) would destroy the file read from `input`: the
+/// same directory entry, or `input` is a symlink that leads to it.
+fn clobbers(member: &Path, input: &Path) -> bool {
+    let Some(m) = entry_of(member) else {
+        return false;
+    };
+    entry_of(input).as_ref() == Some(&m) || fs::canonicalize(input).ok().as_ref() == Some(&m)
+}
+
+/// Refuses an output set that would overwrite a file the same command reads (`inputs`: the
+/// parts of a merge, the measured render of `predict`, the reference of `study`, the scene).
+/// `members` are the files the command writes. An accumulation file that the output's own
+/// accumulation file replaces (`--resume` or a merge into one of its parts, "in place") is
+/// allowed: the new file holds every pass of the old one.
+pub fn refuse_inputs(members: &[&Path], inputs: &[&Path], extends: &[&Path]) -> CheckResult {
+    for m in members {
+        for i in inputs {
+            if clobbers(m, i) && !extends.iter().any(|e| clobbers(e, i) && e == m) {
+                return Err(format!(
+                    "{}: this output would overwrite {}, which this command reads; choose \
+                     another -o",
+                    m.display(),
+                    i.display()
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The result of an output check: a one-line error naming the file.
+pub type CheckResult = Result<(), String>;
+
+/// Refuses an output whose files would replace another render's: a name ending in
+/// `.accum.exr` (the accumulation file of the set without it), `X-noise.exr` when `X.exr`
+/// exists (its preview `X-noise.png` is X's noise map), and `X.exr` when `X-noise.exr`
+/// exists (the other way round).
+fn refuse_other_sets(outputs: &Outputs) -> CheckResult {
+    let stem = stem_of(&outputs.exr, "");
+    if let Some(base) = stem.strip_suffix(".accum") {
+        return Err(format!(
+            "{}: names ending in .accum.exr are accumulation files (this one of the output {}); \
+             give the render's own name, e.g. -o {}",
+            outputs.exr.display(),
+            outputs.exr.with_file_name(format!("{base}.exr")).display(),
+            outputs.exr.with_file_name(format!("{base}.exr")).display()
+        ));
+    }
+    if let Some(base) = stem.strip_suffix("-noise") {
+        let other = outputs.exr.with_file_name(format!("{base}.exr"));
+        if fs::symlink_metadata(&other).is_ok() {
+            return Err(format!(
+                "{}: its preview {} is the noise map of the output {}; choose another -o",
+                outputs.exr.display(),
+                outputs.png.display(),
+                other.display()
+            ));
+        }
+    }
+    let other = outputs.exr.with_file_name(format!("{stem}-noise.exr"));
+    if fs::symlink_metadata(&other).is_ok() {
+        return Err(format!(
+            "{}: its noise map {} is the preview of the output {}; choose another -o",
+            outputs.exr.display(),
+            outputs.noise_png.display(),
+            other.display()
+        ));
+    }
+    Ok(())
+}
+
 /// Makes sure that a render's outputs can be written before any work is done: the requested
-/// name and each of the four files is not a directory or a device, the directory exists (it
-/// is created) and accepts a new file (a probe temporary file is created and removed), and no
-/// other render holds the output. Returns the lock, to be held until the files are in place;
-/// stale temporaries older than `started` are removed.
+/// name and each file of the set (`accumulate`: the accumulation file too) is not a
+/// directory or a device, replaces no other render's file and no file the command reads
+/// (`inputs`; see [`refuse_inputs`]), the directory exists (it is created) and accepts a
+/// temporary file under each member's name (so that a name too long for the file system
+/// shows now, not after the render), and no other render holds the output. Returns the
+/// lock, to be held until the files are in place; stale temporaries older than `started` are
+/// removed.
 pub fn claim(
     requested: &Path,
     outputs: &Outputs,
+    accumulate: bool,
+    inputs: &[&Path],
     started: SystemTime,
 ) -> Result<OutputLock, String> {
     if requested.file_name().is_none() {
@@ -296,9 +395,12 @@ pub fn claim(
         ));
     }
     check_output_name(requested, "the output")?;
-    for p in outputs.all() {
+    let members = outputs.members(accumulate);
+    for p in &members {
         check_output_name(p, "an output file")?;
     }
+    refuse_other_sets(outputs)?;
+    refuse_inputs(&members, inputs, &[&outputs.accum])?;
     let dir = dir_of(&outputs.exr);
     if fs::metadata(dir).is_ok_and(|m| !m.is_dir()) {
         return Err(format!(
@@ -308,25 +410,88 @@ pub fn claim(
     }
     ensure_parent(&outputs.exr)
         .map_err(|e| format!("{}: cannot create the output directory: {e}", dir.display()))?;
-    drop(temp_beside(&outputs.exr).map_err(|e| {
-        format!(
-            "{}: cannot write in the output directory: {e}",
-            dir.display()
-        )
-    })?);
+    for p in &members {
+        drop(temp_beside(p).map_err(|e| {
+            format!(
+                "{}: cannot write a temporary file for it in the output directory: {e}",
+                p.display()
+            )
+        })?);
+    }
     let lock = OutputLock::acquire(&outputs.exr)?;
     remove_stale_temps(outputs, started);
     Ok(lock)
 }
 
+/// A copy of the file at `target` under a temporary name beside it (a hard link where the
+/// file system allows, else a byte copy), removed when dropped; `None` when there is no file.
+fn keep_old(target: &Path) -> io::Result<Option<tempfile::TempPath>> {
+    let Ok(meta) = fs::symlink_metadata(target) else {
+        return Ok(None);
+    };
+    if !meta.is_file() {
+        return Ok(None);
+    }
+    let path = temp_beside(target)?.into_temp_path();
+    // The temporary name is unpredictable, so nobody can take it between the removal and
+    // the link; `hard_link` does not follow a symlink at the new name either.
+    fs::remove_file(&path)?;
+    if fs::hard_link(target, &path).is_err() {
+        let mut to = fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&path)?;
+        let _ = io::copy(&mut fs::File::open(target)?, &mut to)?;
+        to.sync_all()?;
+    }
+    Ok(Some(path))
+}
+
 /// Renames staged files into place in order. The caller puts the EXR last: it is the commit
 /// point of the set, and its `bdpm.run_id` matches the report's `run_id` only once every file
-/// of the run is in place. If a rename fails, the files not yet renamed are removed.
+/// of the run is in place. The old files are kept under temporary names until every rename
+/// has succeeded: if one fails (a directory or an immutable file at its name), the files
+/// already renamed are put back as they were (or removed where there was none), so the set
+/// is the old one, never a mix; the message says if that restoring failed too.
 pub fn commit_all(staged: Vec<Staged>) -> Result<(), String> {
-    for s in staged {
+    let mut olds = Vec::with_capacity(staged.len());
+    for s in &staged {
+        olds.push(keep_old(s.target()).map_err(|e| {
+            format!(
+                "{}: cannot keep the previous file while the new set is moved into place: {e}",
+                s.target().display()
+            )
+        })?);
+    }
+    let mut done: Vec<(PathBuf, Option<tempfile::TempPath>)> = Vec::new();
+    for (s, old) in staged.into_iter().zip(olds) {
         let target = s.target().to_path_buf();
-        s.commit()
-            .map_err(|e| format!("{}: {e}", target.display()))?;
+        if let Err(e) = s.commit() {
+            let mut lost = Vec::new();
+            for (t, old) in done.into_iter().rev() {
+                let restored = match old {
+                    Some(o) => o.persist(&t).map_err(|e| e.error),
+                    None => fs::remove_file(&t),
+                };
+                if restored.is_err() {
+                    lost.push(t.display().to_string());
+                }
+            }
+            return Err(if lost.is_empty() {
+                format!(
+                    "{}: {e}; the previous files of the output are back in place",
+                    target.display()
+                )
+            } else {
+                format!(
+                    "{}: {e}; and cannot put back the previous {}: the output is a mix of two \
+                     renders (compare their bdpm.run_id)",
+                    target.display(),
+                    lost.join(", ")
+                )
+            });
+        }
+        done.push((target, old));
     }
     Ok(())
 }
@@ -404,6 +569,41 @@ mod tests {
         assert_eq!(result, Err("disk full".to_string()));
         for n in names {
             assert_eq!(fs::read(dir.join(n)).expect("read"), b"old", "{n}");
+        }
+        assert!(hidden(&dir).is_empty(), "{:?}", hidden(&dir));
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    /// A rename that fails in the middle of the commit (a directory at the EXR's name) puts
+    /// the files already renamed back: the old set stays whole, a new file where there was
+    /// none is removed, and no temporary file is left.
+    #[test]
+    fn a_failed_commit_rolls_back_to_the_old_set() {
+        let dir = scratch("rollback");
+        for n in ["x.png", "x.json"] {
+            fs::write(dir.join(n), b"old").expect("write old");
+        }
+        fs::create_dir_all(dir.join("x.exr").join("inside")).expect("directory at x.exr");
+        let staged = ["x.png", "x-noise.png", "x.json", "x.exr"]
+            .iter()
+            .map(|n| stage_bytes(&dir.join(n), b"new").expect("stage"))
+            .collect();
+        let e = commit_all(staged).expect_err("the EXR's rename fails");
+        assert!(e.contains("x.exr") && e.contains("back in place"), "{e}");
+        for n in ["x.png", "x.json"] {
+            assert_eq!(fs::read(dir.join(n)).expect("read"), b"old", "{n}");
+        }
+        assert!(!dir.join("x-noise.png").exists());
+        assert!(hidden(&dir).is_empty(), "{:?}", hidden(&dir));
+        // With no failure the new set replaces the old one and the kept copies are removed.
+        fs::remove_dir_all(dir.join("x.exr")).expect("remove directory");
+        let staged = ["x.png", "x.exr"]
+            .iter()
+            .map(|n| stage_bytes(&dir.join(n), b"new").expect("stage"))
+            .collect();
+        commit_all(staged).expect("commit");
+        for n in ["x.png", "x.exr"] {
+            assert_eq!(fs::read(dir.join(n)).expect("read"), b"new", "{n}");
         }
         assert!(hidden(&dir).is_empty(), "{:?}", hidden(&dir));
         let _ = fs::remove_dir_all(&dir);

@@ -334,13 +334,24 @@ impl RunReport {
     }
 }
 
-/// The settings as EXR header attributes (`bdpm.mode`, `bdpm.seed`, …).
+/// The settings as EXR header attributes (`bdpm.mode`, `bdpm.seed`, …), and the scene's
+/// identity `bdpm.scene_hash` ([`crate::accum::scene_hash`]), which `predict --measured` and
+/// `study --reference` check, and `bdpm.estimator_hash` ([`crate::accum::estimator_hash`]),
+/// which `predict --measured` checks.
 pub fn header_attributes(
     s: &RenderSettings,
     r: &Renderer<'_>,
     radius_given: bool,
+    scene_hash: &str,
 ) -> Vec<(String, String)> {
-    let mut v = vec![("version".to_string(), env!("CARGO_PKG_VERSION").to_string())];
+    let mut v = vec![
+        ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
+        ("scene_hash".to_string(), scene_hash.to_string()),
+        (
+            "estimator_hash".to_string(),
+            crate::accum::estimator_hash(s),
+        ),
+    ];
     // The same record as the JSON report's, with the radius in use.
     v.extend(
         s.record(r.radius(), radius_given)

@@ -807,6 +807,7 @@ fn stale_temporary_files_of_the_output_are_removed() {
     for name in [
         ".S.exr.Ab3dE9xQ1z.bdpm-tmp",
         ".S.json.0123456789.bdpm-tmp",
+        ".S.accum.exr.Zz9yX8wV7u.bdpm-tmp",
         ".keep",
     ] {
         let f = std::fs::File::create(dir.path(name)).expect("create");
@@ -1388,4 +1389,602 @@ fn bad_exr_precision_is_refused() {
         .arg(dir.path("p.exr")));
     assert_one_line_error(&out, &["--exr-precision", "double"]);
     assert!(!dir.path("p.exr").exists());
+}
+
+/// Runs `cmd` with its standard output and/or error a pipe whose reader has already gone
+/// (as `bdpm … | true` or a closed terminal): every write to it fails with EPIPE. Returns
+/// the exit code and what reached the stream left open.
+fn run_with_closed(
+    cmd: &mut Command,
+    close_stdout: bool,
+    close_stderr: bool,
+) -> (Option<i32>, String) {
+    let mut child = cmd
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start bdpm");
+    if close_stdout {
+        drop(child.stdout.take());
+    }
+    if close_stderr {
+        drop(child.stderr.take());
+    }
+    let out = child.wait_with_output().expect("wait");
+    let open = if close_stdout {
+        &out.stderr
+    } else {
+        &out.stdout
+    };
+    (out.status.code(), text(open))
+}
+
+/// A closed standard output or error drops the messages and never panics (exit code 101):
+/// an error still exits with 1, a report printed by the lab with 0, and the interrupt
+/// handler, whose message also fails, still quits on a second interrupt.
+#[test]
+fn closed_standard_streams_never_panic() {
+    let dir = TempDir::new("closed");
+    let (code, _) = run_with_closed(bdpm().args(["render", "missing.toml"]), true, true);
+    assert_eq!(code, Some(1));
+    let (code, stderr) = run_with_closed(
+        bdpm()
+            .arg("bench")
+            .arg(scene("cornell-lambert.toml"))
+            .args(["--modes", "path", "--resolution", "8x8", "--photons", "500"])
+            .args(["--spp", "1", "--passes", "1", "--repeats", "1"])
+            .args(["--threads-list", "1", "-o"])
+            .arg(dir.path("b.md")),
+        true,
+        false,
+    );
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(dir.path("b.md").is_file());
+    let (code, _) = run_with_closed(
+        bdpm()
+            .arg("render")
+            .arg(scene("cornell-lambert.toml"))
+            .args([
+                "--resolution",
+                "8x8",
+                "--passes",
+                "1",
+                "--mode",
+                "path",
+                "-o",
+            ])
+            .arg(dir.path("r.exr")),
+        true,
+        true,
+    );
+    assert_eq!(code, Some(0));
+    assert!(dir.path("r.exr").is_file());
+    // Two interrupts during a long pass: the handler's message goes nowhere, and the second
+    // one quits at once without writing.
+    let out = dir.path("long.exr");
+    let mut child = bdpm()
+        .arg("render")
+        .arg(scene("cornell-lambert.toml"))
+        .args(["--resolution", "64x64", "--spp", "100000", "--passes", "2"])
+        .args(["--mode", "path", "--threads", "1", "--quiet", "-o"])
+        .arg(&out)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start bdpm");
+    drop(child.stderr.take());
+    let start = Instant::now();
+    while !dir.path(".long.exr.lock").exists() {
+        assert!(start.elapsed() < Duration::from_secs(30), "no lock file");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let kill = |c: &std::process::Child| {
+        let status = Command::new("kill")
+            .args(["-INT", &c.id().to_string()])
+            .status()
+            .expect("run kill");
+        assert!(status.success());
+    };
+    kill(&child);
+    std::thread::sleep(Duration::from_millis(300));
+    let code = interrupt(&mut child);
+    assert_eq!(code, Some(130));
+    assert!(!out.exists(), "the second interrupt wrote the outputs");
+}
+
+/// An output set never replaces a file the command reads or a member of another render's
+/// set, and every member's name (the accumulation file and the longest temporary name
+/// included) is checked before any work.
+#[test]
+fn output_sets_refuse_inputs_other_sets_and_bad_members_before_any_work() {
+    let dir = TempDir::new("sets");
+    let flags = ["--mode", "optimal", "--passes", "2"];
+    small_render(&dir.path("a.exr"), &["--passes", "2", "--accumulate"]);
+    let files = ["a.exr", "a.png", "a-noise.png", "a.json", "a.accum.exr"];
+    let before: Vec<Vec<u8>> = files
+        .iter()
+        .map(|f| std::fs::read(dir.path(f)).expect("read"))
+        .collect();
+    let render_to = |name: &str, extra: &[&str]| {
+        run(bdpm()
+            .arg("render")
+            .arg(scene("cornell-lambert.toml"))
+            .args(["--resolution", "16x16", "--photons", "2000", "--spp", "1"])
+            .args(flags)
+            .args(extra)
+            .args(["--quiet", "-o"])
+            .arg(dir.path(name)))
+    };
+    assert_one_line_error(
+        &render_to("a.accum.exr", &[]),
+        &["a.accum.exr", "accumulation"],
+    );
+    assert_one_line_error(
+        &render_to("a-noise.exr", &[]),
+        &["a-noise.png", "noise map"],
+    );
+    std::fs::write(dir.path("b-noise.exr"), b"another render").expect("write");
+    assert_one_line_error(&render_to("b.exr", &[]), &["b-noise.png", "b-noise.exr"]);
+    let accum = dir.path("a.accum.exr");
+    assert_one_line_error(
+        &merge(std::slice::from_ref(&accum), &accum),
+        &["a.accum.exr", "accumulation"],
+    );
+    let out = run(bdpm()
+        .arg("predict")
+        .arg(scene("cornell-lambert.toml"))
+        .args([
+            "--resolution",
+            "16x16",
+            "--photons",
+            "2000",
+            "--spp",
+            "1",
+            "--mode",
+            "optimal",
+        ])
+        .arg("--measured")
+        .arg(dir.path("a.exr"))
+        .arg("-o")
+        .arg(dir.path("a.exr")));
+    assert_one_line_error(&out, &["a.exr", "reads"]);
+    for (f, old) in files.iter().zip(&before) {
+        assert_eq!(
+            &std::fs::read(dir.path(f)).expect("read"),
+            old,
+            "{f} changed"
+        );
+    }
+    // A merge into one of its parts (the parts' accumulation file replaced by one holding all
+    // of its passes) stays allowed, as resuming in place does.
+    assert_success(&merge(std::slice::from_ref(&accum), &dir.path("a.exr")));
+
+    // A directory at the accumulation file's name, and a stem whose noise map's temporary
+    // name is too long for the file system (the EXR's fits): refused before the 10⁵ passes.
+    std::fs::create_dir_all(dir.path("c.accum.exr")).expect("mkdir");
+    let long = "n".repeat(228);
+    for (name, extra, needle) in [
+        ("c.exr", &["--accumulate"][..], "c.accum.exr"),
+        (&format!("{long}.exr") as &str, &[][..], "-noise.png"),
+    ] {
+        let start = Instant::now();
+        let out = run(bdpm()
+            .arg("render")
+            .arg(scene("cornell-lambert.toml"))
+            .args(["--resolution", "64x64", "--passes", "100000", "--quiet"])
+            .args(extra)
+            .arg("-o")
+            .arg(dir.path(name)));
+        assert_one_line_error(&out, &[needle]);
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "{:?}",
+            start.elapsed()
+        );
+    }
+    assert!(!dir.path("c.png").exists() && !dir.path(&format!("{long}.exr")).exists());
+    assert!(dir.hidden_files().is_empty(), "{:?}", dir.hidden_files());
+}
+
+/// Rewrites the accumulation file `from` to `to` after `change` edits its channels.
+fn edit_accumulation(
+    from: &Path,
+    to: &Path,
+    change: impl FnOnce(&mut Vec<exr::prelude::AnyChannel<exr::prelude::FlatSamples>>),
+) {
+    use exr::prelude::WritableImage as _;
+    let mut image = exr::prelude::read_all_flat_layers_from_file(from).expect("read accum");
+    let mut list = image.layer_data[0].channel_data.list.to_vec();
+    change(&mut list);
+    list.sort_by(|a, b| a.name.cmp(&b.name));
+    image.layer_data[0].channel_data.list = list.into_iter().collect();
+    image.write().to_file(to).expect("write edited accum");
+}
+
+/// The accumulation reader takes u32 channels only, exactly six per pass, and finite
+/// estimates: a file re-saved as float, with a NaN, or with a stray channel is refused with
+/// one line naming what is wrong (the pass and the pixel for a bad value).
+#[test]
+fn damaged_accumulation_files_are_refused() {
+    use exr::prelude::{AnyChannel, FlatSamples, f16};
+    let dir = TempDir::new("accum-read");
+    small_render(&dir.path("p.exr"), &["--passes", "2", "--accumulate"]);
+    let good = dir.path("p.accum.exr");
+    type Edit = Box<dyn FnOnce(&mut Vec<AnyChannel<FlatSamples>>)>;
+    let find = |list: &mut Vec<AnyChannel<FlatSamples>>, name: &str| {
+        list.iter()
+            .position(|c| c.name.to_string() == name)
+            .expect("channel")
+    };
+    let cases: Vec<(&str, Edit, Vec<&str>)> = vec![
+        (
+            "float",
+            Box::new(move |l| {
+                let i = find(l, "p000000.G.lo");
+                if let FlatSamples::U32(v) = &l[i].sample_data {
+                    l[i].sample_data = FlatSamples::F32(v.iter().map(|x| *x as f32).collect());
+                }
+            }),
+            vec!["p000000.G.lo", "floating-point"],
+        ),
+        (
+            "half",
+            Box::new(move |l| {
+                let i = find(l, "p000001.R.hi");
+                if let FlatSamples::U32(v) = &l[i].sample_data {
+                    l[i].sample_data =
+                        FlatSamples::F16(v.iter().map(|x| f16::from_f32(*x as f32)).collect());
+                }
+            }),
+            vec!["p000001.R.hi", "floating-point"],
+        ),
+        (
+            "nan",
+            Box::new(move |l| {
+                // Pixel (3, 2) of pass 1, red: the high word of a quiet NaN.
+                let i = find(l, "p000001.R.hi");
+                if let FlatSamples::U32(v) = &mut l[i].sample_data {
+                    v[2 * 16 + 3] = 0x7ff8_0000;
+                }
+            }),
+            vec!["pass 1", "pixel (3, 2)", "non-finite"],
+        ),
+        (
+            "extra",
+            Box::new(|l| {
+                let n = l[0].sample_data.len();
+                l.push(AnyChannel::new("zzz", FlatSamples::U32(vec![0; n])));
+            }),
+            vec!["13 channels", "2 passes"],
+        ),
+    ];
+    for (tag, edit, needles) in cases {
+        let bad = dir.path(&format!("{tag}.accum.exr"));
+        edit_accumulation(&good, &bad, edit);
+        let out = merge(
+            std::slice::from_ref(&bad),
+            &dir.path(&format!("m-{tag}.exr")),
+        );
+        let mut all = vec![bad.file_name().unwrap().to_str().unwrap()];
+        all.extend(needles);
+        assert_one_line_error(&out, &all);
+        assert!(!dir.path(&format!("m-{tag}.exr")).exists(), "{tag}");
+    }
+}
+
+/// `predict` reads the passes the render did (not the ones asked for) and, like `study
+/// --reference`, refuses a render of another scene, told by the scene hash in its header.
+#[test]
+fn predict_and_study_check_passes_done_and_the_scene() {
+    let dir = TempDir::new("predict-scene");
+    let settings = [
+        "--mode",
+        "optimal",
+        "--resolution",
+        "16x16",
+        "--photons",
+        "2000",
+        "--spp",
+        "1",
+        "--radius",
+        "0.02",
+    ];
+    let render = |scene_file: &str, out: &str, extra: &[&str]| {
+        let o = run(bdpm()
+            .arg("render")
+            .arg(scene(scene_file))
+            .args(settings)
+            .args(extra)
+            .args(["--quiet", "-o"])
+            .arg(dir.path(out)));
+        assert_success(&o);
+    };
+    let predict = |measured: &str| {
+        run(bdpm()
+            .arg("predict")
+            .arg(scene("cornell-lambert.toml"))
+            .args(settings)
+            .arg("--measured")
+            .arg(dir.path(measured))
+            .arg("-o")
+            .arg(dir.path("p.exr")))
+    };
+    // Stopped by its budget after one pass of 1000: V was not measured.
+    render(
+        "cornell-lambert.toml",
+        "budget.exr",
+        &["--passes", "1000", "--time-budget", "1e-9"],
+    );
+    assert_one_line_error(&predict("budget.exr"), &["budget.exr", "1 pass done"]);
+    // Three passes: the report says 3, not the scene file's pass count.
+    render("cornell-lambert.toml", "three.exr", &["--passes", "3"]);
+    assert_success(&predict("three.exr"));
+    assert_eq!(read_json(&dir.path("p.json"))["passes"], 3);
+    // Without the scene hash or the estimator hash (an older bdpm's render): not checkable.
+    for (key, needle) in [
+        ("bdpm.scene_hash", "no bdpm.scene_hash"),
+        ("bdpm.estimator_hash", "estimator hash missing"),
+    ] {
+        use exr::prelude::WritableImage as _;
+        let mut image = exr::prelude::read_all_flat_layers_from_file(dir.path("three.exr"))
+            .expect("read render");
+        let attrs = &mut image.layer_data[0].attributes.other;
+        assert!(
+            attrs.remove(&exr::prelude::Text::from(key)).is_some(),
+            "{key}"
+        );
+        image
+            .write()
+            .to_file(dir.path("stripped.exr"))
+            .expect("write stripped render");
+        assert_one_line_error(&predict("stripped.exr"), &["stripped.exr", needle]);
+    }
+    // The glossy box with the same settings: another scene.
+    render("cornell-glossy.toml", "glossy.exr", &["--passes", "3"]);
+    assert_one_line_error(&predict("glossy.exr"), &["glossy.exr", "another scene"]);
+    let out = run(bdpm()
+        .arg("study")
+        .arg(scene("cornell-lambert.toml"))
+        .args([
+            "--modes",
+            "optimal",
+            "--passes",
+            "2",
+            "--resolution",
+            "16x16",
+        ])
+        .args(["--photons", "2000", "--spp", "1", "--quiet", "--reference"])
+        .arg(dir.path("glossy.exr"))
+        .arg("-o")
+        .arg(dir.path("study")));
+    assert_one_line_error(&out, &["glossy.exr", "another scene"]);
+}
+
+/// A merge (and a resume) refuses parts rendered while a mesh the scene references was
+/// different: the scene file alone is unchanged, the glTF buffer is not.
+#[test]
+fn merge_refuses_parts_of_a_changed_mesh() {
+    let dir = TempDir::new("mesh-change");
+    let vertices = |order: [usize; 3]| {
+        let v = [[0.9f32, -0.1, -0.1], [0.9, 0.1, -0.1], [0.9, 0.0, 0.1]];
+        order
+            .iter()
+            .flat_map(|&i| v[i].iter().flat_map(|c| c.to_le_bytes()))
+            .collect::<Vec<u8>>()
+    };
+    std::fs::write(dir.path("tri.bin"), vertices([0, 1, 2])).expect("write bin");
+    let gltf = r#"{ "asset": { "version": "2.0" },
+      "buffers": [ { "byteLength": 36, "uri": "tri.bin" } ],
+      "bufferViews": [ { "buffer": 0, "byteLength": 36 } ],
+      "accessors": [ { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                       "min": [0.9, -0.1, -0.1], "max": [0.9, 0.1, 0.1] } ],
+      "meshes": [ { "primitives": [ { "attributes": { "POSITION": 0 } } ] } ],
+      "nodes": [ { "mesh": 0 } ], "scenes": [ { "nodes": [0] } ] }"#;
+    std::fs::write(dir.path("tri.gltf"), gltf).expect("write gltf");
+    let toml = dir.path("s.toml");
+    std::fs::write(
+        &toml,
+        format!("{BASE_SCENE}\n[[shape]]\ntype = \"mesh\"\nfile = \"tri.gltf\"\n"),
+    )
+    .expect("write scene");
+    let part = |k: &str, out: &str| {
+        let o = run(bdpm()
+            .arg("render")
+            .arg(&toml)
+            .args(["--first-pass", k, "--passes", "1", "--quiet", "-o"])
+            .arg(dir.path(out)));
+        assert_success(&o);
+        Exr::read(&dir.path(out)).attributes["bdpm.scene_hash"].clone()
+    };
+    let h0 = part("0", "p0.exr");
+    // The same triangle, its vertices in another order: another mesh.
+    std::fs::write(dir.path("tri.bin"), vertices([0, 2, 1])).expect("write bin");
+    let h1 = part("1", "p1.exr");
+    assert_ne!(h0, h1, "the scene hash ignores the glTF buffer");
+    let out = merge(
+        &[dir.path("p0.accum.exr"), dir.path("p1.accum.exr")],
+        &dir.path("m.exr"),
+    );
+    assert_one_line_error(&out, &["p1.accum.exr", "mesh, buffer or image"]);
+    assert!(!dir.path("m.exr").exists());
+    let out = run(bdpm()
+        .arg("render")
+        .arg(&toml)
+        .args(["--passes", "1", "--quiet", "--resume"])
+        .arg(dir.path("p0.accum.exr"))
+        .arg("-o")
+        .arg(dir.path("r.exr")));
+    assert_one_line_error(&out, &["p0.accum.exr", "mesh, buffer or image"]);
+}
+
+/// The passes a resume or a merge holds are in the memory estimate (48 bytes per pixel per
+/// pass), so a limit that a plain render of the same settings fits is refused when the
+/// held passes do not fit; `merge` takes `--max-memory`.
+#[test]
+fn held_passes_count_in_the_memory_estimate() {
+    let dir = TempDir::new("held-memory");
+    let flags = [
+        "--mode",
+        "path",
+        "--resolution",
+        "64x64",
+        "--spp",
+        "1",
+        "--quiet",
+    ];
+    let render = |extra: &[&str], out: &str| {
+        run(bdpm()
+            .arg("render")
+            .arg(scene("cornell-lambert.toml"))
+            .args(flags)
+            .args(extra)
+            .arg("-o")
+            .arg(dir.path(out)))
+    };
+    assert_success(&render(&["--passes", "40", "--accumulate"], "h.exr"));
+    assert_success(&render(&["--passes", "1"], "plain.exr"));
+    let plain = read_json(&dir.path("plain.json"))["memory"]["estimate_bytes"]
+        .as_u64()
+        .expect("estimate");
+    // 40 held passes + 1 rendered: 41 × 4096 pixels × 48 B ≈ 8.1 MB, over a 4 MB margin.
+    let limit = (plain + (4 << 20)).to_string();
+    let accum = dir.path("h.accum.exr");
+    let out = render(
+        &[
+            "--passes",
+            "1",
+            "--resume",
+            accum.to_str().unwrap(),
+            "--max-memory",
+            &limit,
+        ],
+        "r.exr",
+    );
+    assert_one_line_error(
+        &out,
+        &["passes kept for the accumulation file", "--max-memory"],
+    );
+    assert!(!dir.path("r.exr").exists());
+    let out = run(bdpm()
+        .arg("merge")
+        .arg(&accum)
+        .args(["--quiet", "--max-memory", &limit, "-o"])
+        .arg(dir.path("m.exr")));
+    assert_one_line_error(
+        &out,
+        &["passes kept for the accumulation file", "merge fewer parts"],
+    );
+    // Below what the passes alone need (7.9 MB): refused from the header, before reading.
+    let out = run(bdpm()
+        .arg("merge")
+        .arg(&accum)
+        .args(["--quiet", "--max-memory", "4M", "-o"])
+        .arg(dir.path("m.exr")));
+    assert_one_line_error(
+        &out,
+        &["h.accum.exr", "passes to read", "merge fewer parts"],
+    );
+    let out = run(bdpm()
+        .arg("merge")
+        .arg(&accum)
+        .args(["--quiet", "--max-memory", "4G", "-o"])
+        .arg(dir.path("m.exr")));
+    assert_success(&out);
+    let items = read_json(&dir.path("m.json"))["memory"]["items"].clone();
+    let kept = items
+        .as_array()
+        .expect("items")
+        .iter()
+        .find(|i| i["name"] == "passes kept for the accumulation file")
+        .and_then(|i| i["bytes"].as_u64());
+    assert_eq!(kept, Some(40 * 64 * 64 * 48));
+}
+
+/// An interrupt during a merge either stops it with nothing written (exit 130) or, once the
+/// files are being written, lets it complete as a merge that was not interrupted (exit 0,
+/// `interrupted: false`): never a complete merge reported as interrupted.
+#[test]
+fn an_interrupted_merge_reports_what_it_did() {
+    let dir = TempDir::new("merge-int");
+    let flags = [
+        "--mode",
+        "path",
+        "--resolution",
+        "64x64",
+        "--spp",
+        "1",
+        "--quiet",
+    ];
+    let o = run(bdpm()
+        .arg("render")
+        .arg(scene("cornell-lambert.toml"))
+        .args(flags)
+        .args(["--passes", "200", "--accumulate", "-o"])
+        .arg(dir.path("h.exr")));
+    assert_success(&o);
+    for delay in [50, 400] {
+        let out = dir.path(&format!("m{delay}.exr"));
+        let mut child = bdpm()
+            .arg("merge")
+            .arg(dir.path("h.accum.exr"))
+            .args(["--quiet", "-o"])
+            .arg(&out)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start merge");
+        std::thread::sleep(Duration::from_millis(delay));
+        let code = interrupt(&mut child);
+        match code {
+            Some(130) => assert!(
+                !out.exists(),
+                "an interrupted merge wrote {}",
+                out.display()
+            ),
+            Some(0) => {
+                let json = read_json(&out.with_extension("json"));
+                assert_eq!(json["interrupted"], false);
+                assert_eq!(json["passes_done"], 200);
+            }
+            other => panic!("merge exit code {other:?}"),
+        }
+    }
+}
+
+/// Messages of `merge` and `--resume` that name the problem: a missing part list, an image
+/// given instead of its accumulation file, a part given twice, and settings that differ
+/// (named as the flags that differ, not only as hashes).
+#[test]
+fn merge_and_resume_messages_name_the_problem() {
+    let dir = TempDir::new("merge-messages");
+    small_render(&dir.path("a.exr"), &["--passes", "2", "--accumulate"]);
+    let accum = dir.path("a.accum.exr");
+    let out = run(bdpm().args(["merge", "-o"]).arg(dir.path("m.exr")));
+    assert_one_line_error(&out, &["not provided: <PART.accum.exr>"]);
+    assert_one_line_error(
+        &merge(&[dir.path("a.exr")], &dir.path("m.exr")),
+        &[
+            "a.exr",
+            "not a bdpm accumulation file",
+            "render --accumulate",
+        ],
+    );
+    let again = dir.path(".").join("a.accum.exr");
+    assert_one_line_error(
+        &merge(&[accum.clone(), again], &dir.path("m.exr")),
+        &["a.accum.exr", "given twice"],
+    );
+    let out = run(bdpm()
+        .arg("render")
+        .arg(scene("cornell-lambert.toml"))
+        .args(["--resolution", "8x8", "--photons", "2000", "--spp", "1"])
+        .args(["--mode", "optimal", "--quiet", "--resume"])
+        .arg(&accum)
+        .arg("-o")
+        .arg(dir.path("r.exr")));
+    assert_one_line_error(
+        &out,
+        &["settings differ", "--resolution 16x16", "--resolution 8x8"],
+    );
 }

@@ -4,4 +4,5 @@
 //! per package instead of one per file.
 
 mod cli;
+mod scripts;
 mod study;
