@@ -376,6 +376,23 @@ fn markdown(
     s
 }
 
+/// The preview file of a `--modes` entry: its name with every character but letters, digits,
+/// '.', '_' and '-' replaced by '_' (an entry such as `balance:sampler=independent` has ':'
+/// and '=', which do not belong in file names), and `.png`.
+fn preview_name(entry: &str) -> String {
+    let stem: String = entry
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || "._-".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    format!("{stem}.png")
+}
+
 /// Runs the subcommand.
 pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
     if args.overrides.mode.is_some() {
@@ -402,8 +419,10 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
     // The reference.
     let hash = scene_hash(&args.scene, &loaded.report.gltf_files)?;
     if let Some(path) = &args.reference {
-        let mut members: Vec<PathBuf> =
-            names.iter().map(|n| dir.join(format!("{n}.png"))).collect();
+        let mut members: Vec<PathBuf> = variants
+            .iter()
+            .map(|v| dir.join(preview_name(&v.name)))
+            .collect();
         members.extend(["study.csv", "study.md"].map(|n| dir.join(n)));
         for stem in ["error-vs-time", "sqrt-v"] {
             members.extend(["png", "svg"].map(|e| dir.join(stem).with_extension(e)));
