@@ -584,19 +584,7 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
         let rel_v = variance
             .as_ref()
             .map_or(f64::NAN, |v| rel_mean(v, &ref_lum));
-        // A variant's name has ':' and '=' (`balance:sampler=independent`): not in file names.
-        let file_name: String = m
-            .name
-            .chars()
-            .map(|c| {
-                if c.is_ascii_alphanumeric() || "._-".contains(c) {
-                    c
-                } else {
-                    '_'
-                }
-            })
-            .collect();
-        let preview = dir.join(format!("{file_name}.png"));
+        let preview = dir.join(preview_name(&m.name));
         write_png(&preview, &m.film).map_err(|e| format!("{}: {e}", preview.display()))?;
         files.push(preview.display().to_string());
         let run = ModeRun {
