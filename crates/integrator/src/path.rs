@@ -34,7 +34,7 @@ pub fn trace_path(
         if wo_local.z <= 0.0 {
             break;
         }
-        let Some(s) = scene.bdf(sh.material).sample(wo_local, rng.uniform3()) else {
+        let Some(s) = scene.bdf_at(&sh).sample(wo_local, rng.uniform3()) else {
             break;
         };
         let wi = sh.frame.to_world(s.wi);
