@@ -14,4 +14,5 @@ mod predict;
 mod seams;
 mod stages;
 mod stiff;
+mod textures;
 mod weight_inputs;

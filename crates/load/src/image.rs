@@ -114,3 +114,59 @@ fn decode_jpeg(bytes: &[u8]) -> Result<Decoded, String> {
         texels: texels(&samples, 3),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 16 × 8 texels of sRGB (200, 100, 50), written by libjpeg-turbo's
+    /// `cjpeg -quality 100` from a PPM (djpeg reads back exactly those bytes).
+    const SOLID_JPEG: &[u8] = include_bytes!("../tests/data/solid-200-100-50.jpg");
+
+    fn srgb(byte: u8) -> f32 {
+        srgb_to_linear(f32::from(byte) / 255.0)
+    }
+
+    #[test]
+    fn jpeg_decodes_to_linear_rgb() {
+        let d = decode(SOLID_JPEG).expect("decodes");
+        assert_eq!((d.width, d.height, d.texels.len()), (16, 8, 128));
+        let want = Vec3::new(srgb(200), srgb(100), srgb(50));
+        for t in &d.texels {
+            // Baseline JPEG at quality 100 may be off by one code value.
+            assert!((*t - want).abs().max_element() < 0.01, "{t} vs {want}");
+        }
+    }
+
+    #[test]
+    fn png_grey_and_rgba_decode_to_linear_rgb() {
+        let png = |color, bytes: &[u8]| {
+            let mut out = Vec::new();
+            let mut e = png::Encoder::new(&mut out, 2, 1);
+            e.set_color(color);
+            e.set_depth(png::BitDepth::Eight);
+            let mut w = e.write_header().expect("header");
+            w.write_image_data(bytes).expect("data");
+            w.finish().expect("end");
+            out
+        };
+        let grey = decode(&png(png::ColorType::Grayscale, &[0, 188])).expect("grey");
+        assert_eq!(grey.texels, vec![Vec3::ZERO, Vec3::splat(srgb(188))]);
+        let rgba =
+            decode(&png(png::ColorType::Rgba, &[255, 0, 10, 0, 1, 2, 3, 255])).expect("rgba");
+        assert_eq!(
+            rgba.texels,
+            vec![
+                Vec3::new(1.0, 0.0, srgb(10)),
+                Vec3::new(srgb(1), srgb(2), srgb(3))
+            ]
+        );
+    }
+
+    #[test]
+    fn other_bytes_are_an_error_not_a_panic() {
+        assert!(decode(b"GIF89a").is_err());
+        assert!(decode(&SOLID_JPEG[..100]).is_err());
+        assert!(decode(b"\x89PNG\r\n\x1a\n\0\0").is_err());
+    }
+}
