@@ -32,7 +32,7 @@ passes = 16
 photons = 1_000_000
 spp = 4
 seed = 1
-mode = "balance"
+mode = "balance"      # `light` wins at this radius; `bdd0` at 4 mm (docs/results.md)
 output = "out/caustic-ring.exr"
 
 [camera]
