@@ -93,6 +93,19 @@ impl Bdf {
         })
     }
 
+    /// This model with its Lambert albedo replaced by `kd` (a texture's value at a hit): the
+    /// lobe (g_r, Δ and its shared tables) stays. `kd` must be finite and in [0, 1] with
+    /// kd + g_r ≤ 1 per channel, which holds for kd = (the material's kd) × (a texel in
+    /// [0, 1]); it is not checked again on this per-hit path.
+    pub fn with_kd(&self, kd: Vec3) -> Self {
+        debug_assert!(check_albedo("kd", kd).is_ok());
+        Self {
+            kd,
+            luminance_kd: luminance(kd),
+            ..self.clone()
+        }
+    }
+
     /// The Lambert albedo kd.
     pub fn kd(&self) -> Vec3 {
         self.kd

@@ -1,5 +1,6 @@
 //! The BDPM mix of method.md §2: direct light at x₀, photons merged at x₀ weighted per photon
 //! by 1 − w₁(x₀, y_p), and the camera's second vertex x₁ weighted by w₁(x₀, x₁).
+use std::borrow::Cow;
 use std::f32::consts::PI;
 
 use bdpm_bdf::{Bdf, Outgoing, luminance};
@@ -138,7 +139,8 @@ pub(crate) struct FirstVertex<'s> {
     pub(crate) u: Vec3,
     /// The BDF's data for outgoing direction u, shared by every sample and pdf at x₀.
     pub(crate) out: Outgoing,
-    pub(crate) bdf: &'s Bdf,
+    /// The BDF at x₀ (kd from its texture where the material has one).
+    pub(crate) bdf: Cow<'s, Bdf>,
     /// Luminance of the directional albedo µ(u; x₀).
     pub(crate) albedo: f32,
     /// `camis` only (else 0): its acceptance area A at x₀'s distance from the camera, m².
@@ -175,7 +177,7 @@ impl<'a> Mix<'a> {
         if u_local.z <= 0.0 {
             return None;
         }
-        let bdf = self.scene.bdf(sh.material);
+        let bdf = self.scene.bdf_at(&sh);
         let out = bdf.outgoing(u_local);
         let (acceptance_area, primary_density) = if self.heuristic == Heuristic::Camis {
             self.primary_terms(&sh, u)
@@ -186,8 +188,8 @@ impl<'a> Mix<'a> {
             sh,
             u,
             out,
-            bdf,
             albedo: luminance(bdf.albedo_at(&out)),
+            bdf,
             acceptance_area,
             primary_density,
         })
@@ -236,7 +238,7 @@ impl<'a> Mix<'a> {
         };
         let cached = self
             .cache_needed()
-            .map(|cache| slot.map_or((0.0, 0.0), |s| cache.at(s)));
+            .map(|cache| slot.map_or((0.0, 0.0), |s| self.cache_read(cache, s, x1)));
         self.pair_with(x0, x1, f0, direct, cached)
     }
 
@@ -286,9 +288,9 @@ impl<'a> Mix<'a> {
         let cos0 = x0.sh.ng.dot(v).abs();
         let p_c = x0.bdf.pdf_at(&x0.out, x0.sh.frame.to_local(v)) * cos1 / dist2;
         let frame1 = Frame::from_normal(x1.n);
-        let bdf1 = self.scene.bdf(x1.material);
+        let bdf1 = self.scene.bdf_at_vertex(x1);
         let in_l = bdf1.outgoing(frame1.to_local(incoming));
-        let q = survival_at(bdf1, &in_l);
+        let q = survival_at(&bdf1, &in_l);
         let p_l = q * bdf1.pdf_at(&in_l, frame1.to_local(-v)) * cos0 / dist2;
         (p_c as f64, p_l as f64)
     }
@@ -298,7 +300,7 @@ impl<'a> Mix<'a> {
     /// the geometric-normal frame: the same evaluation for the camera's x₁ and a photon's
     /// previous vertex, so both techniques see the same weight (method.md §2).
     fn x1_scattering(&self, x1: &WeightVertex, incoming: Vec3, v: Vec3) -> f64 {
-        let bdf = self.scene.bdf(x1.material);
+        let bdf = self.scene.bdf_at_vertex(x1);
         if bdf.is_lambert() {
             // The BDF's own test without the frame: the local z of a direction is its dot
             // with the normal, and finite directions stay finite in any orthonormal frame.
@@ -347,7 +349,7 @@ impl<'a> Mix<'a> {
             }
             let dir = d / d2.sqrt();
             let frame = Frame::from_normal(y.at.n);
-            let bdf = self.scene.bdf(y.at.material);
+            let bdf = self.scene.bdf_at_vertex(&y.at);
             let out = bdf.outgoing(frame.to_local(y.incoming));
             let p = y.survival * bdf.pdf_at(&out, frame.to_local(dir)) * to_n.dot(dir).abs() / d2;
             beta *= acceptance_probability(p as f64, area);
@@ -399,6 +401,18 @@ impl<'a> Mix<'a> {
         (self.scene.light_probability(light) / (4.0 * PI) * cos / d2) as f64
     }
 
+    /// The cache's (L_d, b) at `slot` for the vertex `x1`. A Lambert-only cache derives b
+    /// from the triangle's kd (its material's); where the material is textured, b is
+    /// kd/π·L_d with the kd at the actual point instead.
+    fn cache_read(&self, cache: &RadianceCache, slot: CacheSlot, x1: &WeightVertex) -> (f32, f32) {
+        let (ld, b) = cache.at(slot);
+        if self.scene.texture(x1.material).is_some() && !cache.stats().stores_b {
+            let kd = self.scene.kd_at(x1.material, x1.prim, x1.bary);
+            return (ld, luminance(kd) * std::f32::consts::FRAC_1_PI * ld);
+        }
+        (ld, b)
+    }
+
     /// The radiance cache, when the mode's weights read it.
     fn cache_needed(&self) -> Option<&'a RadianceCache> {
         self.cache.filter(|_| self.needs.radiance_cache)
@@ -446,7 +460,7 @@ impl<'a> Mix<'a> {
                 };
                 let (ld, b) = self.cache_needed().map_or((0.0, 0.0), |c| {
                     self.cache_slot(y.prim, y.p, y.n)
-                        .map_or((0.0, 0.0), |s| c.at(s))
+                        .map_or((0.0, 0.0), |s| self.cache_read(c, s, &y))
                 });
                 [l0, ld, b]
             })

@@ -49,7 +49,7 @@ pub(crate) fn trace_path_with_first(
         }
         let u = rng.uniform3();
         let u = first.take().unwrap_or(u);
-        let Some(s) = scene.bdf(sh.material).sample(wo_local, u) else {
+        let Some(s) = scene.bdf_at(&sh).sample(wo_local, u) else {
             break;
         };
         let wi = sh.frame.to_world(s.wi);

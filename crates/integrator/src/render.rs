@@ -682,7 +682,7 @@ pub fn first_hit_layers(scene: &Scene, settings: &RenderSettings) -> FirstHitLay
                 };
                 let wo = -dir;
                 let sh = scene.shade(&hit, wo);
-                let a = scene.bdf(sh.material).albedo(sh.frame.to_local(wo));
+                let a = scene.bdf_at(&sh).albedo(sh.frame.to_local(wo));
                 albedo += a.clamp(Vec3::ZERO, Vec3::ONE).as_dvec3();
                 normal += sh.frame.n.as_dvec3();
             }

@@ -6,9 +6,13 @@ use std::path::{Path, PathBuf};
 
 use bdpm_bdf::Bdf;
 use bdpm_geometry::{Geometry, GeometryError, TriangleMesh};
-use bdpm_scene::{Camera, CameraError, Material, PointLight, Scene, SceneError};
+use std::sync::Arc;
+
+use bdpm_scene::{
+    Camera, CameraError, Material, PointLight, Scene, SceneError, SceneTextures, Texture,
+};
 use bdpm_settings::{Mode, NoiseModel, RenderSettings, Sampler, check_radius, default_radius};
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec2, Vec3};
 
 use crate::gltf_mesh::{Origin, load_gltf};
 use crate::schema::{CameraDef, MaterialDef, Point, RenderDef, SceneFile, ShapeDef, Triple};
@@ -201,6 +205,8 @@ pub(crate) struct Materials {
     list: Vec<Material>,
     by_name: HashMap<String, u32>,
     gltf_default: Option<u32>,
+    /// Base-colour textures by material index (shorter than `list` where the rest have none).
+    textures: Vec<Option<Arc<Texture>>>,
 }
 
 impl Materials {
@@ -214,6 +220,15 @@ impl Materials {
         let bdf = Bdf::lambert(kd).map_err(|e| e.to_string())?;
         self.list.push(Material { name, bdf });
         Ok(self.list.len() as u32 - 1)
+    }
+
+    /// Gives material `m` a base-colour texture.
+    pub(crate) fn set_texture(&mut self, m: u32, texture: Arc<Texture>) {
+        let m = m as usize;
+        if self.textures.len() <= m {
+            self.textures.resize(m + 1, None);
+        }
+        self.textures[m] = Some(texture);
     }
 
     /// The material of glTF primitives without one: Lambert, kd = 0.8 in every channel.
@@ -264,6 +279,8 @@ pub(crate) fn build(
 
     let mut parts: Vec<TriangleMesh> = Vec::with_capacity(file.shape.len());
     let mut total_triangles: u64 = 0;
+    // Texture coordinates per triangle, in the order `merge` concatenates the parts.
+    let mut texcoords: Vec<[Vec2; 3]> = Vec::new();
     for (i, shape) in file.shape.iter().enumerate() {
         let prefix = format!("shape[{i}]");
         let mut mesh = TriangleMesh::default();
@@ -394,11 +411,18 @@ pub(crate) fn build(
                 report.skipped_lights += part.skipped_lights;
                 report.skipped_cameras += part.skipped_cameras;
                 report.textured_materials += part.textured_materials;
+                report.textures += part.textures;
+                report.other_textures += part.other_textures;
+                texcoords.extend_from_slice(&part.texcoords);
                 report.flat_primitives += part.flat_primitives;
                 lights.extend(part.lights);
                 mesh = part.mesh;
             }
         }
+        texcoords.resize(
+            texcoords.len().max(total_of(&parts) + mesh.indices.len()),
+            [Vec2::ZERO; 3],
+        );
         if let Some(k) = mesh.positions.iter().position(|p| !p.is_finite()) {
             return Err(ctx.bad(
                 &prefix,
@@ -461,19 +485,27 @@ pub(crate) fn build(
     report.lights = lights.len();
 
     let light_count = lights.len();
-    let scene = Scene::new(geometry, materials.list, lights, camera).map_err(|e| match e {
-        SceneError::NoLight if light_count == 0 => ctx.bad(
-            "light",
-            "the scene has no light; add a [[light]] with position and flux",
-        ),
-        SceneError::NoLight => ctx.bad(
-            "light",
-            "every light has zero flux; the image would be black",
-        ),
-        SceneError::BadLight { index } => ctx.bad(format!("light[{index}]"), e.to_string()),
-        SceneError::BadCamera(why) => ctx.bad("camera", why.to_string()),
-        SceneError::MissingMaterial { .. } => ctx.bad("shape", e.to_string()),
-    })?;
+    let textures = SceneTextures {
+        base_colour: materials.textures,
+        texcoords,
+    };
+    let scene = Scene::new(geometry, materials.list, lights, camera)
+        .and_then(|s| s.with_textures(textures))
+        .map_err(|e| match e {
+            SceneError::NoLight if light_count == 0 => ctx.bad(
+                "light",
+                "the scene has no light; add a [[light]] with position and flux",
+            ),
+            SceneError::NoLight => ctx.bad(
+                "light",
+                "every light has zero flux; the image would be black",
+            ),
+            SceneError::BadLight { index } => ctx.bad(format!("light[{index}]"), e.to_string()),
+            SceneError::BadCamera(why) => ctx.bad("camera", why.to_string()),
+            SceneError::MissingMaterial { .. } | SceneError::BadTextures { .. } => {
+                ctx.bad("shape", e.to_string())
+            }
+        })?;
     Ok(LoadedScene {
         scene,
         settings,
@@ -527,6 +559,7 @@ fn materials(
         list: Vec::with_capacity(defs.len()),
         by_name: HashMap::new(),
         gltf_default: None,
+        textures: Vec::new(),
     };
     for (name, def) in defs {
         let prefix = format!("material.{name}");
@@ -719,6 +752,11 @@ fn camera(
 
 /// Joins the parts into one mesh. Normals are kept per vertex (zero = flat) if any part has
 /// them, so the result does not depend on the order of the shapes.
+/// Triangles in `parts`.
+fn total_of(parts: &[TriangleMesh]) -> usize {
+    parts.iter().map(|p| p.indices.len()).sum()
+}
+
 fn merge(ctx: &Ctx<'_>, parts: Vec<TriangleMesh>) -> Result<TriangleMesh, LoadError> {
     let vertices: usize = parts.iter().map(|p| p.positions.len()).sum();
     if vertices > u32::MAX as usize {

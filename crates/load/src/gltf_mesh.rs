@@ -9,11 +9,12 @@
 use std::collections::HashMap;
 use std::f32::consts::PI;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use base64::Engine;
 use bdpm_geometry::TriangleMesh;
-use bdpm_scene::PointLight;
-use glam::{Mat3, Mat4, Vec3};
+use bdpm_scene::{PointLight, Texture, Wrap};
+use glam::{Mat3, Mat4, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::json::extensions::scene::khr_lights_punctual::Type as LightType;
 use gltf::json::validation::Checked;
@@ -43,8 +44,16 @@ pub(crate) struct GltfPart {
     pub(crate) skipped_lights: usize,
     /// Nodes with a camera: ignored.
     pub(crate) skipped_cameras: usize,
-    /// Materials used by this file's primitives that have a base-colour texture (ignored).
+    /// Texture coordinates of each triangle of `mesh`, in its order (zero where the
+    /// material has no texture).
+    pub(crate) texcoords: Vec<[Vec2; 3]>,
+    /// Materials made from this file that use a base-colour texture.
     pub(crate) textured_materials: usize,
+    /// Distinct base-colour images decoded (one per image and sampler).
+    pub(crate) textures: usize,
+    /// Materials made from this file with normal, occlusion, emissive or metallic-roughness
+    /// textures, which are ignored.
+    pub(crate) other_textures: usize,
     /// Triangle primitives without normals, shaded flat as glTF requires.
     pub(crate) flat_primitives: usize,
 }
@@ -122,7 +131,8 @@ pub(crate) fn load_gltf(
     };
 
     let mut part = GltfPart::default();
-    let mut material_map: HashMap<usize, u32> = HashMap::new();
+    let mut material_map: HashMap<usize, (u32, Option<u32>)> = HashMap::new();
+    let mut images: HashMap<(usize, Wrap, Wrap), Arc<Texture>> = HashMap::new();
     let mut stack: Vec<(Node<'_>, Mat4, usize)> =
         roots.into_iter().rev().map(|n| (n, post, 0)).collect();
     let mut visits = 0;
@@ -149,17 +159,18 @@ pub(crate) fn load_gltf(
                         continue;
                     }
                 }
-                let m = match material {
-                    Some(m) => m,
-                    None => primitive_material(
-                        origin,
-                        &prim,
-                        &mut material_map,
-                        materials,
-                        &mut part.textured_materials,
-                    )?,
+                let (m, tex_set) = match material {
+                    Some(m) => (m, None),
+                    None => {
+                        let mut seen = Seen {
+                            materials: &mut material_map,
+                            images: &mut images,
+                            part: &mut part,
+                        };
+                        primitive_material(origin, &prim, &buffers, &mut seen, materials)?
+                    }
                 };
-                add_primitive(origin, &what, &prim, &buffers, world, m, &mut part)?;
+                add_primitive(origin, &what, &prim, &buffers, world, m, tex_set, &mut part)?;
             }
         }
         if doc
@@ -225,29 +236,43 @@ fn node_light<'a>(
         .get(index)
 }
 
-/// The scene material of a primitive: the TOML material of the same name if there is one,
-/// otherwise a Lambert material from the base colour, or the shared default (kd = 0.8) when
-/// the primitive has none. A material with a base-colour texture is counted in `textured`
-/// (once, when first met): the texture is ignored.
+/// What one file's walk has met so far: its materials (scene index and the texture-coordinate
+/// set of their base-colour texture), its decoded images, and the counts in `part`.
+struct Seen<'a> {
+    materials: &'a mut HashMap<usize, (u32, Option<u32>)>,
+    images: &'a mut HashMap<(usize, Wrap, Wrap), Arc<Texture>>,
+    part: &'a mut GltfPart,
+}
+
+/// The scene material of a primitive and the TEXCOORD set its texture reads: the TOML
+/// material of the same name if there is one (used as it is, without a texture), otherwise a
+/// Lambert material with kd = baseColorFactor × the base-colour texture if it has one, or the
+/// shared default (kd = 0.8) when the primitive has none. Materials are counted once, when
+/// first met.
 fn primitive_material(
     origin: &Origin<'_>,
     prim: &gltf::Primitive<'_>,
-    map: &mut HashMap<usize, u32>,
+    buffers: &[Vec<u8>],
+    seen: &mut Seen<'_>,
     materials: &mut Materials,
-    textured: &mut usize,
-) -> Result<u32, LoadError> {
+) -> Result<(u32, Option<u32>), LoadError> {
     let mat = prim.material();
     let Some(index) = mat.index() else {
-        return materials.gltf_default();
+        return Ok((materials.gltf_default()?, None));
     };
-    if let Some(&m) = map.get(&index) {
+    if let Some(&m) = seen.materials.get(&index) {
         return Ok(m);
     }
     let m = if let Some(m) = mat.name().and_then(|name| materials.lookup(name)) {
-        m
+        (m, None)
     } else {
-        if mat.pbr_metallic_roughness().base_color_texture().is_some() {
-            *textured += 1;
+        let pbr = mat.pbr_metallic_roughness();
+        if mat.normal_texture().is_some()
+            || mat.occlusion_texture().is_some()
+            || mat.emissive_texture().is_some()
+            || pbr.metallic_roughness_texture().is_some()
+        {
+            seen.part.other_textures += 1;
         }
         let name = match mat.name() {
             Some(name) => name.to_string(),
@@ -260,15 +285,109 @@ fn primitive_material(
                 "material {index} ('{name}'): baseColorFactor {kd} has a channel outside [0, 1]"
             )));
         }
-        materials
+        let m = materials
             .add_lambert(name, kd)
-            .map_err(|e| origin.err(format!("material {index}: {e}")))?
+            .map_err(|e| origin.err(format!("material {index}: {e}")))?;
+        match pbr.base_color_texture() {
+            Some(info) => {
+                let texture = base_colour_texture(origin, index, &info.texture(), buffers, seen)?;
+                materials.set_texture(m, texture);
+                seen.part.textured_materials += 1;
+                (m, Some(info.tex_coord()))
+            }
+            None => (m, None),
+        }
     };
-    let _ = map.insert(index, m);
+    let _ = seen.materials.insert(index, m);
     Ok(m)
 }
 
-/// Appends one triangle primitive, transformed by `world`, to `part`.
+/// The decoded image of a base-colour texture with its sampler's wrap modes (decoded once per
+/// image and sampler). The image is a PNG or JPEG file next to the glTF file, a base64
+/// `data:` URI, or a bufferView (GLB).
+fn base_colour_texture(
+    origin: &Origin<'_>,
+    material: usize,
+    texture: &gltf::Texture<'_>,
+    buffers: &[Vec<u8>],
+    seen: &mut Seen<'_>,
+) -> Result<Arc<Texture>, LoadError> {
+    let wrap = |w: gltf::texture::WrappingMode| match w {
+        gltf::texture::WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+        gltf::texture::WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+        gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+    };
+    let sampler = texture.sampler();
+    let (wrap_u, wrap_v) = (wrap(sampler.wrap_s()), wrap(sampler.wrap_t()));
+    let image = texture.source();
+    let key = (image.index(), wrap_u, wrap_v);
+    if let Some(t) = seen.images.get(&key) {
+        return Ok(Arc::clone(t));
+    }
+    let what = format!(
+        "material {material}: base-colour texture {} (image {})",
+        texture.index(),
+        image.index()
+    );
+    let err = |m: String| origin.err(format!("{what}: {m}"));
+    let bytes: Vec<u8> = match image.source() {
+        gltf::image::Source::View { view, .. } => {
+            let data = buffers
+                .get(view.buffer().index())
+                .ok_or_else(|| err("its bufferView's buffer is missing".into()))?;
+            let end = view.offset().checked_add(view.length());
+            match end {
+                Some(end) if end <= data.len() => data[view.offset()..end].to_vec(),
+                _ => {
+                    return Err(err(format!(
+                        "bufferView {} reaches past the end of buffer {}",
+                        view.index(),
+                        view.buffer().index()
+                    )));
+                }
+            }
+        }
+        gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => {
+            let (header, payload) = uri
+                .split_once(',')
+                .ok_or_else(|| err("malformed data URI".into()))?;
+            if !header.ends_with(";base64") {
+                return Err(err("only base64 data URIs are supported".into()));
+            }
+            base64::engine::general_purpose::STANDARD
+                .decode(payload)
+                .map_err(|e| err(format!("bad base64 in data URI: {e}")))?
+        }
+        gltf::image::Source::Uri { uri, .. } => {
+            let dir = origin.path.parent().unwrap_or(Path::new(""));
+            let file = crate::files::confined_uri(dir, uri).map_err(|e| err(e.to_string()))?;
+            crate::files::read_regular(&file, crate::limits::MAX_GLTF_BYTES, "texture image")
+                .map_err(|message| LoadError::Gltf {
+                    path: file.clone(),
+                    field: format!("{}, {what} of {}", origin.field, origin.path.display()),
+                    message,
+                })?
+        }
+    };
+    let decoded = crate::image::decode(&bytes).map_err(err)?;
+    let texture = Texture::new(
+        decoded.width,
+        decoded.height,
+        decoded.texels,
+        wrap_u,
+        wrap_v,
+    )
+    .map_err(|e| err(e.to_string()))?;
+    let texture = Arc::new(texture);
+    let _ = seen.images.insert(key, Arc::clone(&texture));
+    seen.part.textures += 1;
+    Ok(texture)
+}
+
+/// Appends one triangle primitive, transformed by `world`, to `part`, with the texture
+/// coordinates of set `tex_set` when its material has a texture (zero when the primitive
+/// lacks that set).
+#[allow(clippy::too_many_arguments)]
 fn add_primitive(
     origin: &Origin<'_>,
     what: &str,
@@ -276,6 +395,7 @@ fn add_primitive(
     buffers: &[Vec<u8>],
     world: Mat4,
     material: u32,
+    tex_set: Option<u32>,
     part: &mut GltfPart,
 ) -> Result<(), LoadError> {
     let err = |m: String| origin.err(format!("{what}: {m}"));
@@ -337,6 +457,33 @@ fn add_primitive(
         _ => Vec::new(),
     };
 
+    let texcoords: Vec<Vec2> =
+        match tex_set.and_then(|set| prim.get(&Semantic::TexCoords(set)).map(|acc| (set, acc))) {
+            Some((set, acc)) if acc.count() > 0 => {
+                check_accessor(
+                    &acc,
+                    &[DataType::F32, DataType::U8, DataType::U16],
+                    Dimensions::Vec2,
+                    buffers,
+                )
+                .map_err(|m| err(format!("TEXCOORD_{set}: {m}")))?;
+                if acc.count() != positions.len() {
+                    return Err(err(format!(
+                        "{} texture coordinates for {} positions",
+                        acc.count(),
+                        positions.len()
+                    )));
+                }
+                reader
+                    .read_tex_coords(set)
+                    .ok_or_else(|| err(format!("TEXCOORD_{set} cannot be read")))?
+                    .into_f32()
+                    .map(Vec2::from_array)
+                    .collect()
+            }
+            _ => Vec::new(),
+        };
+
     let indices: Vec<u32> = match prim.indices() {
         Some(acc) => {
             check_accessor(
@@ -395,11 +542,15 @@ fn add_primitive(
     // A mirroring transform turns counter-clockwise into clockwise; glTF asks to keep the
     // front face, so the winding is reversed.
     let mirror = Mat3::from_mat4(world).determinant() < 0.0;
+    let uv = |i: u32| texcoords.get(i as usize).copied().unwrap_or(Vec2::ZERO);
     for t in indices.chunks_exact(3) {
         let (a, b, c) = (t[0] + base, t[1] + base, t[2] + base);
         mesh.indices
             .push(if mirror { [a, c, b] } else { [a, b, c] });
         mesh.materials.push(material);
+        let (ta, tb, tc) = (uv(t[0]), uv(t[1]), uv(t[2]));
+        part.texcoords
+            .push(if mirror { [ta, tc, tb] } else { [ta, tb, tc] });
     }
     if normals.is_empty() {
         part.flat_primitives += 1;
@@ -431,7 +582,11 @@ fn check_accessor(
             acc.index()
         ));
     }
-    if !types.contains(&acc.data_type()) || acc.dimensions() != dims || acc.normalized() {
+    // Integer components are read only where they are normalized (texture coordinates);
+    // everywhere else a normalized accessor is quantized data, which is not supported.
+    let integer_ok =
+        acc.normalized() == (acc.data_type() != DataType::F32 && dims == Dimensions::Vec2);
+    if !types.contains(&acc.data_type()) || acc.dimensions() != dims || !integer_ok {
         return Err(format!(
             "accessor {} is {:?} {:?}{}; expected {:?} of {:?}",
             acc.index(),

@@ -48,6 +48,7 @@ mod build;
 mod error;
 mod files;
 mod gltf_mesh;
+mod image;
 mod schema;
 mod shapes;
 
@@ -78,6 +79,8 @@ pub mod limits {
     pub const MAX_SCENE_FILE_BYTES: u64 = 256 << 20;
     /// Largest glTF or GLB file, and largest external glTF buffer, bytes (2 GiB).
     pub const MAX_GLTF_BYTES: u64 = 2 << 30;
+    /// Most texels of one decoded texture image (16384 × 16384; 3 GiB as linear RGB f32).
+    pub const MAX_TEXTURE_TEXELS: u64 = 1 << 28;
 }
 
 /// Lambert albedo of glTF primitives that have no material.
@@ -126,9 +129,13 @@ pub struct LoadReport {
     pub skipped_lights: usize,
     /// glTF cameras ignored (the scene file's `[camera]` is used).
     pub skipped_cameras: usize,
-    /// glTF materials with a base-colour texture, which is ignored: such a material uses its
-    /// `baseColorFactor` alone (white when the file gives none).
+    /// glTF materials with a base-colour texture: kd = `baseColorFactor` × the texture.
     pub textured_materials: usize,
+    /// Base-colour texture images decoded (one per image and sampler).
+    pub textures: usize,
+    /// glTF materials with normal, occlusion, emissive or metallic-roughness textures, which
+    /// are ignored.
+    pub other_textures: usize,
     /// Whether `[render].radius` was given; otherwise the settings hold the scene default.
     pub radius_given: bool,
 }
@@ -156,11 +163,11 @@ impl LoadReport {
                 self.skipped_cameras
             ));
         }
-        if self.textured_materials > 0 {
+        if self.other_textures > 0 {
             out.push(format!(
-                "glTF: {} material(s) have a base-colour texture, which is ignored: they use \
-                 baseColorFactor alone (white when not given)",
-                self.textured_materials
+                "glTF: {} material(s) have normal, occlusion, emissive or metallic-roughness \
+                 textures, which are ignored (only base colour is used)",
+                self.other_textures
             ));
         }
         out

@@ -176,8 +176,12 @@ struct GltfOut {
     skipped_lights: usize,
     /// Cameras, ignored.
     skipped_cameras: usize,
-    /// Materials whose base-colour texture was ignored.
+    /// Materials whose kd is baseColorFactor × a base-colour texture.
     textured_materials: usize,
+    /// Base-colour images decoded.
+    textures: usize,
+    /// Materials whose normal, occlusion, emissive or metallic-roughness textures were ignored.
+    other_textures: usize,
 }
 
 #[derive(Serialize)]
@@ -248,6 +252,8 @@ impl RunReport {
                     skipped_lights: f.load.skipped_lights,
                     skipped_cameras: f.load.skipped_cameras,
                     textured_materials: f.load.textured_materials,
+                    textures: f.load.textures,
+                    other_textures: f.load.other_textures,
                 },
             },
             // The settings as asked for, with the merge radius and the weight clamp in force.

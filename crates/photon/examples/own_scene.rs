@@ -46,6 +46,7 @@ impl PhotonScene for HollowSphere {
             frame: Frame::from_normal(inward),
             material: 0,
             prim: 0,
+            bary: glam::Vec2::ZERO,
         })
     }
 

@@ -69,9 +69,9 @@ impl PhotonScene for Scene {
 
     #[inline]
     fn scatter(&self, sh: &Shading, incoming: Vec3, u: [f32; 3]) -> (f32, Option<Scatter>) {
-        let bdf = self.bdf(sh.material);
+        let bdf = self.bdf_at(sh);
         let in_local = bdf.outgoing(sh.frame.to_local(incoming));
-        let survival = survival_at(bdf, &in_local);
+        let survival = survival_at(&bdf, &in_local);
         let scatter = bdf.sample_at(&in_local, u).map(|s| Scatter {
             direction: sh.frame.to_world(s.wi),
             f: s.f,

@@ -12,7 +12,7 @@
 //! use bdpm_scene::{Camera, Material, PointLight, Scene};
 //! use bdpm_geometry::{Geometry, TriangleMesh};
 //! use bdpm_bdf::Bdf;
-//! use glam::Vec3;
+//! use glam::{Vec2, Vec3};
 //! let mut mesh = TriangleMesh::default();
 //! mesh.push_quad([Vec3::new(-1.0, 0.0, -1.0), Vec3::new(-1.0, 0.0, 1.0),
 //!                 Vec3::new(1.0, 0.0, 1.0), Vec3::new(1.0, 0.0, -1.0)], 0);
@@ -26,17 +26,20 @@
 //! ```
 
 mod camera;
+mod texture;
 mod vertex;
 
 pub use camera::Camera;
+pub use texture::{SceneTextures, Texture, TextureError, Wrap, srgb_to_linear};
 pub use vertex::{MASKED_LIGHTS, WeightVertex};
 
+use std::borrow::Cow;
 use std::f32::consts::PI;
 use std::fmt;
 
 use bdpm_bdf::{Bdf, luminance};
 use bdpm_geometry::{Frame, Geometry, Hit};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 /// An isotropic point light.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -82,6 +85,14 @@ pub enum SceneError {
     },
     /// The camera's parameters do not define a view.
     BadCamera(CameraError),
+    /// Textures given for more materials than exist, or texture coordinates not one triple
+    /// per triangle while some material has a texture.
+    BadTextures {
+        /// Materials with a texture slot given.
+        textures: usize,
+        /// Triangles with texture coordinates given.
+        texcoords: usize,
+    },
 }
 
 /// Why a camera's parameters do not define a view ([`SceneError::BadCamera`]).
@@ -128,6 +139,13 @@ impl fmt::Display for SceneError {
                 )
             }
             Self::BadCamera(why) => write!(f, "camera: {why}"),
+            Self::BadTextures {
+                textures,
+                texcoords,
+            } => write!(
+                f,
+                "{textures} texture slots or {texcoords} texture-coordinate triples do not fit the materials and triangles"
+            ),
         }
     }
 }
@@ -148,6 +166,9 @@ pub struct Shading {
     pub material: u32,
     /// Triangle index.
     pub prim: u32,
+    /// Barycentric coordinates (b1, b2) of `p` in the triangle (where texture coordinates
+    /// are interpolated).
+    pub bary: Vec2,
 }
 
 /// Geometry, materials, lights and camera of one render.
@@ -163,6 +184,7 @@ pub struct Scene {
     lights: Vec<PointLight>,
     camera: Camera,
     light_cdf: Vec<f32>,
+    textures: SceneTextures,
 }
 
 impl Scene {
@@ -212,7 +234,73 @@ impl Scene {
             lights,
             camera,
             light_cdf,
+            textures: SceneTextures::default(),
         })
+    }
+
+    /// Gives materials base-colour textures: a textured material's kd at a hit is its kd
+    /// times the texture at the hit's interpolated texture coordinates ([`Scene::kd_at`]).
+    pub fn with_textures(mut self, textures: SceneTextures) -> Result<Scene, SceneError> {
+        let any = textures.base_colour.iter().any(Option::is_some);
+        let fits = textures.base_colour.len() <= self.materials.len()
+            && (!any || textures.texcoords.len() == self.geometry.triangle_count());
+        if !fits {
+            return Err(SceneError::BadTextures {
+                textures: textures.base_colour.len(),
+                texcoords: textures.texcoords.len(),
+            });
+        }
+        self.textures = textures;
+        Ok(self)
+    }
+
+    /// The base-colour texture of a material index, if it has one.
+    #[inline]
+    pub fn texture(&self, material: u32) -> Option<&Texture> {
+        self.textures
+            .base_colour
+            .get(material as usize)
+            .and_then(|t| t.as_deref())
+    }
+
+    /// Number of materials with a base-colour texture.
+    pub fn textured_materials(&self) -> usize {
+        self.textures.base_colour.iter().flatten().count()
+    }
+
+    /// kd at barycentric point `bary` of triangle `prim` of material `material`: the
+    /// material's kd, times its texture at the interpolated texture coordinates if it has one.
+    #[inline]
+    pub fn kd_at(&self, material: u32, prim: u32, bary: Vec2) -> Vec3 {
+        let kd = self.bdf(material).kd();
+        match self.texture(material) {
+            Some(t) => kd * t.sample(self.texcoord(prim, bary)),
+            None => kd,
+        }
+    }
+
+    /// Interpolated texture coordinates at barycentric point `bary` of triangle `prim`.
+    fn texcoord(&self, prim: u32, bary: Vec2) -> Vec2 {
+        let [t0, t1, t2] = self.textures.texcoords[prim as usize];
+        t0 * (1.0 - bary.x - bary.y) + t1 * bary.x + t2 * bary.y
+    }
+
+    /// The scattering model at a point of triangle `prim`: the material's, with kd from
+    /// [`Scene::kd_at`] where it is textured (borrowed, at no cost, where it is not).
+    #[inline]
+    pub fn bdf_on(&self, material: u32, prim: u32, bary: Vec2) -> Cow<'_, Bdf> {
+        let bdf = self.bdf(material);
+        if self.texture(material).is_some() {
+            Cow::Owned(bdf.with_kd(self.kd_at(material, prim, bary)))
+        } else {
+            Cow::Borrowed(bdf)
+        }
+    }
+
+    /// [`Scene::bdf_on`] at a shading point.
+    #[inline]
+    pub fn bdf_at(&self, sh: &Shading) -> Cow<'_, Bdf> {
+        self.bdf_on(sh.material, sh.prim, sh.bary)
     }
 
     /// Surfaces and BVH; its frame (world minus [`Geometry::origin`]) is the scene's frame.
@@ -250,7 +338,8 @@ impl Scene {
         Ok(())
     }
 
-    /// The scattering model of a material index.
+    /// The scattering model of a material index, with the material's own kd (a texture, if
+    /// it has one, is applied by [`Scene::bdf_on`] and [`Scene::bdf_at`]).
     #[inline]
     pub fn bdf(&self, material: u32) -> &Bdf {
         &self.materials[material as usize].bdf
@@ -293,6 +382,7 @@ impl Scene {
             frame: Frame::from_normal(hit.ns * flip),
             material: hit.material,
             prim: hit.prim,
+            bary: hit.uv,
         }
     }
 
@@ -310,7 +400,7 @@ impl Scene {
         if sh.ng.dot(wi) <= 0.0 || sh.ng.dot(wo) <= 0.0 {
             return Vec3::ZERO;
         }
-        self.bdf(sh.material)
+        self.bdf_at(sh)
             .eval(sh.frame.to_local(wo), sh.frame.to_local(wi))
     }
 

@@ -2,8 +2,11 @@
 //! the camera's x₁ and a photon's previous vertex y_p (docs/method.md §2: both techniques must
 //! evaluate the same function w₁(x₀, x₁), so both must see the same inputs).
 
+use std::borrow::Cow;
+
+use bdpm_bdf::Bdf;
 use bdpm_geometry::Frame;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use crate::{Scene, Shading};
 
@@ -25,6 +28,8 @@ pub struct WeightVertex {
     pub material: u32,
     /// Triangle index.
     pub prim: u32,
+    /// Barycentric coordinates of `p` in the triangle (for a textured material's kd).
+    pub bary: Vec2,
     /// Bit `l` set iff light `l < MASKED_LIGHTS` lies on the side of `n` and nothing blocks the
     /// segment to it; 0 where visibility was not computed.
     pub lights: u32,
@@ -40,12 +45,19 @@ impl WeightVertex {
             n: sh.ng,
             material: sh.material,
             prim: sh.prim,
+            bary: sh.bary,
             lights,
         }
     }
 }
 
 impl Scene {
+    /// [`Scene::bdf_on`] at a weight vertex.
+    #[inline]
+    pub fn bdf_at_vertex(&self, v: &WeightVertex) -> Cow<'_, Bdf> {
+        self.bdf_on(v.material, v.prim, v.bary)
+    }
+
     /// Visibility bits of the first [`MASKED_LIGHTS`] lights from `sh` (bit `l` iff
     /// [`Scene::light_visible`]): one shadow ray per light on the lit side.
     pub fn visible_light_mask(&self, sh: &Shading) -> u32 {
@@ -71,7 +83,7 @@ impl Scene {
             return Vec3::ZERO;
         }
         let frame = Frame::from_normal(v.n);
-        let bdf = self.bdf(v.material);
+        let bdf = self.bdf_at_vertex(v);
         let wo_l = frame.to_local(wo);
         let mut sum = Vec3::ZERO;
         for (l, light) in self.lights.iter().enumerate().take(MASKED_LIGHTS) {

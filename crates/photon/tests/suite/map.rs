@@ -14,6 +14,7 @@ fn dummy_vertex() -> PathVertex {
             n: Vec3::Z,
             material: 0,
             prim: 0,
+            bary: glam::Vec2::ZERO,
             lights: 0,
         },
         incoming: Vec3::Z,
