@@ -28,13 +28,14 @@ pub use memory::{MemoryEstimate, MemoryItem, PILOT_PHOTONS, estimate_memory, hum
 pub use predict::{JITTER_RAYS, Prediction};
 pub use render::{
     FirstHitLayers, LARGE_RADIUS_FRACTION, PassOutput, RenderError, Renderer, StageProbe,
-    StageReport, TargetError, first_hit_layers, render_path_pass,
+    StageReport, TargetError, first_hit_layers, render_path_pass, resolve_radius,
 };
 // The settings are `bdpm-settings`'; re-exported so that a user of the integrator needs one
 // dependency.
 pub use bdpm_settings::{
-    FOOTPRINT_TABLE_RAYS, MIN_RADIUS, Mode, PINHOLE_TABLE_RAYS, RadiusError, RenderSettings,
-    Sampler, Setting, SettingsError, SettingsRecord, WeightClamp, check_radius, default_radius,
+    FOOTPRINT_TABLE_RAYS, MIN_RADIUS, Mode, PINHOLE_TABLE_RAYS, RadiusError, RadiusSpec,
+    RenderSettings, Sampler, Setting, SettingsError, SettingsRecord, WeightClamp, check_radius,
+    default_radius,
 };
 pub use sampler::strata;
 pub use table::{PixelTable, PixelWeights};

@@ -85,7 +85,9 @@ pub fn estimate_memory(
 ) -> MemoryEstimate {
     let s = settings;
     let pixels = s.width as u64 * s.height as u64;
-    let radius = s.radius.unwrap_or_else(|| scene_default_radius(scene));
+    // An unusable radius fails in `Renderer::new`; the estimate goes on with the default.
+    let radius = crate::render::resolve_radius(scene, s, scene.pixel_footprint())
+        .unwrap_or_else(|_| scene_default_radius(scene));
     let mut items = vec![
         MemoryItem {
             name: BASE_NAME,

@@ -65,6 +65,11 @@ pub enum RenderError {
     /// The merge radius in force (the scene's default when none was given) is unusable.
     #[error("merge radius {0}")]
     Radius(RadiusError),
+    /// A merge radius in pixel footprints, but no pixel's centre ray hits the scene.
+    #[error(
+        "merge radius {0} px: the camera sees no surface through any pixel centre, so a pixel has no footprint; give the radius in metres"
+    )]
+    NoFootprint(f32),
     /// The mode (`path`, `light`) has no weights, so no weight map.
     #[error("mode '{0}' has no weights")]
     NoWeights(Mode),
@@ -136,6 +141,7 @@ pub struct Renderer<'a> {
     heuristic: Option<Heuristic>,
     stages: Vec<StageReport>,
     radius: f32,
+    footprint: Option<f32>,
     techniques: bool,
     camera_x1_weighting: bool,
     per_visit_inputs: bool,
@@ -155,13 +161,14 @@ impl<'a> Renderer<'a> {
                 settings: (s.width, s.height),
             });
         }
-        let radius = s.radius.unwrap_or_else(|| scene_default_radius(scene));
-        check_radius(radius).map_err(RenderError::Radius)?;
-        // `None` means the scene's default; the renderer's copy holds the value in force. The
-        // mode stays as given: `heuristic` is the mode's with the clamp in force
-        // (RenderSettings::weight_clamp).
+        let footprint = scene.pixel_footprint();
+        let radius = resolve_radius(scene, s, footprint)?;
+        // `None` means the scene's default or a radius in pixels; the renderer's copy holds
+        // the value in force, in metres. The mode stays as given: `heuristic` is the mode's
+        // with the clamp in force (RenderSettings::weight_clamp).
         let mut settings = s.clone();
         settings.radius = Some(radius);
+        settings.radius_px = None;
         let heuristic = settings.heuristic();
         let mut renderer = Renderer {
             scene,
@@ -169,6 +176,7 @@ impl<'a> Renderer<'a> {
             heuristic,
             stages: Vec::new(),
             radius,
+            footprint,
             techniques: false,
             camera_x1_weighting: false,
             per_visit_inputs: false,
@@ -344,6 +352,12 @@ impl<'a> Renderer<'a> {
     /// The merge radius r in use, metres.
     pub fn radius(&self) -> f32 {
         self.radius
+    }
+
+    /// The scene's pixel footprint at this resolution, metres (`Scene::pixel_footprint`):
+    /// what a radius of "1px" is. `None` when the camera sees nothing.
+    pub fn pixel_footprint(&self) -> Option<f32> {
+        self.footprint
     }
 
     /// The settings this renderer uses: the caller's, with the merge radius in force.
@@ -691,4 +705,21 @@ pub fn first_hit_layers(scene: &Scene, settings: &RenderSettings) -> FirstHitLay
     });
     let (albedo, normal) = pixels.into_iter().unzip();
     FirstHitLayers { albedo, normal }
+}
+
+/// The merge radius in force for `settings` on `scene`, metres: `radius` if given, else
+/// `radius_px` times the pixel footprint `footprint` (`Scene::pixel_footprint`, passed in so
+/// that a caller who has it does not trace it twice), else [`scene_default_radius`]. Checked
+/// with `check_radius`.
+pub fn resolve_radius(
+    scene: &Scene,
+    settings: &RenderSettings,
+    footprint: Option<f32>,
+) -> Result<f32, RenderError> {
+    let r = match (settings.radius, settings.radius_px) {
+        (Some(r), _) => r,
+        (None, Some(k)) => k * footprint.ok_or(RenderError::NoFootprint(k))?,
+        (None, None) => scene_default_radius(scene),
+    };
+    check_radius(r).map_err(RenderError::Radius)
 }

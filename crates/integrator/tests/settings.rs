@@ -10,6 +10,11 @@ use glam::Vec3;
 
 /// A floor lit from above, seen by an 8×8 camera.
 fn scene() -> Scene {
+    scene_seen_from(Vec3::ZERO)
+}
+
+/// The floor with the 8×8 camera at (0, 1, −2) m looking at `target`.
+fn scene_seen_from(target: Vec3) -> Scene {
     let mut mesh = TriangleMesh::default();
     mesh.push_quad(
         [
@@ -30,7 +35,7 @@ fn scene() -> Scene {
             position: Vec3::new(0.0, 1.0, 0.0),
             flux: Vec3::ONE,
         }],
-        Camera::look_at(Vec3::new(0.0, 1.0, -2.0), Vec3::ZERO, Vec3::Y, 40.0, 8, 8).unwrap(),
+        Camera::look_at(Vec3::new(0.0, 1.0, -2.0), target, Vec3::Y, 40.0, 8, 8).unwrap(),
     )
     .unwrap()
 }
@@ -59,7 +64,7 @@ fn the_footprint_clamp_is_computed_not_written_into_the_mode() {
         })
     );
     assert!(r.settings().weight_clamp().footprint);
-    assert!(r.settings().record(r.radius(), false).clamp_weights);
+    assert!(r.settings().record(r.radius(), false, None).clamp_weights);
 }
 
 #[test]
@@ -109,5 +114,31 @@ fn settings_errors_are_typed() {
             camera: (8, 8),
             settings: (16, 8)
         })
+    ));
+}
+
+#[test]
+fn a_radius_in_pixels_is_resolved_against_the_camera() {
+    let scene = scene();
+    let footprint = scene.pixel_footprint().expect("the floor is in view");
+    let mut s = settings(Mode::parse("balance").unwrap());
+    s.radius_px = Some(2.5);
+    let r = Renderer::new(&scene, &s).unwrap();
+    assert_eq!(r.radius(), 2.5 * footprint);
+    assert_eq!(r.pixel_footprint(), Some(footprint));
+    // The renderer's copy holds metres only, so it validates again.
+    assert_eq!(
+        (r.settings().radius, r.settings().radius_px),
+        (Some(2.5 * footprint), None)
+    );
+    assert!(r.settings().validate().is_ok());
+    let rec = r.settings().record(r.radius(), true, r.pixel_footprint());
+    assert!((rec.radius_px.unwrap() - 2.5).abs() < 1e-6);
+
+    // A camera that sees nothing has no footprint: a radius in pixels is refused by name.
+    let blind = scene_seen_from(Vec3::new(0.0, 2.0, -4.0));
+    assert!(matches!(
+        Renderer::new(&blind, &s),
+        Err(RenderError::NoFootprint(k)) if k == 2.5
     ));
 }

@@ -10,7 +10,7 @@
 use std::path::Path;
 use std::process::ExitCode;
 
-use bdpm_integrator::{Mode, RenderSettings, Sampler};
+use bdpm_integrator::{Mode, RadiusSpec, RenderSettings, Sampler};
 use bdpm_output::cli::CliResult;
 use bdpm_output::files::write_atomic;
 use clap::Subcommand;
@@ -55,7 +55,8 @@ pub fn run(command: Command) -> Result<ExitCode, String> {
 }
 
 /// One entry of `--modes`: a mode, and settings of its own on top of the shared ones
-/// (`MODE[:KEY=VALUE]…` with KEY one of `sampler`, `radius` (metres), `spp`, `photons`), so
+/// (`MODE[:KEY=VALUE]…` with KEY one of `sampler`, `radius` (metres, or pixel footprints as
+/// `1.2px`), `spp`, `photons`), so
 /// that configurations are compared side by side in one run, e.g.
 /// `balance:sampler=independent,balance,optimal-path:radius=0.01`.
 #[derive(Clone, Debug, PartialEq)]
@@ -65,7 +66,7 @@ pub(crate) struct Variant {
     /// The weight or reference mode.
     pub(crate) mode: Mode,
     sampler: Option<Sampler>,
-    radius: Option<f32>,
+    radius: Option<RadiusSpec>,
     spp: Option<u32>,
     photons: Option<u64>,
 }
@@ -104,12 +105,7 @@ impl Variant {
                         ))
                     })?)
                 }
-                "radius" => {
-                    let r: f32 = value
-                        .parse()
-                        .map_err(|_| bad("the radius is a number of metres"))?;
-                    v.radius = Some(r);
-                }
+                "radius" => v.radius = Some(RadiusSpec::parse(value).map_err(|e| bad(&e))?),
                 "spp" => {
                     v.spp = Some(
                         value
@@ -138,7 +134,7 @@ impl Variant {
             s.sampler = x;
         }
         if let Some(r) = self.radius {
-            s.radius = Some(r);
+            r.apply(&mut s);
         }
         if let Some(n) = self.spp {
             s.spp = n;
@@ -193,6 +189,9 @@ mod tests {
         assert_eq!(s.mode, Mode::parse("balance").unwrap());
         assert_eq!(s.sampler, Sampler::Independent);
         assert_eq!((s.radius, s.spp, s.photons), (Some(0.01), 1, 5000));
+        let px = parse_modes(&["balance:radius=1.5px".into()]).unwrap();
+        let s = px[0].settings(&RenderSettings::default()).unwrap();
+        assert_eq!((s.radius, s.radius_px), (None, Some(1.5)));
         let plain = parse_modes(&["optimal-path".into()]).unwrap();
         assert_eq!(
             plain[0].settings(&RenderSettings::default()).unwrap().spp,

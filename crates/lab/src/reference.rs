@@ -47,6 +47,7 @@ pub(crate) fn reference_settings(
     // `light` merges nothing: the radius does not change it, so studies at several radii share
     // one cached reference.
     s.radius = None;
+    s.radius_px = None;
     s
 }
 

@@ -11,11 +11,15 @@ use std::sync::Arc;
 use bdpm_scene::{
     Camera, CameraError, Material, PointLight, Scene, SceneError, SceneTextures, Texture,
 };
-use bdpm_settings::{Mode, NoiseModel, RenderSettings, Sampler, check_radius, default_radius};
+use bdpm_settings::{
+    Mode, NoiseModel, RadiusSpec, RenderSettings, Sampler, check_radius, default_radius,
+};
 use glam::{Mat4, Vec2, Vec3};
 
 use crate::gltf_mesh::{Origin, load_gltf};
-use crate::schema::{CameraDef, MaterialDef, Point, RenderDef, SceneFile, ShapeDef, Triple};
+use crate::schema::{
+    CameraDef, MaterialDef, Point, RadiusDef, RenderDef, SceneFile, ShapeDef, Triple,
+};
 use crate::shapes::{BOX_FACES, push_box, push_sphere, sphere_triangle_count};
 use crate::{LoadError, LoadReport, LoadedScene, limits};
 
@@ -463,19 +467,23 @@ pub(crate) fn build(
 
     let (lo, hi) = geometry.bounds();
     let extent = (hi - lo).max_element();
-    let radius = match settings.radius {
-        Some(r) => r,
-        None => check_radius(default_radius(extent)).map_err(|e| {
-            ctx.bad(
-                "render.radius",
-                format!(
-                    "cannot derive a default from the scene extent {extent:e} m ({e}); give one"
-                ),
-            )
-        })?,
-    };
-    report.radius_given = settings.radius.is_some();
-    settings.radius = Some(radius);
+    // A radius in pixels is resolved against the camera by the renderer (the resolution
+    // may still change); otherwise the settings carry metres.
+    report.radius_given = settings.radius.is_some() || settings.radius_px.is_some();
+    if settings.radius_px.is_none() {
+        let radius = match settings.radius {
+            Some(r) => r,
+            None => check_radius(default_radius(extent)).map_err(|e| {
+                ctx.bad(
+                    "render.radius",
+                    format!(
+                        "cannot derive a default from the scene extent {extent:e} m ({e}); give one"
+                    ),
+                )
+            })?,
+        };
+        settings.radius = Some(radius);
+    }
 
     let camera = camera(&ctx, file.camera, settings.width, settings.height)?;
 
@@ -670,7 +678,12 @@ fn render_settings(
     // every range is checked once, by `RenderSettings::validate`.
     let radius = match r.radius {
         None => None,
-        Some(v) => Some(ctx.positive("render.radius", v, "metres")?),
+        Some(RadiusDef::Metres(v)) => Some(RadiusSpec::Metres(
+            ctx.positive("render.radius", v, "metres")?.into(),
+        )),
+        Some(RadiusDef::Text(t)) => {
+            Some(RadiusSpec::parse(&t).map_err(|e| ctx.bad("render.radius", e))?)
+        }
     };
     let threshold_radius = match r.threshold_radius {
         None => d.threshold_radius,
@@ -682,7 +695,8 @@ fn render_settings(
         passes: r.passes.unwrap_or(d.passes),
         photons: r.photons.unwrap_or(d.photons),
         spp: r.spp.unwrap_or(d.spp),
-        radius,
+        radius: None,
+        radius_px: None,
         seed: r.seed.unwrap_or(d.seed),
         mode: d.mode,
         threshold_radius,
@@ -695,6 +709,9 @@ fn render_settings(
         sampler,
         roulette_depth: r.roulette_depth.unwrap_or(d.roulette_depth),
     };
+    if let Some(spec) = radius {
+        spec.apply(&mut settings);
+    }
     // The file's `threshold_radius` is the threshold mode's radius.
     settings.select(mode);
     settings

@@ -91,8 +91,9 @@ pub const GLTF_DEFAULT_KD: f32 = 0.8;
 pub struct LoadedScene {
     /// Geometry, materials, lights and camera (the camera has the `[render]` resolution).
     pub scene: bdpm_scene::Scene,
-    /// `[render]` with defaults filled in; `radius` is always `Some`: the file's value, or
-    /// `default_radius` of the largest extent of the scene's bounding box.
+    /// `[render]` with defaults filled in. Exactly one of `radius` and `radius_px` is `Some`:
+    /// the file's radius in pixel footprints (resolved by the renderer), else `radius` in
+    /// metres, the file's or `default_radius` of the scene bounding box's largest extent.
     pub settings: bdpm_settings::RenderSettings,
     /// `[render].output` exactly as written. A relative path is meant relative to the current
     /// directory (as a path typed on the command line would be), not to the scene file.

@@ -26,6 +26,15 @@ pub(crate) struct SceneFile {
     pub(crate) shape: Vec<ShapeDef>,
 }
 
+/// `[render].radius`: a number of metres, or text such as `"1.2px"` (pixel footprints) or
+/// `"0.01m"`.
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+pub(crate) enum RadiusDef {
+    Metres(f64),
+    Text(String),
+}
+
 /// `[render]`.
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -35,7 +44,7 @@ pub(crate) struct RenderDef {
     pub(crate) passes: Option<u32>,
     pub(crate) photons: Option<u64>,
     pub(crate) spp: Option<u32>,
-    pub(crate) radius: Option<f64>,
+    pub(crate) radius: Option<RadiusDef>,
     pub(crate) seed: Option<u64>,
     pub(crate) mode: Option<String>,
     pub(crate) output: Option<PathBuf>,

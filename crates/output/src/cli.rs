@@ -4,7 +4,7 @@
 //! progress bar and the facts about the machine that reports record.
 use std::path::{Path, PathBuf};
 
-use bdpm_integrator::{Mode, NoiseModel, RenderSettings, Sampler, Setting, StageProbe};
+use bdpm_integrator::{Mode, NoiseModel, RadiusSpec, RenderSettings, Sampler, Setting, StageProbe};
 use bdpm_load::{LoadReport, load_scene};
 use bdpm_scene::Scene;
 use clap::Args;
@@ -56,9 +56,10 @@ pub struct Overrides {
     /// Camera samples per pixel per pass (N_B).
     #[arg(long, allow_negative_numbers = true, value_parser = whole::<u32>)]
     pub spp: Option<u32>,
-    /// Merge radius, metres.
-    #[arg(long, allow_negative_numbers = true, value_parser = number)]
-    pub radius: Option<f64>,
+    /// Merge radius: metres (0.01) or pixel footprints (1.2px: the median footprint of the
+    /// pixels' first hits at this resolution)
+    #[arg(long, allow_negative_numbers = true, value_parser = RadiusSpec::parse)]
+    pub radius: Option<RadiusSpec>,
     /// Master seed of all random streams.
     #[arg(long, allow_negative_numbers = true, value_parser = whole::<u64>)]
     pub seed: Option<u64>,
@@ -150,8 +151,12 @@ pub fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> CliResul
     if let Some(n) = o.spp {
         settings.spp = n;
     }
-    if let Some(r) = o.radius {
-        if !(r.is_finite() && r > 0.0 && r <= f32::MAX as f64) {
+    if let Some(spec) = o.radius {
+        let r = match spec {
+            RadiusSpec::Metres(r) => r,
+            RadiusSpec::Pixels(_) => 1.0,
+        };
+        if !(r <= f32::MAX as f64) {
             let r = if (1e-4..1e7).contains(&r.abs()) {
                 format!("{r}")
             } else {
@@ -161,7 +166,7 @@ pub fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> CliResul
                 "--radius must be a positive number of metres below 3.4e38, not {r}"
             ));
         }
-        settings.radius = Some(r as f32);
+        spec.apply(settings);
     }
     if o.no_jitter {
         settings.pixel_jitter = false;
@@ -279,8 +284,8 @@ impl Overrides {
             push("--spp", n.to_string());
         }
         if let Some(r) = o.radius {
-            // `{:?}` of an f64 round-trips exactly.
-            push("--radius", format!("{r:?}"));
+            // `Display` of an f64 is its shortest exact form.
+            push("--radius", r.to_string());
         }
         if let Some(s) = o.seed {
             push("--seed", s.to_string());
@@ -479,7 +484,7 @@ mod tests {
             mode: Some("optimal".into()),
             resolution: Some((16, 8)),
             photons: Some(100),
-            radius: Some(0.1),
+            radius: Some(RadiusSpec::Metres(0.1)),
             seed: Some(7),
             no_jitter: true,
             sampler: Some("independent".into()),
@@ -487,7 +492,13 @@ mod tests {
         };
         let back = Overrides::from_args(&o.to_args()).unwrap();
         assert_eq!(back.to_args(), o.to_args());
-        assert_eq!(back.radius, Some(0.1));
+        assert_eq!(back.radius, Some(RadiusSpec::Metres(0.1)));
+        let px = Overrides {
+            radius: Some(RadiusSpec::Pixels(1.25)),
+            ..Default::default()
+        };
+        let back = Overrides::from_args(&px.to_args()).unwrap();
+        assert_eq!(back.radius, Some(RadiusSpec::Pixels(1.25)));
     }
 
     #[test]

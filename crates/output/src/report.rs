@@ -257,7 +257,11 @@ impl RunReport {
                 },
             },
             // The settings as asked for, with the merge radius and the weight clamp in force.
-            settings: f.settings.record(f.renderer.radius(), f.radius_given),
+            settings: f.settings.record(
+                f.renderer.radius(),
+                f.radius_given,
+                f.renderer.pixel_footprint(),
+            ),
             threads: f.threads,
             passes_done: f.film.passes(),
             interrupted: f.interrupted,
@@ -360,7 +364,7 @@ pub fn header_attributes(
     ];
     // The same record as the JSON report's, with the radius in use.
     v.extend(
-        s.record(r.radius(), radius_given)
+        s.record(r.radius(), radius_given, r.pixel_footprint())
             .header_attributes()
             .into_iter()
             .map(|(k, val)| (k.to_string(), val)),

@@ -332,6 +332,43 @@ impl Scene {
         &self.camera
     }
 
+    /// The pixel footprint of this camera on this scene, metres: the median, over the pixels
+    /// whose centre ray hits a surface, of √(area of the pixel projected onto the surface
+    /// first seen) = √(Ω_pixel·t²/|cos θ|), with Ω_pixel the pixel's solid angle, t the hit
+    /// distance and θ the angle between the ray and the surface normal. At most 64 × 64
+    /// pixel centres, evenly spaced, are traced; `None` when none hits. A merge radius of
+    /// "1 px" is this length (method-notes.md, "Radius in pixels").
+    pub fn pixel_footprint(&self) -> Option<f32> {
+        let cam = &self.camera;
+        let (w, h) = (cam.width(), cam.height());
+        let (nx, ny) = (w.min(64), h.min(64));
+        let mut sizes = Vec::with_capacity((nx * ny) as usize);
+        for j in 0..ny {
+            for i in 0..nx {
+                // Pixel centres spread evenly over the image, the same ones at any seed.
+                let px = ((i as f32 + 0.5) * w as f32 / nx as f32).floor() + 0.5;
+                let py = ((j as f32 + 0.5) * h as f32 / ny as f32).floor() + 0.5;
+                let d = cam.ray_direction(px, py);
+                let Some(hit) = self.geometry.intersect(cam.position(), d, f32::INFINITY) else {
+                    continue;
+                };
+                let cos_cam = d.dot(cam.forward());
+                let cos_surf = d.dot(hit.ng).abs();
+                if cos_surf <= 0.0 {
+                    continue;
+                }
+                let solid_angle = cam.pixel_area() * cos_cam * cos_cam * cos_cam;
+                sizes.push((solid_angle * hit.t * hit.t / cos_surf).sqrt());
+            }
+        }
+        if sizes.is_empty() {
+            return None;
+        }
+        let mid = sizes.len() / 2;
+        let (_, m, _) = sizes.select_nth_unstable_by(mid, f32::total_cmp);
+        Some(*m)
+    }
+
     /// Gives the camera another image size (the field of view stays vertical).
     pub fn set_resolution(&mut self, width: u32, height: u32) -> Result<(), SceneError> {
         self.camera = self.camera.with_resolution(width, height)?;
@@ -445,5 +482,63 @@ impl Scene {
     pub fn light_visible(&self, sh: &Shading, light: &PointLight) -> bool {
         let to = light.position - sh.p;
         sh.ng.dot(to) > 0.0 && !self.geometry.occluded(self.spawn(sh, to), light.position)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bdpm_geometry::TriangleMesh;
+    use glam::Vec3;
+
+    /// A camera at the origin looking at `look` and a wall z = `d` (wider than the view), 64 × 48
+    /// pixels, vertical field of view 40°.
+    fn wall_scene(d: f32, look: Vec3) -> Scene {
+        let mut mesh = TriangleMesh::default();
+        let s = 100.0;
+        mesh.push_quad(
+            [
+                Vec3::new(-s, -s, d),
+                Vec3::new(s, -s, d),
+                Vec3::new(s, s, d),
+                Vec3::new(-s, s, d),
+            ],
+            0,
+        );
+        Scene::new(
+            Geometry::new(mesh).unwrap(),
+            vec![Material {
+                name: "wall".into(),
+                bdf: Bdf::lambert(Vec3::splat(0.5)).unwrap(),
+            }],
+            vec![PointLight {
+                position: Vec3::new(0.0, 0.0, 1.0),
+                flux: Vec3::ONE,
+            }],
+            Camera::look_at(Vec3::ZERO, look, Vec3::Y, 40.0, 64, 48).unwrap(),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn footprint_on_a_facing_wall_is_distance_times_pixel_pitch() {
+        // On a plane facing the camera every pixel covers (pitch·d)², whatever its angle
+        // off the axis: t = d/cos α, Ω = pitch²·cos³α and the slant 1/cos α cancel.
+        for d in [0.5_f32, 3.0] {
+            let scene = wall_scene(d, Vec3::Z);
+            let pitch = 2.0 * (20.0_f32.to_radians()).tan() / 48.0;
+            let f = scene.pixel_footprint().expect("the wall fills the view");
+            assert!(
+                (f / (pitch * d) - 1.0).abs() < 1e-4,
+                "footprint {f} m, expected {} m",
+                pitch * d
+            );
+        }
+    }
+
+    #[test]
+    fn no_footprint_when_nothing_is_seen() {
+        // The camera turned away from the wall.
+        assert_eq!(wall_scene(2.0, -Vec3::Z).pixel_footprint(), None);
     }
 }

@@ -151,9 +151,14 @@ pub struct RenderSettings {
     pub photons: u64,
     /// Camera samples per pixel per pass, N_B.
     pub spp: u32,
-    /// Merge (gather) radius r, metres; `None` = the scene's largest extent / 1600
-    /// ([`default_radius`]).
+    /// Merge (gather) radius r, metres; `None` = [`RenderSettings::radius_px`] if set, else
+    /// the scene's largest extent / 1600 ([`default_radius`]).
     pub radius: Option<f32>,
+    /// Merge radius in pixel footprints (`radius = "1px"`): resolved into metres against the
+    /// scene's camera when a renderer is made (the median footprint of the pixels' first
+    /// hits, method-notes.md "Radius in pixels"). At most one of `radius` and `radius_px`
+    /// is set.
+    pub radius_px: Option<f32>,
     /// Master seed of every random stream.
     pub seed: u64,
     /// Integrator and weight mode. A `threshold` mode's radius must equal
@@ -315,6 +320,17 @@ pub enum SettingsError {
     /// A merge radius that cannot be used.
     #[error("{0}")]
     Radius(RadiusError),
+    /// A merge radius in pixel footprints that is not finite or not in (0, [`MAX_RADIUS_PX`]].
+    #[error("{0} px must be a number of pixel footprints in (0, {MAX_RADIUS_PX}]")]
+    RadiusPx(f32),
+    /// Both a radius in metres and one in pixel footprints.
+    #[error("both {metres} m and {pixels} px given; give one")]
+    TwoRadii {
+        /// [`RenderSettings::radius`], metres.
+        metres: f32,
+        /// [`RenderSettings::radius_px`], pixel footprints.
+        pixels: f32,
+    },
     /// A threshold radius R that is not finite, not > 0 or not a normal f32 (metres).
     #[error("{0:e} must be a finite number > 0 (metres)")]
     ThresholdRadius(f32),
@@ -335,7 +351,9 @@ impl SettingsError {
     pub fn setting(&self) -> Setting {
         match self {
             SettingsError::OutOfRange { setting, .. } => *setting,
-            SettingsError::Radius(_) => Setting::Radius,
+            SettingsError::Radius(_)
+            | SettingsError::RadiusPx(_)
+            | SettingsError::TwoRadii { .. } => Setting::Radius,
             SettingsError::ThresholdRadius(_) => Setting::ThresholdRadius,
             SettingsError::ThresholdMismatch { .. } => Setting::Mode,
         }
@@ -438,6 +456,14 @@ impl RenderSettings {
         if let Some(r) = self.radius {
             check_radius(r).map_err(SettingsError::Radius)?;
         }
+        if let Some(k) = self.radius_px
+            && !(k > 0.0 && k <= MAX_RADIUS_PX)
+        {
+            return Err(SettingsError::RadiusPx(k));
+        }
+        if let (Some(metres), Some(pixels)) = (self.radius, self.radius_px) {
+            return Err(SettingsError::TwoRadii { metres, pixels });
+        }
         let t = self.threshold_radius;
         if !(t.is_finite() && t > 0.0 && t.is_normal()) {
             return Err(SettingsError::ThresholdRadius(t));
@@ -473,8 +499,14 @@ impl RenderSettings {
     }
 
     /// The settings as reports and image headers give them, with the merge radius in force
-    /// (`radius`, metres: the scene's default when none was given) and whether it was given.
-    pub fn record(&self, radius: f32, radius_given: bool) -> SettingsRecord {
+    /// (`radius`, metres: the scene's default when none was given), whether it was given, and
+    /// the scene's pixel footprint (metres) when known, to give the radius in pixels too.
+    pub fn record(
+        &self,
+        radius: f32,
+        radius_given: bool,
+        footprint: Option<f32>,
+    ) -> SettingsRecord {
         SettingsRecord {
             mode: self.mode.name(),
             width: self.width,
@@ -483,6 +515,7 @@ impl RenderSettings {
             photons_per_pass: self.photons,
             spp: self.spp,
             radius_m: radius,
+            radius_px: footprint.map(|f| radius / f),
             radius_given,
             seed: self.seed,
             threshold_radius_m: self.threshold_radius,
@@ -507,6 +540,7 @@ impl Default for RenderSettings {
             photons: 100_000,
             spp: 4,
             radius: None,
+            radius_px: None,
             seed: 1,
             // `balance` wins at equal time on both preprint scenes with jittered pixels
             // (docs/results.md); `path` and `light` are references, not defaults.
@@ -520,6 +554,64 @@ impl Default for RenderSettings {
             pixel_jitter: true,
             noise_model: NoiseModel::Footprint,
             sampler: Sampler::Stratified,
+        }
+    }
+}
+
+/// Largest merge radius in pixel footprints accepted ([`RenderSettings::radius_px`]).
+pub const MAX_RADIUS_PX: f32 = 1000.0;
+
+/// A merge radius as a user writes it: metres (`0.01`) or pixel footprints (`1.2px`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RadiusSpec {
+    /// Metres.
+    Metres(f64),
+    /// Pixel footprints ([`RenderSettings::radius_px`]).
+    Pixels(f64),
+}
+
+impl RadiusSpec {
+    /// Parses `0.01` (metres), `0.01m` or `1.2px`. Says what is wrong otherwise; the ranges
+    /// are checked by [`RenderSettings::validate`].
+    pub fn parse(text: &str) -> Result<RadiusSpec, String> {
+        let t = text.trim();
+        let (number, px) = match t.strip_suffix("px") {
+            Some(n) => (n, true),
+            None => (t.strip_suffix('m').unwrap_or(t), false),
+        };
+        let v: f64 = number.trim().parse().map_err(|_| {
+            format!("'{text}' is not a radius: write metres (0.01) or pixel footprints (1.2px)")
+        })?;
+        if !(v.is_finite() && v > 0.0) {
+            return Err(format!("'{text}': the radius must be a finite number > 0"));
+        }
+        Ok(if px {
+            RadiusSpec::Pixels(v)
+        } else {
+            RadiusSpec::Metres(v)
+        })
+    }
+
+    /// Puts this radius into `settings`, clearing the other unit.
+    pub fn apply(self, settings: &mut RenderSettings) {
+        match self {
+            RadiusSpec::Metres(m) => {
+                settings.radius = Some(m as f32);
+                settings.radius_px = None;
+            }
+            RadiusSpec::Pixels(k) => {
+                settings.radius = None;
+                settings.radius_px = Some(k as f32);
+            }
+        }
+    }
+}
+
+impl fmt::Display for RadiusSpec {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            RadiusSpec::Metres(m) => write!(f, "{m}"),
+            RadiusSpec::Pixels(k) => write!(f, "{k}px"),
         }
     }
 }

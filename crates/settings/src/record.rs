@@ -21,6 +21,9 @@ pub struct SettingsRecord {
     pub spp: u32,
     /// The merge radius in use (the scene's default when none was given), metres.
     pub radius_m: f32,
+    /// The same radius in pixel footprints (`Scene::pixel_footprint`), when the camera sees
+    /// the scene.
+    pub radius_px: Option<f32>,
     /// Whether the radius was given (scene file or `--radius`) or is the scene default.
     pub radius_given: bool,
     /// Master seed.
@@ -60,6 +63,10 @@ impl SettingsRecord {
             ("noise_model", self.noise_model.into()),
             ("sampler", self.sampler.into()),
             ("radius_m", self.radius_m.to_string()),
+            (
+                "radius_px",
+                self.radius_px.map_or("unknown".into(), |k| k.to_string()),
+            ),
             (
                 "radius_source",
                 if self.radius_given {

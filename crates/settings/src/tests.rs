@@ -87,17 +87,43 @@ fn clamp_is_computed_not_written_back() {
         clamp_weights: true,
     });
     assert!(s.weight_clamp().requested);
-    let r = s.record(0.01, false);
+    let r = s.record(0.01, false, None);
     assert!(r.clamp_weights && r.clamp_weights_requested);
 }
 
 #[test]
 fn record_feeds_the_header() {
-    let r = RenderSettings::default().record(0.25, true);
+    let r = RenderSettings::default().record(0.25, true, Some(0.01));
     let h = r.header_attributes();
     assert_eq!(h[0], ("mode", "balance".to_string()));
     assert!(h.contains(&("radius_source", "given".to_string())));
     assert!(h.contains(&("radius_m", "0.25".to_string())));
+    assert!(h.contains(&("radius_px", "25".to_string())));
+}
+
+#[test]
+fn radius_in_pixels_parses_applies_and_validates() {
+    assert_eq!(RadiusSpec::parse("1.5px"), Ok(RadiusSpec::Pixels(1.5)));
+    assert_eq!(RadiusSpec::parse(" 0.01 "), Ok(RadiusSpec::Metres(0.01)));
+    assert_eq!(RadiusSpec::parse("0.01m"), Ok(RadiusSpec::Metres(0.01)));
+    for bad in ["", "px", "-1px", "0", "1 pixel", "nanpx", "infpx"] {
+        assert!(RadiusSpec::parse(bad).is_err(), "{bad}");
+    }
+    let mut s = RenderSettings::default();
+    RadiusSpec::Metres(0.02).apply(&mut s);
+    RadiusSpec::Pixels(2.0).apply(&mut s);
+    assert_eq!((s.radius, s.radius_px), (None, Some(2.0)));
+    assert!(s.validate().is_ok());
+    s.radius_px = Some(MAX_RADIUS_PX * 2.0);
+    assert_eq!(
+        s.validate(),
+        Err(SettingsError::RadiusPx(MAX_RADIUS_PX * 2.0))
+    );
+    s.radius_px = Some(1.0);
+    s.radius = Some(0.01);
+    let e = s.validate().unwrap_err();
+    assert_eq!(e.setting(), Setting::Radius);
+    assert!(matches!(e, SettingsError::TwoRadii { .. }));
 }
 
 #[cfg(feature = "serde")]
@@ -110,7 +136,7 @@ fn serde_round_trip() {
     let back: RenderSettings = serde_json::from_str(&text).unwrap();
     assert_eq!(back, s);
     assert!(
-        serde_json::to_string(&s.record(0.1, false))
+        serde_json::to_string(&s.record(0.1, false, None))
             .unwrap()
             .contains("\"threshold_radius_m\"")
     );

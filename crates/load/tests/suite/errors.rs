@@ -404,3 +404,27 @@ fn the_report_says_whether_the_radius_was_given() {
     let given = with("passes = 1", "passes = 1\nradius = 0.01");
     assert!(load(&given).expect("valid").report.radius_given);
 }
+
+#[test]
+fn radius_in_pixels_loads_and_bad_text_is_named() {
+    let ok = with("passes = 1", "passes = 1\nradius = \"1.5px\"");
+    let loaded = load_scene_str(&ok, Path::new("scenes"), Path::new("scenes/bad.toml")).unwrap();
+    assert_eq!(loaded.settings.radius, None);
+    assert_eq!(loaded.settings.radius_px, Some(1.5));
+    assert!(loaded.report.radius_given);
+    let metres = with("passes = 1", "passes = 1\nradius = \"0.02m\"");
+    let loaded =
+        load_scene_str(&metres, Path::new("scenes"), Path::new("scenes/bad.toml")).unwrap();
+    assert_eq!(
+        (loaded.settings.radius, loaded.settings.radius_px),
+        (Some(0.02), None)
+    );
+    for (v, why) in [
+        ("\"1.5 pixels\"", "not a radius"),
+        ("\"-2px\"", "> 0"),
+        ("\"2000px\"", "pixel footprints in (0, 1000]"),
+    ] {
+        let m = error_of(&with("passes = 1", &format!("passes = 1\nradius = {v}")));
+        assert!(m.contains("render.radius: ") && m.contains(why), "{v}: {m}");
+    }
+}
