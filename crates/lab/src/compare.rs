@@ -13,6 +13,7 @@ use bdpm_output::say;
 use bdpm_output::stats::luminance;
 
 use crate::reference::read_exr;
+use crate::study::{mean, rel_mean, rel_mse, rmse, without_floor};
 
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]
@@ -79,6 +80,38 @@ pub(crate) fn compare(
     }
 }
 
+/// The error of an image against a reference, over pixel luminance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct ErrorFigures {
+    /// RMSE / the reference's image mean.
+    pub(crate) rel_rmse: f64,
+    /// Mean over pixels of (I − R)²/(R² + ε), ε = 0.01·mean(R)².
+    pub(crate) rel_mse: f64,
+}
+
+/// Rel. RMSE and relMSE of `image` against `reference` (luminance per pixel), with the
+/// reference's own variance (from its per-channel standard errors, when given) subtracted as
+/// `bdpm study` does. `None` for a black reference.
+pub(crate) fn error_against(
+    image: &[f64],
+    reference: &[f64],
+    reference_stderr: Option<&[glam::DVec3]>,
+) -> Option<ErrorFigures> {
+    let ref_mean = mean(reference);
+    if ref_mean.is_nan() || ref_mean <= 0.0 {
+        return None;
+    }
+    let var: Vec<f64> = match reference_stderr {
+        Some(se) => se.iter().map(|c| luminance(*c).powi(2)).collect(),
+        None => vec![0.0; reference.len()],
+    };
+    let mse = without_floor(rmse(image, reference).powi(2), mean(&var));
+    Some(ErrorFigures {
+        rel_rmse: mse.sqrt() / ref_mean,
+        rel_mse: without_floor(rel_mse(image, reference), rel_mean(&var, reference)),
+    })
+}
+
 /// Runs `bdpm compare`.
 pub(crate) fn run(args: CompareArgs) -> CliResult<ExitCode> {
     let a = read_exr(&args.a)?;
@@ -123,6 +156,20 @@ pub(crate) fn run(args: CompareArgs) -> CliResult<ExitCode> {
         c.mean.0,
         c.mean.1
     );
+    let a_lum: Vec<f64> = a.mean.iter().map(|c| luminance(*c)).collect();
+    let b_lum: Vec<f64> = b.mean.iter().map(|c| luminance(*c)).collect();
+    if let Some(e) = error_against(&a_lum, &b_lum, b.stderr.as_deref()) {
+        say!(
+            "the first against the second as reference: rel. RMSE {:.3}%, relMSE {:.4e}{}",
+            100.0 * e.rel_rmse,
+            e.rel_mse,
+            if b.stderr.is_some() {
+                " (the second's own error subtracted)"
+            } else {
+                " (the second has no stderr layer: its own error is included)"
+            }
+        );
+    }
     match c.within {
         Some(f) => say!(
             "{:.2}% of pixels within {} combined standard errors",
@@ -142,6 +189,20 @@ pub(crate) fn run(args: CompareArgs) -> CliResult<ExitCode> {
 mod tests {
     use super::*;
     use glam::DVec3;
+
+    #[test]
+    fn error_against_a_reference_subtracts_its_variance() {
+        let r = [1.0, 1.0];
+        // Squared errors 0.04 and 0.16: MSE 0.1; the reference's variance 0.01 per pixel.
+        let e = error_against(&[1.2, 0.6], &r, None).unwrap();
+        assert!((e.rel_rmse - 0.1f64.sqrt()).abs() < 1e-12);
+        let se = [DVec3::splat(0.1); 2];
+        let e = error_against(&[1.2, 0.6], &r, Some(&se)).unwrap();
+        assert!((e.rel_rmse - 0.09f64.sqrt()).abs() < 1e-9);
+        // ε = 0.01: relMSE = (0.1 − 0.01)/1.01.
+        assert!((e.rel_mse - 0.09 / 1.01).abs() < 1e-9);
+        assert_eq!(error_against(&[1.0], &[0.0], None), None);
+    }
 
     #[test]
     fn identical_images_compare_identical() {

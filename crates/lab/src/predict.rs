@@ -67,6 +67,8 @@ struct Measured {
     height: u32,
     /// Per-pass variance of the pixel luminance (see the module docs), (W·m⁻²·sr⁻¹)².
     variance: Vec<f64>,
+    /// The render's mean luminance per pixel, W·m⁻²·sr⁻¹ (the R of relV).
+    mean: Vec<f64>,
     attributes: Vec<(String, String)>,
 }
 
@@ -99,10 +101,18 @@ fn read_measured(path: &Path) -> CliResult<Measured> {
         // outputs were made with, and it keeps their bits.
         .map(|((r, g), b)| wr * r * r + wg * g * g + wb * b * b)
         .collect();
+    let (r, g, b) = (find("R")?, find("G")?, find("B")?);
+    let mean = r
+        .iter()
+        .zip(g)
+        .zip(b)
+        .map(|((r, g), b)| wr * r + wg * g + wb * b)
+        .collect();
     Ok(Measured {
         width: layer.width,
         height: layer.height,
         variance,
+        mean,
         attributes: layer.attributes,
     })
 }
@@ -193,6 +203,10 @@ struct Report<'a> {
     /// Image means over the pixels with a surface, W²·m⁻⁴·sr⁻².
     image_mean_predicted_v: f64,
     image_mean_measured_v: f64,
+    /// relV, the mean over the compared pixels of V/(L² + ε) with L the measured render's
+    /// mean and ε = 0.01·mean(L)² (as `bdpm study`): predicted and measured.
+    rel_v_predicted: f64,
+    rel_v_measured: f64,
     term_shares: Shares,
     per_pixel: Agreement,
     block_size: u32,
@@ -423,6 +437,10 @@ pub(crate) fn run(args: PredictArgs) -> CliResult<()> {
         }
     };
     let n = compared.len().max(1) as f64;
+    // relV over the compared pixels, with the measured render's mean as R (study's ε).
+    let lum: Vec<f64> = compared.iter().map(|&i| measured.mean[i]).collect();
+    let pick = |v: &[f64]| -> Vec<f64> { compared.iter().map(|&i| v[i]).collect() };
+    let rel_v = |v: &[f64]| crate::study::rel_mean(&pick(v), &lum);
     let pairs: Vec<(f64, f64)> = p.total.iter().copied().zip(mv.iter().copied()).collect();
     // Blocks: only surface pixels count, in both sums.
     let measured_on_surface: Vec<f64> = mv
@@ -493,6 +511,8 @@ pub(crate) fn run(args: PredictArgs) -> CliResult<()> {
         pixels_without_measured_noise: surface.len() - compared.len(),
         image_mean_predicted_v: total / n,
         image_mean_measured_v: sum(mv) / n,
+        rel_v_predicted: rel_v(&p.total),
+        rel_v_measured: rel_v(mv),
         term_shares: Shares {
             t0: share(&p.t0),
             t1: share(&p.t1),
@@ -574,6 +594,12 @@ fn print_summary(r: &Report<'_>) {
         r.image_mean_predicted_v / r.image_mean_measured_v,
         r.pixels_without_surface,
         r.pixels_without_measured_noise
+    );
+    say!(
+        "relV: predicted {:.4e}, measured {:.4e} (ratio {:.3})",
+        r.rel_v_predicted,
+        r.rel_v_measured,
+        r.rel_v_predicted / r.rel_v_measured
     );
     let s = &r.term_shares;
     say!(

@@ -210,6 +210,26 @@ struct ModeState<'a> {
     points: Vec<PassPoint>,
 }
 
+/// The reference's own error, as the amounts it adds to a squared-error figure.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ErrorFloor {
+    /// Mean over pixels of the reference's variance (W²·m⁻⁴·sr⁻²).
+    pub(crate) mse: f64,
+    /// The same divided per pixel by R² + ε ([`rel_mean`]).
+    pub(crate) rel_mse: f64,
+}
+
+/// `measured − floor`: a squared-error figure of the image alone, without the reference's own
+/// error `floor`; at least 1 % of `floor`, a positive stand-in for "below what the reference
+/// can resolve" that the log-log interpolation needs. Unchanged when `floor` is 0.
+pub(crate) fn without_floor(measured: f64, floor: f64) -> f64 {
+    if floor > 0.0 {
+        (measured - floor).max(0.01 * floor)
+    } else {
+        measured
+    }
+}
+
 /// The common time at which modes are compared: the smallest final time over the modes
 /// (every mode ran at least that long).
 pub(crate) fn equal_time(runs: &[ModeRun]) -> f64 {
@@ -275,6 +295,8 @@ struct RefFacts {
     /// RMSE-equivalent of the reference's own standard error (an upper bound: the luminance of
     /// the per-channel standard errors), when known.
     floor: Option<f64>,
+    /// The reference's own error in relMSE (0 without a stderr layer).
+    rel_mse_floor: f64,
 }
 
 /// The markdown report: settings, reference, and the per-mode table.
@@ -297,6 +319,14 @@ fn markdown(
         ),
         None => "its own error is unknown (no stderr layer)".into(),
     };
+    let subtracted = if refs.floor.is_some() {
+        format!(
+            " Every error figure (RMSE, rel. RMSE, relMSE) has the reference's own error              subtracted: its variance per pixel from the squared error (relMSE {:.3e}), floored              at 1 % of it.",
+            refs.rel_mse_floor
+        )
+    } else {
+        String::new()
+    };
     let _ = writeln!(
         s,
         "Reference: {}; mean luminance {:.4e} W·m⁻²·sr⁻¹; {floor}.\n",
@@ -314,7 +344,7 @@ fn markdown(
          columns interpolate each mode's curve in log-log at the smallest final {clock} time \
          of all modes; efficiency is 1/(mean V · {clock} time per pass), and in relV \
          1/(relV · {clock} time per pass), relative to `{baseline}`. Without bias, relMSE after \
-         K passes is relV/K plus the reference's own error.\n"
+         K passes is relV/K.{subtracted}\n"
     );
     let _ = writeln!(
         s,
@@ -476,13 +506,21 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
             reference.path.display()
         ));
     }
+    // The reference's own variance per pixel (its squared standard error), subtracted from
+    // every squared error below: E[(I − R)²] = MSE(I) + Var(R) for an independent R.
+    let ref_var: Vec<f64> = match &reference.stderr {
+        Some(se) => se.iter().map(|c| luminance(*c).powi(2)).collect(),
+        None => vec![0.0; ref_lum.len()],
+    };
+    let floor = ErrorFloor {
+        mse: mean(&ref_var),
+        rel_mse: rel_mean(&ref_var, &ref_lum),
+    };
     let refs = RefFacts {
         origin: reference.origin.clone(),
         mean_lum: ref_mean,
-        floor: reference.stderr.as_ref().map(|se| {
-            let sq: Vec<f64> = se.iter().map(|c| luminance(*c).powi(2)).collect();
-            mean(&sq).sqrt()
-        }),
+        floor: reference.stderr.as_ref().map(|_| floor.mse.sqrt()),
+        rel_mse_floor: floor.rel_mse,
     };
 
     // The modes: every renderer is prepared first, then the passes are taken round-robin, one
@@ -548,7 +586,7 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
             m.film.add_pass(&out.estimates, out.dropped);
             m.lum.add_pass(&out.estimates);
             let image = m.lum.mean();
-            let e = rmse(&image, &ref_lum);
+            let e = without_floor(rmse(&image, &ref_lum).powi(2), floor.mse).sqrt();
             let var = m.lum.variance();
             let sqrt_v = var.as_ref().map_or(f64::NAN, |v| {
                 mean(&v.iter().map(|x| x.sqrt()).collect::<Vec<_>>())
@@ -569,7 +607,7 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
                 cpu_s: m.cpu,
                 rmse: e,
                 rel_rmse: e / ref_mean,
-                rel_mse: rel_mse(&image, &ref_lum),
+                rel_mse: without_floor(rel_mse(&image, &ref_lum), floor.rel_mse),
                 mean_sqrt_v: sqrt_v,
                 mean_rel_sqrt_v: rel_sqrt_v,
             });
@@ -720,6 +758,13 @@ mod tests {
         assert!((rel_mean(&[1.0, 1.0], &r) - expected).abs() < 1e-12);
         assert_eq!(rel_mse(&r, &r), 0.0);
         assert!((rel_epsilon(&r) - 0.01).abs() < 1e-15);
+    }
+
+    #[test]
+    fn the_references_error_is_subtracted_down_to_a_positive_floor() {
+        assert_eq!(without_floor(5.0, 0.0), 5.0);
+        assert_eq!(without_floor(5.0, 2.0), 3.0);
+        assert_eq!(without_floor(1.0, 2.0), 0.02);
     }
 
     #[test]
