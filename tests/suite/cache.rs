@@ -75,7 +75,7 @@ fn cache_reproduces_the_uniform_furnace_radiance() {
 
 #[test]
 fn glossy_scenes_get_directional_bins_and_b() {
-    let path = scene_path("cornell-glossy.toml");
+    let path = scene_path("preprint/cornell-glossy.toml");
     let scene = bdpm_load::load_scene(&path).unwrap().scene;
     let settings = CacheSettings {
         bins: 100,

@@ -20,12 +20,12 @@ const RADIUS: f32 = 0.01;
 
 fn scene() -> &'static (Scene, RenderSettings) {
     static SCENE: OnceLock<(Scene, RenderSettings)> = OnceLock::new();
-    SCENE.get_or_init(|| load("cornell-lambert.toml", RES, RES))
+    SCENE.get_or_init(|| load("preprint/cornell-lambert.toml", RES, RES))
 }
 
 fn glossy() -> &'static (Scene, RenderSettings) {
     static SCENE: OnceLock<(Scene, RenderSettings)> = OnceLock::new();
-    SCENE.get_or_init(|| load("cornell-glossy.toml", RES, RES))
+    SCENE.get_or_init(|| load("preprint/cornell-glossy.toml", RES, RES))
 }
 
 fn reference() -> &'static Film {

@@ -13,7 +13,7 @@ fn bits(film: &bdpm_integrator::Film) -> Vec<u64> {
 
 #[test]
 fn images_do_not_depend_on_the_thread_count() {
-    let (scene, settings) = load("cornell-glossy.toml", 24, 24);
+    let (scene, settings) = load("preprint/cornell-glossy.toml", 24, 24);
     for mode in ["path", "light", "optimal", "balance"] {
         let s = with_mode(&settings, mode, 2, 2, 20_000);
         let render_on = |threads: usize| {
@@ -46,7 +46,7 @@ fn images_do_not_depend_on_the_thread_count() {
 /// one (where only `algebraic-direct` has no directional cache and so uses them).
 #[test]
 fn precomputed_photon_inputs_keep_the_bits() {
-    for scene_file in ["cornell-lambert.toml", "cornell-glossy.toml"] {
+    for scene_file in ["preprint/cornell-lambert.toml", "preprint/cornell-glossy.toml"] {
         let (scene, settings) = load(scene_file, 24, 24);
         for mode in [
             "algebraic-direct",

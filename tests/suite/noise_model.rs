@@ -112,7 +112,7 @@ struct Row {
 
 /// Measures one resolution: rows for N_B = 4, 16, 64 (jittered) and the centred ratios.
 fn measure(size: u32) -> (Vec<f64>, Vec<Row>, Vec<f64>) {
-    let (scene, base) = load("cornell-lambert.toml", size, size);
+    let (scene, base) = load("preprint/cornell-lambert.toml", size, size);
     let base = RenderSettings {
         passes: PASSES,
         photons: PHOTONS,

@@ -211,7 +211,7 @@ fn translations_up_to_nine_hundred_kilometres_give_the_same_image_bits_in_every_
 /// (obvhs's box test ignored everything within 10⁻⁴ m of a ray's origin).
 #[test]
 fn rays_leaving_a_seam_towards_the_neighbouring_surface_do_not_escape() {
-    let (scene, _) = load("cornell-lambert.toml", 8, 8);
+    let (scene, _) = load("preprint/cornell-lambert.toml", 8, 8);
     let seam = Seam::cornell_left_floor();
     let g = &scene.geometry();
     let eye = Vec3::new(1.39, 1.3, 1.4);
@@ -256,7 +256,7 @@ fn rays_leaving_a_seam_towards_the_neighbouring_surface_do_not_escape() {
 /// a segment's length).
 #[test]
 fn shadow_segments_through_a_neighbouring_surface_are_occluded() {
-    let (scene, _) = load("cornell-lambert.toml", 8, 8);
+    let (scene, _) = load("preprint/cornell-lambert.toml", 8, 8);
     let seam = Seam::cornell_left_floor();
     let eye = Vec3::new(1.39, 1.3, 1.4);
     let mut rng = Rng::new(8, Domain::Other, [0; 3]);

@@ -133,7 +133,7 @@ fn bdd0_furnace_prediction_matches_with_one_jittered_sample() {
 /// the cache only when its mode needs it): the same image bits with and without it.
 #[test]
 fn model_inputs_keep_the_image_bits() {
-    let (scene, settings) = load("cornell-lambert.toml", 16, 16);
+    let (scene, settings) = load("preprint/cornell-lambert.toml", 16, 16);
     for mode in ["bdd0", "bdd1", "balance"] {
         let s = with_mode(&settings, mode, 1, 2, 5_000);
         let plain = Renderer::new(&scene, &s).expect("valid settings");
@@ -170,7 +170,7 @@ fn total_over(p: &bdpm_integrator::Prediction, q: &bdpm_integrator::Prediction) 
 /// jittered samples (N_eff ≈ 1) the weights it leaves on the table are small.
 #[test]
 fn no_mode_predicts_less_than_the_floor() {
-    let (scene, settings) = load("cornell-lambert.toml", 24, 24);
+    let (scene, settings) = load("preprint/cornell-lambert.toml", 24, 24);
     let floor_h = bdpm_mis::Heuristic::OptimalSplit {
         clamp_weights: false,
     };

@@ -48,7 +48,7 @@ fn escaped_through_a_wall(o: Vec3, d: Vec3) -> Option<bool> {
 
 #[test]
 fn rays_from_near_every_edge_of_the_box_do_not_escape() {
-    let (scene, _) = load("cornell-lambert.toml", 8, 8);
+    let (scene, _) = load("preprint/cornell-lambert.toml", 8, 8);
     let g = scene.geometry();
     // The five walls are the scene's first five quads: floor, ceiling, back, right, left.
     let walls: Vec<u32> = (0..10).collect();

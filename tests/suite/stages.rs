@@ -27,23 +27,23 @@ fn modes_prepare_only_what_they_need() {
         "camis",
     ] {
         assert!(
-            stage_names("cornell-lambert.toml", mode).is_empty(),
+            stage_names("preprint/cornell-lambert.toml", mode).is_empty(),
             "{mode} prepared something"
         );
     }
     // The model-based weights use each pixel's N_eff (method.md §12): footprints, no cache.
-    let direct = stage_names("cornell-lambert.toml", "algebraic-direct");
+    let direct = stage_names("preprint/cornell-lambert.toml", "algebraic-direct");
     assert_eq!(
         direct.iter().map(|s| s.0.as_str()).collect::<Vec<_>>(),
         ["pixel footprints"]
     );
-    let algebraic = stage_names("cornell-lambert.toml", "algebraic");
+    let algebraic = stage_names("preprint/cornell-lambert.toml", "algebraic");
     assert_eq!(
         algebraic.iter().map(|s| s.0.as_str()).collect::<Vec<_>>(),
         ["radiance cache", "pixel footprints"]
     );
     for mode in ["optimal", "optimal-split", "optimal-path"] {
-        let stages = stage_names("cornell-lambert.toml", mode);
+        let stages = stage_names("preprint/cornell-lambert.toml", mode);
         assert_eq!(
             stages.iter().map(|s| s.0.as_str()).collect::<Vec<_>>(),
             ["radiance cache", "pixel table"],
@@ -57,7 +57,7 @@ fn modes_prepare_only_what_they_need() {
 /// weights use N_B: either way no footprints are computed.
 #[test]
 fn centred_samples_and_the_pinhole_model_need_no_footprints() {
-    let (scene, settings) = load("cornell-lambert.toml", 16, 16);
+    let (scene, settings) = load("preprint/cornell-lambert.toml", 16, 16);
     for (jitter, model) in [
         (false, bdpm_integrator::NoiseModel::Footprint),
         (true, bdpm_integrator::NoiseModel::Pinhole),
@@ -77,13 +77,13 @@ fn centred_samples_and_the_pinhole_model_need_no_footprints() {
 
 #[test]
 fn lambert_scenes_get_one_bin_and_glossy_scenes_get_k_bins() {
-    let lambert = stage_names("cornell-lambert.toml", "optimal");
+    let lambert = stage_names("preprint/cornell-lambert.toml", "optimal");
     assert!(
         lambert[0].1.contains(" 1 bin(s) per side") && lambert[0].1.contains("derived"),
         "{:?}",
         lambert[0]
     );
-    let glossy = stage_names("cornell-glossy.toml", "optimal");
+    let glossy = stage_names("preprint/cornell-glossy.toml", "optimal");
     assert!(
         glossy[0].1.contains(" 100 bin(s) per side") && glossy[0].1.contains("b stored"),
         "{:?}",
@@ -95,7 +95,7 @@ fn lambert_scenes_get_one_bin_and_glossy_scenes_get_k_bins() {
 /// while a mix uses both; and the weighted layers sum to the image.
 #[test]
 fn pure_strategies_skip_the_other_technique() {
-    let (scene, settings) = load("cornell-lambert.toml", 16, 16);
+    let (scene, settings) = load("preprint/cornell-lambert.toml", 16, 16);
     let layers = |mode: &str| {
         let s = with_mode(&settings, mode, 1, 4, 50_000);
         let r = Renderer::new(&scene, &s)

@@ -78,13 +78,13 @@ fn camera_and_photon_vertices_agree(scene_name: &str, photons: u64) -> usize {
 
 #[test]
 fn camera_x1_and_photon_previous_vertex_have_the_same_weight_inputs_lambert() {
-    let n = camera_and_photon_vertices_agree("cornell-lambert.toml", 2_000);
+    let n = camera_and_photon_vertices_agree("preprint/cornell-lambert.toml", 2_000);
     assert!(n > 1_000, "only {n} vertices compared");
 }
 
 #[test]
 fn camera_x1_and_photon_previous_vertex_have_the_same_weight_inputs_glossy() {
-    let n = camera_and_photon_vertices_agree("cornell-glossy.toml", 2_000);
+    let n = camera_and_photon_vertices_agree("preprint/cornell-glossy.toml", 2_000);
     assert!(n > 1_000, "only {n} vertices compared");
 }
 
@@ -92,7 +92,7 @@ fn camera_x1_and_photon_previous_vertex_have_the_same_weight_inputs_glossy() {
 /// b = (k_d/π)·L_d (luminances, method.md §7), and a glossy scene's cache stores its own b.
 #[test]
 fn the_cache_returns_b_in_lambert_only_scenes() {
-    let (scene, _) = load("cornell-lambert.toml", 16, 16);
+    let (scene, _) = load("preprint/cornell-lambert.toml", 16, 16);
     let settings = CacheSettings {
         bins: 16,
         cell_size: 0.2,

@@ -165,15 +165,32 @@ pub fn assets_hash(gltf_files: &[PathBuf]) -> String {
 }
 
 /// The scene identity that every image header carries (`bdpm.scene_hash`): FNV-1a of the
-/// scene file's hash and the [`assets_hash`] of the files it references, hex. Two renders with
-/// the same scene hash rendered the same scene content, wherever its files were.
+/// scene file's content and the [`assets_hash`] of the files it references, hex. The content
+/// is the file as TOML without its `[render]` table, comments and layout (the bytes, for a
+/// file that is not TOML): two renders with the same scene hash rendered the same scene,
+/// wherever its files were and whatever their render settings, so that a reference or a
+/// measured render made with other settings (scenes/preprint/) is accepted.
 pub fn scene_hash(scene: &Path, gltf_files: &[PathBuf]) -> Result<String, String> {
     let bytes =
         std::fs::read(scene).map_err(|e| format!("{}: cannot read: {e}", scene.display()))?;
     Ok(combined_hash(
-        &format!("{:016x}", fnv1a(&bytes)),
+        &format!("{:016x}", fnv1a(&scene_content(&bytes))),
         &assets_hash(gltf_files),
     ))
+}
+
+/// What of a scene file [`scene_hash`] covers (see there).
+fn scene_content(bytes: &[u8]) -> Vec<u8> {
+    let parsed = std::str::from_utf8(bytes)
+        .ok()
+        .and_then(|t| t.parse::<toml::Table>().ok());
+    match parsed {
+        Some(mut table) => {
+            table.remove("render");
+            toml::to_string(&table).map_or_else(|_| bytes.to_vec(), String::into_bytes)
+        }
+        None => bytes.to_vec(),
+    }
 }
 
 fn combined_hash(scene_file: &str, assets: &str) -> String {
@@ -664,6 +681,16 @@ pub fn combine(parts: Vec<Accumulation>) -> Result<(Accumulation, Vec<PathBuf>),
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_scene_hash_ignores_render_settings_comments_and_layout() {
+        let a = b"# a box\n[render]\npasses = 3\n\n[[light]]\nposition = [0.0, 1.0, 0.0]\n";
+        let b = b"[render]\npasses = 9\nradius = \"1px\"\n[[light]]\nposition = [0.0,  1.0, 0.0]\n";
+        let c = b"[render]\npasses = 3\n[[light]]\nposition = [0.0, 2.0, 0.0]\n";
+        assert_eq!(scene_content(a), scene_content(b));
+        assert_ne!(scene_content(a), scene_content(c));
+        assert_eq!(scene_content(b"not = [toml"), b"not = [toml".to_vec());
+    }
 
     #[test]
     fn fnv_hash_is_stable() {

@@ -143,7 +143,7 @@ fn render_writes_exr_png_noise_map_and_report() {
     let dir = TempDir::new("render");
     let out = run(bdpm()
         .arg("render")
-        .arg(scene("cornell-lambert.toml"))
+        .arg(scene("preprint/cornell-lambert.toml"))
         .args(["--mode", "path", "--resolution", "24x24", "--passes", "2"])
         .args(["--spp", "2", "--quiet", "-o"])
         .arg(dir.path("X.exr")));
@@ -203,7 +203,7 @@ fn technique_layers_sum_to_the_image() {
     let dir = TempDir::new("techniques");
     let out = run(bdpm()
         .arg("render")
-        .arg(scene("cornell-lambert.toml"))
+        .arg(scene("preprint/cornell-lambert.toml"))
         .args([
             "--mode",
             "optimal",
@@ -254,7 +254,7 @@ fn techniques_flag_is_refused_for_reference_modes() {
     let dir = TempDir::new("techniques-path");
     let out = run(bdpm()
         .arg("render")
-        .arg(scene("cornell-lambert.toml"))
+        .arg(scene("preprint/cornell-lambert.toml"))
         .args(["--mode", "path", "--resolution", "8x8", "--passes", "1"])
         .args(["--techniques", "--quiet", "-o"])
         .arg(dir.path("p.exr")));
@@ -439,7 +439,7 @@ fn weight_map_shows_the_ceiling_spot() {
     let dir = TempDir::new("weights");
     let out = run(bdpm()
         .arg("weights")
-        .arg(scene("cornell-lambert.toml"))
+        .arg(scene("preprint/cornell-lambert.toml"))
         .args(["--x0", "1.05,0.4125,0.4475", "--mode", "algebraic"])
         // The preprint's figure is drawn with its own (pinhole) noise model: N_B = 30.
         .args(["--noise-model", "pinhole"])
@@ -492,12 +492,12 @@ fn weight_map_shows_the_ceiling_spot() {
 fn weights_needs_a_mode_with_weights() {
     let out = run(bdpm()
         .arg("weights")
-        .arg(scene("cornell-lambert.toml"))
+        .arg(scene("preprint/cornell-lambert.toml"))
         .args(["--pixel", "4,4", "--mode", "path", "--resolution", "8x8"]));
     assert_one_line_error(&out, &["--mode path", "no weights"]);
     let out = run(bdpm()
         .arg("weights")
-        .arg(scene("cornell-lambert.toml"))
+        .arg(scene("preprint/cornell-lambert.toml"))
         .args(["--pixel", "40,4", "--mode", "bdd1", "--resolution", "8x8"]));
     assert_one_line_error(&out, &["--pixel", "outside"]);
 }
@@ -511,7 +511,7 @@ fn compare_tells_identical_from_merely_equivalent_renders() {
     let render = |name: &str, seed: &str, threads: &str, res: &str| {
         let out = run(bdpm()
             .arg("render")
-            .arg(scene("cornell-lambert.toml"))
+            .arg(scene("preprint/cornell-lambert.toml"))
             .args(["--mode", "balance", "--resolution", res, "--passes", "3"])
             .args(["--spp", "4", "--photons", "20000", "--seed", seed])
             .args(["--threads", threads, "--quiet", "-o"])
@@ -571,14 +571,14 @@ fn predict_compares_the_noise_model_with_a_render() {
     let rendered = dir.path("r.exr");
     let out = run(bdpm()
         .arg("render")
-        .arg(scene("cornell-lambert.toml"))
+        .arg(scene("preprint/cornell-lambert.toml"))
         .args(settings)
         .args(["--passes", "8", "--quiet", "-o"])
         .arg(&rendered));
     assert_success(&out);
     let out = run(bdpm()
         .arg("predict")
-        .arg(scene("cornell-lambert.toml"))
+        .arg(scene("preprint/cornell-lambert.toml"))
         .args(settings)
         .arg("--measured")
         .arg(&rendered)
@@ -657,7 +657,7 @@ fn predict_compares_the_noise_model_with_a_render() {
         other[i] = value;
         let out = run(bdpm()
             .arg("predict")
-            .arg(scene("cornell-lambert.toml"))
+            .arg(scene("preprint/cornell-lambert.toml"))
             .args(&other)
             .arg("--measured")
             .arg(&rendered)
@@ -672,7 +672,7 @@ fn predict_compares_the_noise_model_with_a_render() {
 fn spawn_render(args: &[&[&str]], out: &Path) -> std::process::Child {
     bdpm()
         .arg("render")
-        .arg(scene("cornell-lambert.toml"))
+        .arg(scene("preprint/cornell-lambert.toml"))
         .args(args.concat())
         .args(["--quiet", "-o"])
         .arg(out)
@@ -731,7 +731,7 @@ fn output_location_is_checked_before_any_work() {
         // 10⁵ passes would take minutes: the error must come before the render.
         let out = run(bdpm()
             .arg("render")
-            .arg(scene("cornell-lambert.toml"))
+            .arg(scene("preprint/cornell-lambert.toml"))
             .args([
                 "--resolution",
                 "64x64",
@@ -773,7 +773,7 @@ fn a_second_render_to_the_same_output_is_refused_and_temps_cannot_be_planted() {
     }
     let second = run(bdpm()
         .arg("render")
-        .arg(scene("cornell-lambert.toml"))
+        .arg(scene("preprint/cornell-lambert.toml"))
         .args(["--resolution", "8x8", "--passes", "1", "--quiet", "-o"])
         .arg(&out));
     assert_one_line_error(&second, &["L.exr", "another bdpm render"]);
@@ -815,7 +815,7 @@ fn stale_temporary_files_of_the_output_are_removed() {
     }
     let out = run(bdpm()
         .arg("render")
-        .arg(scene("cornell-lambert.toml"))
+        .arg(scene("preprint/cornell-lambert.toml"))
         .args([
             "--mode",
             "path",
@@ -991,7 +991,7 @@ fn memory_is_estimated_before_the_render_and_refused_above_the_limit() {
         let start = Instant::now();
         let out = run(bdpm()
             .arg("render")
-            .arg(scene("cornell-lambert.toml"))
+            .arg(scene("preprint/cornell-lambert.toml"))
             .args(args)
             .args(["--quiet", "-o"])
             .arg(dir.path("m.exr")));
@@ -1006,7 +1006,7 @@ fn memory_is_estimated_before_the_render_and_refused_above_the_limit() {
     // Within the limit, the estimate and the measured peak are in the report.
     let out = run(bdpm()
         .arg("render")
-        .arg(scene("cornell-lambert.toml"))
+        .arg(scene("preprint/cornell-lambert.toml"))
         .args(["--mode", "bdd0", "--resolution", "16x16", "--passes", "1"])
         .args([
             "--photons",
@@ -1055,7 +1055,7 @@ fn memory_is_estimated_before_the_render_and_refused_above_the_limit() {
 fn small_render(out: &Path, extra: &[&str]) -> Output {
     let out = run(bdpm()
         .arg("render")
-        .arg(scene("cornell-lambert.toml"))
+        .arg(scene("preprint/cornell-lambert.toml"))
         .args(["--resolution", "16x16", "--photons", "2000", "--spp", "1"])
         .args(["--mode", "optimal", "--quiet"])
         .args(extra)
@@ -1188,7 +1188,7 @@ fn overlapping_or_mismatched_parts_are_refused() {
     // Resuming with other settings is refused the same way.
     let out = run(bdpm()
         .arg("render")
-        .arg(scene("cornell-lambert.toml"))
+        .arg(scene("preprint/cornell-lambert.toml"))
         .args(["--resolution", "16x16", "--photons", "3000", "--spp", "1"])
         .args(["--mode", "optimal", "--quiet", "--passes", "1", "--resume"])
         .arg(&a)
@@ -1302,7 +1302,7 @@ fn budgets_stop_after_the_pass_that_crosses_them() {
 fn render_small(dir: &TempDir, name: &str, extra: &[&str]) -> Exr {
     let out = run(bdpm()
         .arg("render")
-        .arg(scene("cornell-lambert.toml"))
+        .arg(scene("preprint/cornell-lambert.toml"))
         .args(["--resolution", "24x24", "--passes", "1", "--spp", "2"])
         .args(["--photons", "5000", "--quiet"])
         .args(extra)
@@ -1384,7 +1384,7 @@ fn bad_exr_precision_is_refused() {
     let dir = TempDir::new("precision-bad");
     let out = run(bdpm()
         .arg("render")
-        .arg(scene("cornell-lambert.toml"))
+        .arg(scene("preprint/cornell-lambert.toml"))
         .args(["--resolution", "8x8", "--exr-precision", "double", "-o"])
         .arg(dir.path("p.exr")));
     assert_one_line_error(&out, &["--exr-precision", "double"]);
@@ -1430,7 +1430,7 @@ fn closed_standard_streams_never_panic() {
     let (code, stderr) = run_with_closed(
         bdpm()
             .arg("bench")
-            .arg(scene("cornell-lambert.toml"))
+            .arg(scene("preprint/cornell-lambert.toml"))
             .args(["--modes", "path", "--resolution", "8x8", "--photons", "500"])
             .args(["--spp", "1", "--passes", "1", "--repeats", "1"])
             .args(["--threads-list", "1", "-o"])
@@ -1444,7 +1444,7 @@ fn closed_standard_streams_never_panic() {
     let (code, _) = run_with_closed(
         bdpm()
             .arg("render")
-            .arg(scene("cornell-lambert.toml"))
+            .arg(scene("preprint/cornell-lambert.toml"))
             .args([
                 "--resolution",
                 "8x8",
@@ -1465,7 +1465,7 @@ fn closed_standard_streams_never_panic() {
     let out = dir.path("long.exr");
     let mut child = bdpm()
         .arg("render")
-        .arg(scene("cornell-lambert.toml"))
+        .arg(scene("preprint/cornell-lambert.toml"))
         .args(["--resolution", "64x64", "--spp", "100000", "--passes", "2"])
         .args(["--mode", "path", "--threads", "1", "--quiet", "-o"])
         .arg(&out)
@@ -1509,7 +1509,7 @@ fn output_sets_refuse_inputs_other_sets_and_bad_members_before_any_work() {
     let render_to = |name: &str, extra: &[&str]| {
         run(bdpm()
             .arg("render")
-            .arg(scene("cornell-lambert.toml"))
+            .arg(scene("preprint/cornell-lambert.toml"))
             .args(["--resolution", "16x16", "--photons", "2000", "--spp", "1"])
             .args(flags)
             .args(extra)
@@ -1533,7 +1533,7 @@ fn output_sets_refuse_inputs_other_sets_and_bad_members_before_any_work() {
     );
     let out = run(bdpm()
         .arg("predict")
-        .arg(scene("cornell-lambert.toml"))
+        .arg(scene("preprint/cornell-lambert.toml"))
         .args([
             "--resolution",
             "16x16",
@@ -1571,7 +1571,7 @@ fn output_sets_refuse_inputs_other_sets_and_bad_members_before_any_work() {
         let start = Instant::now();
         let out = run(bdpm()
             .arg("render")
-            .arg(scene("cornell-lambert.toml"))
+            .arg(scene("preprint/cornell-lambert.toml"))
             .args(["--resolution", "64x64", "--passes", "100000", "--quiet"])
             .args(extra)
             .arg("-o")
@@ -1703,7 +1703,7 @@ fn predict_and_study_check_passes_done_and_the_scene() {
     let predict = |measured: &str| {
         run(bdpm()
             .arg("predict")
-            .arg(scene("cornell-lambert.toml"))
+            .arg(scene("preprint/cornell-lambert.toml"))
             .args(settings)
             .arg("--measured")
             .arg(dir.path(measured))
@@ -1712,13 +1712,13 @@ fn predict_and_study_check_passes_done_and_the_scene() {
     };
     // Stopped by its budget after one pass of 1000: V was not measured.
     render(
-        "cornell-lambert.toml",
+        "preprint/cornell-lambert.toml",
         "budget.exr",
         &["--passes", "1000", "--time-budget", "1e-9"],
     );
     assert_one_line_error(&predict("budget.exr"), &["budget.exr", "1 pass done"]);
     // Three passes: the report says 3, not the scene file's pass count.
-    render("cornell-lambert.toml", "three.exr", &["--passes", "3"]);
+    render("preprint/cornell-lambert.toml", "three.exr", &["--passes", "3"]);
     assert_success(&predict("three.exr"));
     assert_eq!(read_json(&dir.path("p.json"))["passes"], 3);
     // Without the scene hash or the estimator hash (an older bdpm's render): not checkable.
@@ -1741,11 +1741,11 @@ fn predict_and_study_check_passes_done_and_the_scene() {
         assert_one_line_error(&predict("stripped.exr"), &["stripped.exr", needle]);
     }
     // The glossy box with the same settings: another scene.
-    render("cornell-glossy.toml", "glossy.exr", &["--passes", "3"]);
+    render("preprint/cornell-glossy.toml", "glossy.exr", &["--passes", "3"]);
     assert_one_line_error(&predict("glossy.exr"), &["glossy.exr", "another scene"]);
     let out = run(bdpm()
         .arg("study")
-        .arg(scene("cornell-lambert.toml"))
+        .arg(scene("preprint/cornell-lambert.toml"))
         .args([
             "--modes",
             "optimal",
@@ -1836,7 +1836,7 @@ fn held_passes_count_in_the_memory_estimate() {
     let render = |extra: &[&str], out: &str| {
         run(bdpm()
             .arg("render")
-            .arg(scene("cornell-lambert.toml"))
+            .arg(scene("preprint/cornell-lambert.toml"))
             .args(flags)
             .args(extra)
             .arg("-o")
@@ -1918,7 +1918,7 @@ fn an_interrupted_merge_reports_what_it_did() {
     ];
     let o = run(bdpm()
         .arg("render")
-        .arg(scene("cornell-lambert.toml"))
+        .arg(scene("preprint/cornell-lambert.toml"))
         .args(flags)
         .args(["--passes", "200", "--accumulate", "-o"])
         .arg(dir.path("h.exr")));
@@ -1977,7 +1977,7 @@ fn merge_and_resume_messages_name_the_problem() {
     );
     let out = run(bdpm()
         .arg("render")
-        .arg(scene("cornell-lambert.toml"))
+        .arg(scene("preprint/cornell-lambert.toml"))
         .args(["--resolution", "8x8", "--photons", "2000", "--spp", "1"])
         .args(["--mode", "optimal", "--quiet", "--resume"])
         .arg(&accum)

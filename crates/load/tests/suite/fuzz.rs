@@ -18,6 +18,7 @@ fn seeds() -> Vec<String> {
     [
         "cornell-lambert.toml",
         "cornell-glossy.toml",
+        "preprint/cornell-lambert.toml",
         "sphere-furnace.toml",
     ]
     .iter()

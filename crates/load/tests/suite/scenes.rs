@@ -50,7 +50,7 @@ fn check_cornell_geometry(s: &LoadedScene) {
 
 #[test]
 fn cornell_lambert_matches_appendix_a() {
-    let s = load("cornell-lambert.toml");
+    let s = load("preprint/cornell-lambert.toml");
     check_cornell_geometry(&s);
     assert_eq!(s.scene.lights().len(), 1);
     assert!(close(
@@ -72,15 +72,43 @@ fn cornell_lambert_matches_appendix_a() {
         (256, 256, 10, 1_000_000, 30, 1)
     );
     assert_eq!(r.mode.name(), "balance");
+    assert_eq!(r.sampler, bdpm_settings::Sampler::Independent);
+    assert_eq!((r.radius, r.radius_px), (Some(2.796 / 1600.0), None));
     assert_eq!(
         s.output.as_deref(),
-        Some(Path::new("out/cornell-lambert.exr"))
+        Some(Path::new("out/preprint-cornell-lambert.exr"))
     );
 }
 
 #[test]
+fn the_default_cornell_files_are_the_preprint_scenes_with_other_render_settings() {
+    for name in ["cornell-lambert.toml", "cornell-glossy.toml"] {
+        let main = load(name);
+        let preprint = load(&format!("preprint/{name}"));
+        check_cornell_geometry(&main);
+        let tris = main.scene.geometry().triangle_count();
+        assert_eq!(tris, preprint.scene.geometry().triangle_count(), "{name}");
+        for prim in 0..tris as u32 {
+            assert_eq!(
+                main.scene.geometry().vertices(prim),
+                preprint.scene.geometry().vertices(prim),
+                "{name}"
+            );
+            let (a, b) = (
+                main.scene.bdf(main.scene.geometry().material(prim)),
+                preprint.scene.bdf(preprint.scene.geometry().material(prim)),
+            );
+            assert_eq!((a.kd(), a.gr(), a.delta()), (b.kd(), b.gr(), b.delta()));
+        }
+        assert_eq!(main.scene.lights(), preprint.scene.lights(), "{name}");
+        assert_eq!(main.settings.sampler, bdpm_settings::Sampler::Stratified);
+        assert!(main.settings.radius_px.is_some(), "{name}: radius in pixels");
+    }
+}
+
+#[test]
 fn cornell_glossy_matches_method_section_10() {
-    let s = load("cornell-glossy.toml");
+    let s = load("preprint/cornell-glossy.toml");
     check_cornell_geometry(&s);
     assert!(close(
         s.scene.lights()[0].position,
