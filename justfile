@@ -18,8 +18,8 @@ bench:
 
 # The preprint's two paper runs of docs/performance.md.
 paper:
-    cargo run --release -- render scenes/cornell-lambert.toml --mode optimal --resolution 512x512 -o out/paper-lambert.exr
-    cargo run --release -- render scenes/cornell-glossy.toml --mode optimal --resolution 512x512 -o out/paper-glossy.exr
+    cargo run --release -- render scenes/preprint/cornell-lambert.toml --mode optimal --resolution 512x512 -o out/paper-lambert.exr
+    cargo run --release -- render scenes/preprint/cornell-glossy.toml --mode optimal --resolution 512x512 -o out/paper-glossy.exr
 
 # Render the bit-check set into DIR (compare two sets with scripts/bit-check.sh compare A B).
 bit-check dir:

@@ -21,9 +21,9 @@ case "${1:-}" in
   render)
     dir=${2:?usage: $0 render DIR}; mkdir -p "$dir"
     for m in $modes; do
-      "$bin" render scenes/cornell-lambert.toml --mode "$m" --resolution 64x64 --passes 2 \
+      "$bin" render scenes/preprint/cornell-lambert.toml --mode "$m" --resolution 64x64 --passes 2 \
         --photons 200000 --spp 4 -o "$dir/lambert-$m.exr" --quiet > /dev/null
-      "$bin" render scenes/cornell-glossy.toml --mode "$m" --resolution 64x64 --passes 2 \
+      "$bin" render scenes/preprint/cornell-glossy.toml --mode "$m" --resolution 64x64 --passes 2 \
         --photons 100000 --spp 4 -o "$dir/glossy-$m.exr" --quiet > /dev/null
     done
     echo "rendered $(ls "$dir"/*.exr | wc -l) images into $dir" ;;

@@ -3,8 +3,10 @@
 # --time-budget SECONDS --threads THREADS`, in turn, REPEATS times (seeds 1..REPEATS), and
 # compares every image with REFERENCE (`bdpm compare`: rel. RMSE and relMSE with the
 # reference's own error subtracted). Prints one line per render and, per scene file, the
-# medians of the error and of the wall time the render took (a render stops after the pass
-# that reaches the budget, so its time is a little over it: compare errors at the times shown).
+# medians of the error and of the wall time the render took. A render stops after the pass
+# that reaches the budget, so its time is a little over it; the "at the budget" column scales
+# each render's rel. RMSE by √(its time / budget), as a variance-dominated error falls (a bias
+# does not fall, so this overstates the error of a biased render).
 # Usage:
 #   scripts/equal-time.sh REFERENCE.exr SECONDS THREADS REPEATS SCENE.toml...
 # e.g. (docs/results.md, "Defaults that win at equal time"):
@@ -24,25 +26,27 @@ for i in $(seq "$repeats"); do
     "$bin" render "$scene" --time-budget "$budget" --threads "$threads" --seed "$i" \
       --passes 100000 "${extra[@]}" -o "$tmp/run.exr" --quiet > /dev/null
     line=$("$bin" compare "$tmp/run.exr" "$ref" | grep "as reference")
-    python3 - "$tmp/run.json" "$line" "$scene" "$i" >> "$tmp/$key.txt" <<'PY'
+    python3 - "$tmp/run.json" "$line" "$scene" "$i" "$budget" >> "$tmp/$key.txt" <<'PY'
 import json, re, sys
 d = json.load(open(sys.argv[1])); t = d["timing"]
 m = re.search(r"rel\. RMSE ([0-9.]+)%, relMSE ([0-9.e+-]+)", sys.argv[2])
 wall = t["prepare_s"] + t["render_s"]
-print(f'{float(m.group(1)):.3f} {float(m.group(2)):.4e} {wall:.2f} {d["passes_done"]}')
+budget = float(sys.argv[5])
+print(f'{float(m.group(1)):.3f} {float(m.group(2)):.4e} {wall:.2f} {d["passes_done"]} '
+      f'{float(m.group(1)) * (wall / budget) ** 0.5:.3f}')
 print(f'{sys.argv[3]} seed {sys.argv[4]}: rel. RMSE {m.group(1)}%, relMSE {m.group(2)}, '
       f'{wall:.1f} s, {d["passes_done"]} passes', file=sys.stderr)
 PY
   done
 done
-echo "| scene file | renders | median rel. RMSE | median relMSE | median wall s | median passes |"
-echo "|---|---:|---:|---:|---:|---:|"
+echo "| scene file | renders | median rel. RMSE | median rel. RMSE at the budget | median relMSE | median wall s | median passes |"
+echo "|---|---:|---:|---:|---:|---:|---:|"
 for scene in "$@"; do
   key=$(echo "$scene" | tr '/.' '__')
   python3 - "$tmp/$key.txt" "$scene" <<'PY'
 import statistics as st, sys
 rows = [list(map(float, l.split())) for l in open(sys.argv[1])]
 med = lambda k: st.median(r[k] for r in rows)
-print(f"| {sys.argv[2]} | {len(rows)} | {med(0):.2f}% | {med(1):.3e} | {med(2):.1f} | {med(3):.0f} |")
+print(f"| {sys.argv[2]} | {len(rows)} | {med(0):.2f}% | {med(4):.2f}% | {med(1):.3e} | {med(2):.1f} | {med(3):.0f} |")
 PY
 done

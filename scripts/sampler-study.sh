@@ -13,12 +13,12 @@ mkdir -p "$out"
 for scene in cornell-lambert cornell-glossy; do
   for res in $resolutions; do
     for r in $radii; do
-      modes="balance:sampler=independent,balance,optimal-path:sampler=independent,optimal-path"
+      modes="balance:sampler=independent,balance:sampler=stratified,optimal-path:sampler=independent,optimal-path:sampler=stratified"
       extra=()
       [ "$r" != scene ] && extra=(--radius "$r")
       dir="$out/$scene-$res-r$r"
       # The reference: 64 passes of `light`, cached under out/ (its own error is in study.md).
-      "$bin" study "scenes/$scene.toml" --modes "$modes" --passes "$passes" \
+      "$bin" study "scenes/preprint/$scene.toml" --modes "$modes" --passes "$passes" \
         --resolution "${res}x${res}" "${extra[@]}" --clock cpu --quiet \
         --reference-passes 64 -o "$dir" > "$dir.log"
       echo "$dir/study.md"

@@ -27,7 +27,7 @@ for path in sorted(glob.glob(os.path.join(sys.argv[1], "*", "study.md")),
     r = "1.75 mm (scene)" if r == "rscene" else f"{float(r[1:]) * 1000:g} mm"
     rs = rows(path)
     for mode in ["balance", "optimal-path"]:
-        ind, st = rs.get(f"{mode}:sampler=independent"), rs.get(mode)
+        ind, st = rs.get(f"{mode}:sampler=independent"), rs.get(f"{mode}:sampler=stratified")
         if not ind or not st:
             continue
         eff = lambda a, b, k: (b["cpu"] * b[k]) / (a["cpu"] * a[k])

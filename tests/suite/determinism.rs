@@ -46,7 +46,10 @@ fn images_do_not_depend_on_the_thread_count() {
 /// one (where only `algebraic-direct` has no directional cache and so uses them).
 #[test]
 fn precomputed_photon_inputs_keep_the_bits() {
-    for scene_file in ["preprint/cornell-lambert.toml", "preprint/cornell-glossy.toml"] {
+    for scene_file in [
+        "preprint/cornell-lambert.toml",
+        "preprint/cornell-glossy.toml",
+    ] {
         let (scene, settings) = load(scene_file, 24, 24);
         for mode in [
             "algebraic-direct",

@@ -28,6 +28,12 @@ pub struct CompareArgs {
     /// Exit with code 1 unless the mean radiance channels are bit-identical.
     #[arg(long)]
     require_identical: bool,
+    /// Also compare the means of BLOCK × BLOCK pixel blocks (luminance): each block's relative
+    /// difference and its z-score against the combined standard error of the block means
+    /// (both files need stderr). Tells a bias (many blocks off by many standard errors, of one
+    /// sign) from noise.
+    #[arg(long, value_name = "BLOCK")]
+    blocks: Option<u32>,
 }
 
 /// What a comparison found, per channel over pixel luminance (Rec. 709).
@@ -112,6 +118,50 @@ pub(crate) fn error_against(
     })
 }
 
+/// One block of [`block_differences`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct BlockDifference {
+    /// (mean of a − mean of b) / mean of b over the block's pixels.
+    pub(crate) relative: f64,
+    /// (mean of a − mean of b) / √(SE_a² + SE_b²) of the block means.
+    pub(crate) z: f64,
+}
+
+/// Differences of the luminance means of `block` × `block` pixel blocks of two images of
+/// `width` columns (partial blocks at the right and bottom edges included), with per-pixel
+/// standard errors of each (independent pixels). Blocks where `b`'s mean is not positive are
+/// left out.
+pub(crate) fn block_differences(
+    (a, b): (&[f64], &[f64]),
+    (se_a, se_b): (&[f64], &[f64]),
+    width: usize,
+    block: usize,
+) -> Vec<BlockDifference> {
+    let height = a.len() / width.max(1);
+    let mut out = Vec::new();
+    for by in (0..height).step_by(block) {
+        for bx in (0..width).step_by(block) {
+            let (mut sa, mut sb, mut va, mut n) = (0.0, 0.0, 0.0, 0.0);
+            for y in by..(by + block).min(height) {
+                for x in bx..(bx + block).min(width) {
+                    let i = y * width + x;
+                    sa += a[i];
+                    sb += b[i];
+                    va += se_a[i] * se_a[i] + se_b[i] * se_b[i];
+                    n += 1.0;
+                }
+            }
+            if sb > 0.0 {
+                out.push(BlockDifference {
+                    relative: (sa - sb) / sb,
+                    z: (sa - sb) / n / (va.sqrt() / n),
+                });
+            }
+        }
+    }
+    out
+}
+
 /// Runs `bdpm compare`.
 pub(crate) fn run(args: CompareArgs) -> CliResult<ExitCode> {
     let a = read_exr(&args.a)?;
@@ -170,6 +220,43 @@ pub(crate) fn run(args: CompareArgs) -> CliResult<ExitCode> {
             }
         );
     }
+    if let Some(block) = args.blocks {
+        let (Some(sa), Some(sb)) = (a.stderr.as_deref(), b.stderr.as_deref()) else {
+            return Err("--blocks needs the stderr layer in both files".into());
+        };
+        if block == 0 {
+            return Err("--blocks must be at least 1 pixel".into());
+        }
+        let lum = |v: &[glam::DVec3]| v.iter().map(|c| luminance(*c)).collect::<Vec<_>>();
+        let d = block_differences(
+            (&a_lum, &b_lum),
+            (&lum(sa), &lum(sb)),
+            a.width as usize,
+            block as usize,
+        );
+        let nb = d.len().max(1) as f64;
+        let mean_rel = d.iter().map(|x| x.relative).sum::<f64>() / nb;
+        let rms_z = (d.iter().map(|x| x.z * x.z).sum::<f64>() / nb).sqrt();
+        let beyond = d.iter().filter(|x| x.z.abs() > 3.0).count();
+        let worst = d
+            .iter()
+            .max_by(|x, y| x.z.abs().total_cmp(&y.z.abs()))
+            .copied();
+        say!(
+            "{}x{} blocks ({}): mean relative difference {:+.3}%, rms z {:.2} (1 for noise alone), {} beyond 3 standard errors{}",
+            block,
+            block,
+            d.len(),
+            100.0 * mean_rel,
+            rms_z,
+            beyond,
+            worst.map_or(String::new(), |w| format!(
+                "; largest |z| {:.1} at {:+.2}%",
+                w.z.abs(),
+                100.0 * w.relative
+            ))
+        );
+    }
     match c.within {
         Some(f) => say!(
             "{:.2}% of pixels within {} combined standard errors",
@@ -202,6 +289,20 @@ mod tests {
         // ε = 0.01: relMSE = (0.1 − 0.01)/1.01.
         assert!((e.rel_mse - 0.09 / 1.01).abs() < 1e-9);
         assert_eq!(error_against(&[1.0], &[0.0], None), None);
+    }
+
+    #[test]
+    fn block_differences_of_a_biased_image() {
+        // 4 × 2 pixels, blocks of 2: two blocks; the left one 10 % high.
+        let b = vec![1.0; 8];
+        let a = vec![1.1, 1.1, 1.0, 1.0, 1.1, 1.1, 1.0, 1.0];
+        let se = vec![0.01; 8];
+        let d = block_differences((&a, &b), (&se, &se), 4, 2);
+        assert_eq!(d.len(), 2);
+        assert!((d[0].relative - 0.1).abs() < 1e-12);
+        // Block SE: √(4·2·10⁻⁴)/4 = 0.00707; difference 0.1 → z ≈ 14.1.
+        assert!((d[0].z - 0.1 / (8e-4f64.sqrt() / 4.0)).abs() < 1e-9);
+        assert_eq!(d[1].relative, 0.0);
     }
 
     #[test]

@@ -152,11 +152,10 @@ pub fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> CliResul
         settings.spp = n;
     }
     if let Some(spec) = o.radius {
-        let r = match spec {
-            RadiusSpec::Metres(r) => r,
-            RadiusSpec::Pixels(_) => 1.0,
-        };
-        if !(r <= f32::MAX as f64) {
+        // `RadiusSpec::parse` took only finite numbers > 0; metres must also fit in f32.
+        if let RadiusSpec::Metres(r) = spec
+            && r > f32::MAX as f64
+        {
             let r = if (1e-4..1e7).contains(&r.abs()) {
                 format!("{r}")
             } else {

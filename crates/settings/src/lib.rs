@@ -583,7 +583,9 @@ impl RadiusSpec {
             format!("'{text}' is not a radius: write metres (0.01) or pixel footprints (1.2px)")
         })?;
         if !(v.is_finite() && v > 0.0) {
-            return Err(format!("'{text}': the radius must be a finite number > 0"));
+            return Err(format!(
+                "'{text}': the radius must be a positive, finite number"
+            ));
         }
         Ok(if px {
             RadiusSpec::Pixels(v)

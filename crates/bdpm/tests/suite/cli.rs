@@ -1718,7 +1718,11 @@ fn predict_and_study_check_passes_done_and_the_scene() {
     );
     assert_one_line_error(&predict("budget.exr"), &["budget.exr", "1 pass done"]);
     // Three passes: the report says 3, not the scene file's pass count.
-    render("preprint/cornell-lambert.toml", "three.exr", &["--passes", "3"]);
+    render(
+        "preprint/cornell-lambert.toml",
+        "three.exr",
+        &["--passes", "3"],
+    );
     assert_success(&predict("three.exr"));
     assert_eq!(read_json(&dir.path("p.json"))["passes"], 3);
     // Without the scene hash or the estimator hash (an older bdpm's render): not checkable.
@@ -1741,7 +1745,11 @@ fn predict_and_study_check_passes_done_and_the_scene() {
         assert_one_line_error(&predict("stripped.exr"), &["stripped.exr", needle]);
     }
     // The glossy box with the same settings: another scene.
-    render("preprint/cornell-glossy.toml", "glossy.exr", &["--passes", "3"]);
+    render(
+        "preprint/cornell-glossy.toml",
+        "glossy.exr",
+        &["--passes", "3"],
+    );
     assert_one_line_error(&predict("glossy.exr"), &["glossy.exr", "another scene"]);
     let out = run(bdpm()
         .arg("study")

@@ -421,7 +421,7 @@ fn radius_in_pixels_loads_and_bad_text_is_named() {
     );
     for (v, why) in [
         ("\"1.5 pixels\"", "not a radius"),
-        ("\"-2px\"", "> 0"),
+        ("\"-2px\"", "positive"),
         ("\"2000px\"", "pixel footprints in (0, 1000]"),
     ] {
         let m = error_of(&with("passes = 1", &format!("passes = 1\nradius = {v}")));

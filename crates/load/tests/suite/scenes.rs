@@ -102,7 +102,10 @@ fn the_default_cornell_files_are_the_preprint_scenes_with_other_render_settings(
         }
         assert_eq!(main.scene.lights(), preprint.scene.lights(), "{name}");
         assert_eq!(main.settings.sampler, bdpm_settings::Sampler::Stratified);
-        assert!(main.settings.radius_px.is_some(), "{name}: radius in pixels");
+        assert!(
+            main.settings.radius_px.is_some(),
+            "{name}: radius in pixels"
+        );
     }
 }
 
