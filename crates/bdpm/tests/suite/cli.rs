@@ -914,6 +914,15 @@ fn warnings_reach_stdout_and_the_report() {
     assert_eq!(json["settings"]["radius_given"], true);
     let w = json["warnings"][0].as_str().expect("warning");
     assert!(w.contains("merge radius"), "{w}");
+    // A radius in pixel footprints: resolved against the camera, reported in both units, and
+    // twice the pixels give twice the metres.
+    let (_, one) = render("px1", BASE_SCENE.into(), &["--radius", "0.5px"]);
+    let (_, two) = render("px2", BASE_SCENE.into(), &["--radius", "1px"]);
+    let px = |j: &serde_json::Value| j["settings"]["radius_px"].as_f64().expect("radius_px");
+    let m = |j: &serde_json::Value| j["settings"]["radius_m"].as_f64().expect("radius_m");
+    assert!((px(&one) - 0.5).abs() < 1e-5, "{}", one["settings"]);
+    assert!((m(&two) / m(&one) - 2.0).abs() < 1e-5, "{} {}", m(&one), m(&two));
+    assert_eq!(one["settings"]["radius_given"], true);
     // A glTF file with a triangle, a point primitive and a camera: the skips are reported.
     let mut tri = Vec::new();
     for c in [0.9f32, -0.1, -0.1, 0.9, 0.1, -0.1, 0.9, 0.0, 0.1] {
