@@ -695,10 +695,11 @@ impl<'a> Mix<'a> {
         let camis = self.heuristic == Heuristic::Camis;
         let mut ph_raw = Vec3::ZERO;
         let mut ph_weighted = Vec3::ZERO;
+        let bdf1 = scene.bdf_at(&sh1);
         map.finish_query(query, |ph| {
             let prev = map.vertex(ph.prev);
             let wp = (prev.at.p - ph.position).normalize_or_zero();
-            let f = scene.eval(&sh1, wo1, wp);
+            let f = scene.eval_with(&bdf1, &sh1, wo1, wp);
             if f == Vec3::ZERO {
                 return;
             }
@@ -755,7 +756,7 @@ impl<'a> Mix<'a> {
             let prev = map.vertex(ph.prev);
             let to_prev = prev.at.p - x0.sh.p;
             let wp = (prev.at.p - ph.position).normalize_or_zero();
-            let f = scene.eval(&x0.sh, x0.u, wp);
+            let f = scene.eval_with(&x0.bdf, &x0.sh, x0.u, wp);
             if f == Vec3::ZERO {
                 return;
             }
@@ -772,7 +773,7 @@ impl<'a> Mix<'a> {
                 }
                 let v = to_prev / dist2.sqrt();
                 let y = prev.at;
-                let f0 = scene.eval(&x0.sh, x0.u, v);
+                let f0 = scene.eval_with(&x0.bdf, &x0.sh, x0.u, v);
                 let mut pair = match prev_inputs.get(i) {
                     Some(&[l0, ld, b]) if !l0.is_nan() && self.same_cache_side(&y, -v) => {
                         // direct_masked's own test of the side; the rest of L₀ is the same

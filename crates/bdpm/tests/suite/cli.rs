@@ -921,7 +921,12 @@ fn warnings_reach_stdout_and_the_report() {
     let px = |j: &serde_json::Value| j["settings"]["radius_px"].as_f64().expect("radius_px");
     let m = |j: &serde_json::Value| j["settings"]["radius_m"].as_f64().expect("radius_m");
     assert!((px(&one) - 0.5).abs() < 1e-5, "{}", one["settings"]);
-    assert!((m(&two) / m(&one) - 2.0).abs() < 1e-5, "{} {}", m(&one), m(&two));
+    assert!(
+        (m(&two) / m(&one) - 2.0).abs() < 1e-5,
+        "{} {}",
+        m(&one),
+        m(&two)
+    );
     assert_eq!(one["settings"]["radius_given"], true);
     // A glTF file with a triangle, a point primitive and a camera: the skips are reported.
     let mut tri = Vec::new();
