@@ -13,7 +13,7 @@ use bdpm_output::say;
 use bdpm_output::stats::luminance;
 
 use crate::reference::read_exr;
-use crate::study::{mean, rel_mean, rel_mse, rmse, without_floor};
+use crate::study::{luminances, mean, reference_variance, rel_mean, rel_mse, rmse, without_floor};
 
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]
@@ -107,10 +107,7 @@ pub(crate) fn error_against(
     if ref_mean.is_nan() || ref_mean <= 0.0 {
         return None;
     }
-    let var: Vec<f64> = match reference_stderr {
-        Some(se) => se.iter().map(|c| luminance(*c).powi(2)).collect(),
-        None => vec![0.0; reference.len()],
-    };
+    let var = reference_variance(reference_stderr, reference.len());
     let mse = without_floor(rmse(image, reference).powi(2), mean(&var));
     Some(ErrorFigures {
         rel_rmse: mse.sqrt() / ref_mean,
@@ -206,8 +203,7 @@ pub(crate) fn run(args: CompareArgs) -> CliResult<ExitCode> {
         c.mean.0,
         c.mean.1
     );
-    let a_lum: Vec<f64> = a.mean.iter().map(|c| luminance(*c)).collect();
-    let b_lum: Vec<f64> = b.mean.iter().map(|c| luminance(*c)).collect();
+    let (a_lum, b_lum) = (luminances(&a.mean), luminances(&b.mean));
     if let Some(e) = error_against(&a_lum, &b_lum, b.stderr.as_deref()) {
         say!(
             "the first against the second as reference: rel. RMSE {:.3}%, relMSE {:.4e}{}",
@@ -227,10 +223,9 @@ pub(crate) fn run(args: CompareArgs) -> CliResult<ExitCode> {
         if block == 0 {
             return Err("--blocks must be at least 1 pixel".into());
         }
-        let lum = |v: &[glam::DVec3]| v.iter().map(|c| luminance(*c)).collect::<Vec<_>>();
         let d = block_differences(
             (&a_lum, &b_lum),
-            (&lum(sa), &lum(sb)),
+            (&luminances(sa), &luminances(sb)),
             a.width as usize,
             block as usize,
         );

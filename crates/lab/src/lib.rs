@@ -56,9 +56,8 @@ pub fn run(command: Command) -> Result<ExitCode, String> {
 
 /// One entry of `--modes`: a mode, and settings of its own on top of the shared ones
 /// (`MODE[:KEY=VALUE]…` with KEY one of `sampler`, `radius` (metres, or pixel footprints as
-/// `1.2px`), `spp`, `photons`), so
-/// that configurations are compared side by side in one run, e.g.
-/// `balance:sampler=independent,balance,optimal-path:radius=0.01`.
+/// `1.2px`), `spp`, `photons`), so that configurations are compared side by side in one run,
+/// e.g. `balance:sampler=independent,balance,optimal-path:radius=0.2px`.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Variant {
     /// The entry as given (trimmed): its name in tables, plots and files.

@@ -219,6 +219,20 @@ pub(crate) struct ErrorFloor {
     pub(crate) rel_mse: f64,
 }
 
+/// Luminance of each pixel (Rec. 709), in the pixels' unit.
+pub(crate) fn luminances(pixels: &[glam::DVec3]) -> Vec<f64> {
+    pixels.iter().map(|c| luminance(*c)).collect()
+}
+
+/// A reference's own variance per pixel (W²·m⁻⁴·sr⁻²): the square of the luminance of its
+/// standard error (an upper bound for coloured pixels), or 0 for `len` pixels without one.
+pub(crate) fn reference_variance(stderr: Option<&[glam::DVec3]>, len: usize) -> Vec<f64> {
+    match stderr {
+        Some(se) => se.iter().map(|c| luminance(*c).powi(2)).collect(),
+        None => vec![0.0; len],
+    }
+}
+
 /// `measured − floor`: a squared-error figure of the image alone, without the reference's own
 /// error `floor`; at least 1 % of `floor`, a positive stand-in for "below what the reference
 /// can resolve" that the log-log interpolation needs. Unchanged when `floor` is 0.
@@ -498,7 +512,7 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
             reference.height
         ));
     }
-    let ref_lum: Vec<f64> = reference.mean.iter().map(|c| luminance(*c)).collect();
+    let ref_lum = luminances(&reference.mean);
     let ref_mean = mean(&ref_lum);
     if ref_mean.is_nan() || ref_mean <= 0.0 {
         return Err(format!(
@@ -508,10 +522,7 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
     }
     // The reference's own variance per pixel (its squared standard error), subtracted from
     // every squared error below: E[(I − R)²] = MSE(I) + Var(R) for an independent R.
-    let ref_var: Vec<f64> = match &reference.stderr {
-        Some(se) => se.iter().map(|c| luminance(*c).powi(2)).collect(),
-        None => vec![0.0; ref_lum.len()],
-    };
+    let ref_var = reference_variance(reference.stderr.as_deref(), ref_lum.len());
     let floor = ErrorFloor {
         mse: mean(&ref_var),
         rel_mse: rel_mean(&ref_var, &ref_lum),
