@@ -381,7 +381,7 @@ impl<'a> Mix<'a> {
         light: usize,
         pair: Pair,
     ) -> Pair {
-        let incoming = (self.scene.lights()[light].position - x1.p).normalize();
+        let incoming = self.light_direction(light, x1.p);
         let (pc, pl) = self.densities(x0, x1, v, dist2, incoming);
         Pair {
             path: PathKind::OneBounce,
@@ -390,6 +390,13 @@ impl<'a> Mix<'a> {
             emission_density: self.emission_density(light, x1),
             ..pair
         }
+    }
+
+    /// Unit direction from `at` to light `light`: a one-bounce path's arrival direction at
+    /// x₁, computed from the positions on both sides of the mix (a photon's stored direction
+    /// at its first vertex is the emitted ray's, which the camera side does not have).
+    fn light_direction(&self, light: usize, at: Vec3) -> Vec3 {
+        (self.scene.lights()[light].position - at).normalize_or_zero()
     }
 
     /// Emission density p_L(light→x₁) in area measure (choice of light included).
@@ -697,8 +704,7 @@ impl<'a> Mix<'a> {
         let mut ph_weighted = Vec3::ZERO;
         let bdf1 = scene.bdf_at(&sh1);
         map.finish_query(query, |ph| {
-            let prev = map.vertex(ph.prev);
-            let wp = (prev.at.p - ph.position).normalize_or_zero();
+            let wp = ph.incoming;
             let f = scene.eval_with(&bdf1, &sh1, wo1, wp);
             if f == Vec3::ZERO {
                 return;
@@ -755,7 +761,7 @@ impl<'a> Mix<'a> {
         map.finish_query_indexed(query, |i, ph| {
             let prev = map.vertex(ph.prev);
             let to_prev = prev.at.p - x0.sh.p;
-            let wp = (prev.at.p - ph.position).normalize_or_zero();
+            let wp = ph.incoming;
             let f = scene.eval_with(&x0.bdf, &x0.sh, x0.u, wp);
             if f == Vec3::ZERO {
                 return;
@@ -792,7 +798,12 @@ impl<'a> Mix<'a> {
                     pair.x1_scattering = self.x1_scattering(&y, prev.incoming, v);
                 }
                 if self.needs.densities {
-                    let (pc, pl) = self.densities(x0, &y, v, dist2, prev.incoming);
+                    let incoming = if prev.depth == 0 {
+                        self.light_direction(prev.light as usize, y.p)
+                    } else {
+                        prev.incoming
+                    };
+                    let (pc, pl) = self.densities(x0, &y, v, dist2, incoming);
                     pair.camera_density = pc;
                     pair.light_density = pl;
                     if prev.depth == 0 {

@@ -14,6 +14,12 @@ use crate::trace::{PathVertex, TraceOptions, trace_chunks};
 pub struct Photon {
     /// Position, m.
     pub position: Vec3,
+    /// Unit direction from `position` back towards where the light came from (the previous
+    /// vertex): the arrival direction of the ray that stored it, as its previous vertex's
+    /// successor would record it. Stored rather than recomputed from the positions so that a
+    /// merge at the camera's x₁ and a merge at x₀ through this vertex read the same number
+    /// (their weights must agree bit for bit, method.md §2).
+    pub incoming: Vec3,
     /// Power E_p, W per channel; already includes Φ/N_F.
     pub power: Vec3,
     /// Index into [`PhotonMap::vertices()`] of the previous vertex y_p (where it was scattered
@@ -134,6 +140,7 @@ impl PhotonMap {
                     // vertex pushed.
                     photons.push(Photon {
                         position: a.vertex.at.p,
+                        incoming: a.vertex.incoming,
                         power: a.power,
                         prev: vertices.len() as u32 - 1,
                     });

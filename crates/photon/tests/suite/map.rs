@@ -31,6 +31,7 @@ fn synthetic(positions: &[Vec3]) -> Vec<Photon> {
         .enumerate()
         .map(|(i, &position)| Photon {
             position,
+            incoming: Vec3::Z,
             power: Vec3::ONE,
             prev: i as u32,
         })
