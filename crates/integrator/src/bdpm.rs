@@ -210,6 +210,13 @@ impl<'a> Mix<'a> {
         (acceptance_area(d2.sqrt()), density)
     }
 
+    /// f(u, v) at x₀ for the unit direction `v`, sr⁻¹ per channel: the BDF value the weights'
+    /// f̃ is made of. Evaluated, never taken from the BDF sample that chose v, so that a
+    /// camera sample and a photon reaching x₀ from the same x₁ compute the same bits.
+    pub(crate) fn f_at_x0(&self, x0: &FirstVertex<'_>, v: Vec3) -> Vec3 {
+        self.scene.eval_with(&x0.bdf, &x0.sh, x0.u, v)
+    }
+
     /// The pair data shared by both path kinds for x₀ and a candidate x₁ at `x1`.
     pub(crate) fn pair(&self, x0: &FirstVertex<'_>, x1: &WeightVertex, v: Vec3, f0: Vec3) -> Pair {
         self.pair_at(x0, x1, v, f0, self.cache_slot(x1.prim, x1.p, -v))
@@ -618,7 +625,7 @@ impl<'a> Mix<'a> {
         let sh1 = scene.shade(&hit1, wo1);
         let x1 = scene.weight_vertex(&sh1);
         let lights = x1.lights;
-        let pair = self.pair_at(x0, &x1, v, s.f, slot);
+        let pair = self.pair_at(x0, &x1, v, self.f_at_x0(x0, v), slot);
         let dist2 = (x1.p - x0.sh.p).length_squared();
 
         // One-bounce paths light→x₁→x₀, light by light (their balance weights differ).
@@ -779,7 +786,7 @@ impl<'a> Mix<'a> {
                 }
                 let v = to_prev / dist2.sqrt();
                 let y = prev.at;
-                let f0 = scene.eval_with(&x0.bdf, &x0.sh, x0.u, v);
+                let f0 = self.f_at_x0(x0, v);
                 let mut pair = match prev_inputs.get(i) {
                     Some(&[l0, ld, b]) if !l0.is_nan() && self.same_cache_side(&y, -v) => {
                         // direct_masked's own test of the side; the rest of L₀ is the same

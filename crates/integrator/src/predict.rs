@@ -356,7 +356,7 @@ fn direction(
     let wo1 = -v;
     let sh1 = scene.shade(&hit1, wo1);
     let x1 = scene.weight_vertex(&sh1);
-    let pair = mix.pair(x0, &x1, v, s.f);
+    let pair = mix.pair(x0, &x1, v, mix.f_at_x0(x0, v));
     let dist2 = (x1.p - x0.sh.p).length_squared();
     let per_light = h.needs().densities;
     let w_merge = if per_light {

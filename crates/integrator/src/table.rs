@@ -88,7 +88,7 @@ pub(crate) fn pixel_terms(
         };
         let sh1 = scene.shade(&hit1, -v);
         let x1 = scene.weight_vertex(&sh1);
-        let pair = mix.pair(x0, &x1, v, s.f);
+        let pair = mix.pair(x0, &x1, v, mix.f_at_x0(x0, v));
         let cos_over_pdf = (s.wi.z / s.pdf) as f64;
         if split {
             let wl =
