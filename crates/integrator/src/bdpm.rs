@@ -1,20 +1,19 @@
 //! The BDPM mix of method.md §2: direct light at x₀, photons merged at x₀ weighted per photon
 //! by 1 − w₁(x₀, y_p), and the camera's second vertex x₁ weighted by w₁(x₀, x₁).
 use std::borrow::Cow;
-use std::f32::consts::PI;
 
 use bdpm_bdf::{Bdf, Outgoing, luminance};
-use bdpm_cache::{CacheSlot, RadianceCache};
+use bdpm_cache::RadianceCache;
 use bdpm_geometry::Hit;
-use bdpm_geometry::{Frame, Rng};
-use bdpm_mis::{Budget, Heuristic, Needs, Pair, PathKind, acceptance_area, acceptance_probability};
-use bdpm_photon::{PhotonMap, PhotonQuery, survival_at};
+use bdpm_geometry::Rng;
+use bdpm_mis::{Budget, Heuristic, Needs, Pair, acceptance_area};
+use bdpm_photon::{PhotonMap, PhotonQuery};
 use bdpm_scene::{Scene, Shading};
 
+use crate::inputs::Arrival;
 use crate::table::PixelWeights;
 use bdpm_scene::WeightVertex;
 use glam::{DVec3, Vec3};
-use rayon::prelude::*;
 
 /// The contributions of one camera sample, split by technique (for the debug layers).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -149,22 +148,7 @@ pub(crate) struct FirstVertex<'s> {
     pub(crate) primary_density: f64,
 }
 
-/// `camis` stops walking a light path once its β has fallen below this fraction of the camera
-/// prefix's a: every further factor is ≤ 1, so β only shrinks, and r = a/(a + β(1 − a)) is
-/// then within 1e-9 of 1. The cut is a deterministic function of the path, so both techniques
-/// still evaluate the same weight.
-const SUFFIX_CUTOFF: f64 = 1e-9;
-
 impl<'a> Mix<'a> {
-    /// f̃ = f/µ at x₀ for direction `v` (luminances), sr⁻¹.
-    fn f_tilde(&self, x0: &FirstVertex<'_>, f: Vec3) -> f64 {
-        if x0.albedo > 0.0 {
-            (luminance(f) / x0.albedo) as f64
-        } else {
-            0.0
-        }
-    }
-
     /// Prepares x₀ for a camera ray that hit `hit` (u = towards the camera), or None if the
     /// shading normal faces away from the camera.
     pub(crate) fn first_vertex<'s>(&'s self, hit: &Hit, u: Vec3) -> Option<FirstVertex<'s>> {
@@ -208,277 +192,6 @@ impl<'a> Mix<'a> {
         let image = d2 * cam.pixel_area() as f64 * cos_c * cos_c * cos_c;
         let density = if image > 0.0 { cos0 / image } else { 0.0 };
         (acceptance_area(d2.sqrt()), density)
-    }
-
-    /// f(u, v) at x₀ for the unit direction `v`, sr⁻¹ per channel: the BDF value the weights'
-    /// f̃ is made of. Evaluated, never taken from the BDF sample that chose v, so that a
-    /// camera sample and a photon reaching x₀ from the same x₁ compute the same bits.
-    pub(crate) fn f_at_x0(&self, x0: &FirstVertex<'_>, v: Vec3) -> Vec3 {
-        self.scene.eval_with(&x0.bdf, &x0.sh, x0.u, v)
-    }
-
-    /// The pair data shared by both path kinds for x₀ and a candidate x₁ at `x1`.
-    pub(crate) fn pair(&self, x0: &FirstVertex<'_>, x1: &WeightVertex, v: Vec3, f0: Vec3) -> Pair {
-        self.pair_at(x0, x1, v, f0, self.cache_slot(x1.prim, x1.p, -v))
-    }
-
-    /// Where the weights' radiance-cache lookup for the point `p` of triangle `prim` towards
-    /// `wo` reads (None without a cache); see [`Self::pair_at`].
-    pub(crate) fn cache_slot(&self, prim: u32, p: Vec3, wo: Vec3) -> Option<CacheSlot> {
-        self.cache_needed().and_then(|c| c.slot(prim, p, wo))
-    }
-
-    /// [`Self::pair`] with the cache slot of (x₁, −v) found beforehand by [`Self::cache_slot`],
-    /// so that its read could be fetched ahead.
-    pub(crate) fn pair_at(
-        &self,
-        x0: &FirstVertex<'_>,
-        x1: &WeightVertex,
-        v: Vec3,
-        f0: Vec3,
-        slot: Option<CacheSlot>,
-    ) -> Pair {
-        let direct = if self.needs.direct_at_x1 {
-            luminance(self.scene.direct_masked(x1, -v))
-        } else {
-            0.0
-        };
-        let cached = self
-            .cache_needed()
-            .map(|cache| slot.map_or((0.0, 0.0), |s| self.cache_read(cache, s, x1)));
-        self.pair_with(x0, x1, f0, direct, cached)
-    }
-
-    /// [`Self::pair_at`] from L₀(x₁→x₀) (luminance, `direct`) and the cache's (L_d, b) at
-    /// x₁ towards x₀ (`cached`, None without a cache) found beforehand.
-    fn pair_with(
-        &self,
-        x0: &FirstVertex<'_>,
-        x1: &WeightVertex,
-        f0: Vec3,
-        direct: f32,
-        cached: Option<(f32, f32)>,
-    ) -> Pair {
-        let mut pair = Pair {
-            f_tilde: self.f_tilde(x0, f0),
-            acceptance_area: x0.acceptance_area,
-            primary_density: x0.primary_density,
-            direct: direct as f64,
-            ..Pair::default()
-        };
-        if let (Some(_), Some((ld, b))) = (self.cache, cached) {
-            pair.indirect = ld as f64;
-            pair.b = b as f64;
-        }
-        if let Heuristic::Threshold { .. } = self.heuristic {
-            pair.light_distance = self
-                .scene
-                .lights()
-                .iter()
-                .map(|l| (l.position - x1.p).length())
-                .fold(f32::INFINITY, f32::min) as f64;
-        }
-        pair
-    }
-
-    /// Area-measure densities of §8 for a full path …→x₁→x₀ whose light path arrives at x₁
-    /// from direction `incoming` (unit, pointing away from x₁). Returns (p_C(x₀→x₁), p_L(x₁→x₀)).
-    pub(crate) fn densities(
-        &self,
-        x0: &FirstVertex<'_>,
-        x1: &WeightVertex,
-        v: Vec3,
-        dist2: f32,
-        incoming: Vec3,
-    ) -> (f64, f64) {
-        let cos1 = x1.n.dot(v).abs();
-        let cos0 = x0.sh.ng.dot(v).abs();
-        let p_c = x0.bdf.pdf_at(&x0.out, x0.sh.frame.to_local(v)) * cos1 / dist2;
-        let frame1 = Frame::from_normal(x1.n);
-        let bdf1 = self.scene.bdf_at_vertex(x1);
-        let in_l = bdf1.outgoing(frame1.to_local(incoming));
-        let q = survival_at(&bdf1, &in_l);
-        let p_l = q * bdf1.pdf_at(&in_l, frame1.to_local(-v)) * cos0 / dist2;
-        (p_c as f64, p_l as f64)
-    }
-
-    /// f₁(ω₂, x₁→x₀): the BDF at the candidate x₁ (luminance, sr⁻¹) for a light path arriving
-    /// from `incoming` (unit, pointing away from x₁) and leaving towards x₀ (along −`v`), in
-    /// the geometric-normal frame: the same evaluation for the camera's x₁ and a photon's
-    /// previous vertex, so both techniques see the same weight (method.md §2).
-    fn x1_scattering(&self, x1: &WeightVertex, incoming: Vec3, v: Vec3) -> f64 {
-        let bdf = self.scene.bdf_at_vertex(x1);
-        if bdf.is_lambert() {
-            // The BDF's own test without the frame: the local z of a direction is its dot
-            // with the normal, and finite directions stay finite in any orthonormal frame.
-            let inside = x1.n.dot(-v) > 0.0 && x1.n.dot(incoming) > 0.0;
-            let finite = v.is_finite() && incoming.is_finite();
-            return if inside && finite {
-                luminance(bdf.kd() * std::f32::consts::FRAC_1_PI) as f64
-            } else {
-                0.0
-            };
-        }
-        let frame = Frame::from_normal(x1.n);
-        luminance(bdf.eval(frame.to_local(-v), frame.to_local(incoming))) as f64
-    }
-
-    /// `camis`'s β for a merge path …→x₂→x₁→x₀ (method-notes.md, "camis"): the product of
-    /// min(p_L·A, 1) over the light path's densities of x₁ (from x₂), of x₂ (from x₃), … and
-    /// of its first vertex (from the light). `start` is x₂'s index in the photon map, whose
-    /// vertices are stored path by path, so each vertex of depth k > 0 follows its
-    /// predecessor. `camera_density` is p_C(x₀→x₁) (m⁻²), which sets the cut-off.
-    ///
-    /// The camera's x₁ and a photon's previous vertex y_p enter only through their position
-    /// and normal, and everything beyond them is read from the same stored vertices, so both
-    /// techniques get the same β for the same path.
-    fn light_suffix(
-        &self,
-        map: &PhotonMap,
-        x0: &FirstVertex<'_>,
-        x1: &WeightVertex,
-        start: u32,
-        camera_density: f64,
-    ) -> f64 {
-        let area = x0.acceptance_area;
-        let camera = acceptance_probability(x0.primary_density, area)
-            * acceptance_probability(camera_density, area);
-        let cutoff = camera * SUFFIX_CUTOFF;
-        let (mut to_p, mut to_n) = (x1.p, x1.n);
-        let mut index = start;
-        let mut beta = 1.0;
-        loop {
-            let y = map.vertex(index);
-            let d = to_p - y.at.p;
-            let d2 = d.length_squared();
-            if d2 <= 0.0 {
-                return beta;
-            }
-            let dir = d / d2.sqrt();
-            let frame = Frame::from_normal(y.at.n);
-            let bdf = self.scene.bdf_at_vertex(&y.at);
-            let out = bdf.outgoing(frame.to_local(y.incoming));
-            let p = y.survival * bdf.pdf_at(&out, frame.to_local(dir)) * to_n.dot(dir).abs() / d2;
-            beta *= acceptance_probability(p as f64, area);
-            if beta <= cutoff {
-                return beta;
-            }
-            if y.depth == 0 {
-                let emission = self.emission_density(y.light as usize, &y.at);
-                return beta * acceptance_probability(emission, area);
-            }
-            // A map not stored path by path (hand-made in tests) ends the walk here.
-            if index == 0 || map.vertex(index - 1).depth + 1 != y.depth {
-                debug_assert!(false, "light-path vertices are not consecutive");
-                return beta;
-            }
-            (to_p, to_n) = (y.at.p, y.at.n);
-            index -= 1;
-        }
-    }
-
-    /// `pair` completed for the one-bounce path light `light`→x₁→x₀ with the densities of the
-    /// density-based weights (method.md §8); `v` is the unit direction x₀→x₁, `dist2` = |x₁ − x₀|².
-    pub(crate) fn one_bounce_pair(
-        &self,
-        x0: &FirstVertex<'_>,
-        x1: &WeightVertex,
-        v: Vec3,
-        dist2: f32,
-        light: usize,
-        pair: Pair,
-    ) -> Pair {
-        let incoming = self.light_direction(light, x1.p);
-        let (pc, pl) = self.densities(x0, x1, v, dist2, incoming);
-        Pair {
-            path: PathKind::OneBounce,
-            camera_density: pc,
-            light_density: pl,
-            emission_density: self.emission_density(light, x1),
-            ..pair
-        }
-    }
-
-    /// Unit direction from `at` to light `light`: a one-bounce path's arrival direction at
-    /// x₁, computed from the positions on both sides of the mix (a photon's stored direction
-    /// at its first vertex is the emitted ray's, which the camera side does not have).
-    fn light_direction(&self, light: usize, at: Vec3) -> Vec3 {
-        (self.scene.lights()[light].position - at).normalize_or_zero()
-    }
-
-    /// Emission density p_L(light→x₁) in area measure (choice of light included).
-    pub(crate) fn emission_density(&self, light: usize, x1: &WeightVertex) -> f64 {
-        let l = self.scene.lights()[light];
-        let to = l.position - x1.p;
-        let d2 = to.length_squared();
-        let cos = x1.n.dot(to).abs() / d2.sqrt();
-        (self.scene.light_probability(light) / (4.0 * PI) * cos / d2) as f64
-    }
-
-    /// The cache's (L_d, b) at `slot` for the vertex `x1`. A Lambert-only cache derives b
-    /// from the triangle's kd (its material's); where the material is textured, b is
-    /// kd/π·L_d with the kd at the actual point instead.
-    fn cache_read(&self, cache: &RadianceCache, slot: CacheSlot, x1: &WeightVertex) -> (f32, f32) {
-        let (ld, b) = cache.at(slot);
-        if self.scene.texture(x1.material).is_some() && !cache.stats().stores_b {
-            let kd = self.scene.kd_at(x1.material, x1.prim, x1.bary);
-            return (ld, luminance(kd) * std::f32::consts::FRAC_1_PI * ld);
-        }
-        (ld, b)
-    }
-
-    /// The radiance cache, when the mode's weights read it.
-    fn cache_needed(&self) -> Option<&'a RadianceCache> {
-        self.cache.filter(|_| self.needs.radiance_cache)
-    }
-
-    /// Whether a cache lookup at `y` towards `wo` reads the side that [`Self::prev_inputs`]
-    /// read (towards y's normal); true without a cache.
-    fn same_cache_side(&self, y: &WeightVertex, wo: Vec3) -> bool {
-        self.cache_needed()
-            .is_none_or(|c| c.same_side(y.prim, wo, y.n))
-    }
-
-    /// The weight inputs of every photon's previous vertex y_p that do not depend on where
-    /// the photon landed, one [L₀, L_d, b] (luminances: W·m⁻²·sr⁻¹, b in W·m⁻²·sr⁻²) per photon of `map`, in its
-    /// order: for a Lambert y_p, L₀(y_p) and the cache's L_d and b on the side of y_p's normal
-    /// (isotropic there; `merge_at_x0` checks the side), NaN for the others. Empty when the
-    /// mode's weights at x₀ read neither, or the cache has directional bins or stores b.
-    ///
-    /// A merge at x₀ visits a photon once per camera sample whose disk holds it, several
-    /// times per pass at high resolution; computing these once per photon gives the same
-    /// numbers, bit for bit, as [`Self::pair`] would for each visit.
-    pub(crate) fn prev_inputs(&self, map: &PhotonMap) -> Vec<[f32; 3]> {
-        let reads_inputs = self.needs.direct_at_x1 || self.needs.radiance_cache;
-        let per_visit = matches!(self.heuristic, Heuristic::Bdd0)
-            || self.camera_x1_weighting
-            || self.per_visit_inputs;
-        let isotropic = self
-            .cache_needed()
-            .is_none_or(|c| c.is_isotropic() && !c.stats().stores_b);
-        if !(self.needs.photons_at_x0 && reads_inputs && isotropic) || per_visit {
-            return Vec::new();
-        }
-        map.photons()
-            .par_iter()
-            .map(|ph| {
-                let prev = map.vertex(ph.prev);
-                if !self.scene.bdf(prev.at.material).is_lambert() {
-                    return [f32::NAN; 3];
-                }
-                let y = prev.at;
-                let l0 = if self.needs.direct_at_x1 {
-                    luminance(self.scene.direct_masked(&y, y.n))
-                } else {
-                    0.0
-                };
-                let (ld, b) = self.cache_needed().map_or((0.0, 0.0), |c| {
-                    self.cache_slot(y.prim, y.p, y.n)
-                        .map_or((0.0, 0.0), |s| self.cache_read(c, s, &y))
-                });
-                [l0, ld, b]
-            })
-            .collect()
     }
 
     fn w1(&self, pair: &Pair, pixel: Option<&PixelWeights>, stats: &mut WeightStats) -> f64 {
@@ -625,7 +338,7 @@ impl<'a> Mix<'a> {
         let sh1 = scene.shade(&hit1, wo1);
         let x1 = scene.weight_vertex(&sh1);
         let lights = x1.lights;
-        let pair = self.pair_at(x0, &x1, v, self.f_at_x0(x0, v), slot);
+        let pair = self.camera_side_base(x0, &x1, v, slot);
         let dist2 = (x1.p - x0.sh.p).length_squared();
 
         // One-bounce paths light→x₁→x₀, light by light (their balance weights differ).
@@ -642,12 +355,11 @@ impl<'a> Mix<'a> {
         };
         // Weights by path kind give the one-bounce paths (through L₀(x₁)) their own weight; the
         // merge paths (through the photons at x₁) keep `w_const`.
-        let w_direct = if self.needs.path_kinds && lights != 0 {
-            let pair = Pair {
-                path: PathKind::OneBounce,
-                ..pair
-            };
-            self.w1(&pair, pixel, stats)
+        // Without densities a one-bounce path's inputs do not depend on its light: one
+        // evaluation serves them all.
+        let w_direct = if self.needs.path_kinds && lights != 0 && !per_light {
+            let one = self.path_pair(x0, &x1, (v, dist2), Arrival::Light(0), pair);
+            self.w1(&one, pixel, stats)
         } else {
             w_const
         };
@@ -658,8 +370,8 @@ impl<'a> Mix<'a> {
             }
             direct_raw += c;
             let w = if per_light {
-                let pair = self.one_bounce_pair(x0, &x1, v, dist2, l, pair);
-                self.w1(&pair, pixel, stats)
+                let one = self.path_pair(x0, &x1, (v, dist2), Arrival::Light(l), pair);
+                self.w1(&one, pixel, stats)
             } else {
                 w_direct
             };
@@ -704,9 +416,8 @@ impl<'a> Mix<'a> {
             direct_weighted,
         } = second;
         let wo1 = -v;
-        let per_light = self.needs.densities;
-        let per_photon = self.needs.x1_scattering;
-        let camis = self.heuristic == Heuristic::Camis;
+        // Weights that read the light path's own inputs differ from photon to photon.
+        let per_path = self.needs.densities || self.needs.x1_scattering;
         let mut ph_raw = Vec3::ZERO;
         let mut ph_weighted = Vec3::ZERO;
         let bdf1 = scene.bdf_at(&sh1);
@@ -718,27 +429,9 @@ impl<'a> Mix<'a> {
             }
             let c = f * ph.power;
             ph_raw += c;
-            let w = if per_light {
-                let (pc, pl) = self.densities(x0, &x1, v, dist2, wp);
-                let light_suffix = if camis {
-                    self.light_suffix(map, x0, &x1, ph.prev, pc)
-                } else {
-                    0.0
-                };
-                let pair = Pair {
-                    path: PathKind::Merge,
-                    camera_density: pc,
-                    light_density: pl,
-                    light_suffix,
-                    ..pair
-                };
-                self.w1(&pair, pixel, stats)
-            } else if per_photon {
-                let pair = Pair {
-                    x1_scattering: self.x1_scattering(&x1, wp, v),
-                    ..pair
-                };
-                self.w1(&pair, pixel, stats)
+            let w = if per_path {
+                let path = self.camera_side_pair(map, x0, &x1, (v, dist2), ph, pair);
+                self.w1(&path, pixel, stats)
             } else {
                 w_const
             };
@@ -754,7 +447,7 @@ impl<'a> Mix<'a> {
     fn merge_at_x0(
         &self,
         x0: &FirstVertex<'_>,
-        (map, prev_inputs): (&PhotonMap, &[[f32; 3]]),
+        photons: (&PhotonMap, &[[f32; 3]]),
         query: &PhotonQuery,
         pixel: Option<&PixelWeights>,
         camera_w1: Option<f64>,
@@ -765,9 +458,7 @@ impl<'a> Mix<'a> {
         let mut raw = Vec3::ZERO;
         let mut weighted = Vec3::ZERO;
         let pure = matches!(self.heuristic, Heuristic::Bdd0);
-        map.finish_query_indexed(query, |i, ph| {
-            let prev = map.vertex(ph.prev);
-            let to_prev = prev.at.p - x0.sh.p;
+        photons.0.finish_query_indexed(query, |i, ph| {
             let wp = ph.incoming;
             let f = scene.eval_with(&x0.bdf, &x0.sh, x0.u, wp);
             if f == Vec3::ZERO {
@@ -780,47 +471,9 @@ impl<'a> Mix<'a> {
             } else if self.camera_x1_weighting {
                 1.0 - camera_w1.unwrap_or(0.0)
             } else {
-                let dist2 = to_prev.length_squared();
-                if dist2 <= 0.0 {
+                let Some(pair) = self.photon_side_pair(photons, x0, i, ph) else {
                     return;
-                }
-                let v = to_prev / dist2.sqrt();
-                let y = prev.at;
-                let f0 = self.f_at_x0(x0, v);
-                let mut pair = match prev_inputs.get(i) {
-                    Some(&[l0, ld, b]) if !l0.is_nan() && self.same_cache_side(&y, -v) => {
-                        // direct_masked's own test of the side; the rest of L₀ is the same
-                        // number for any direction on it (method-notes.md, "Precomputed inputs").
-                        let direct = if y.n.dot(-v) <= 0.0 { 0.0 } else { l0 };
-                        let cached = self.cache_needed().map(|_| (ld, b));
-                        self.pair_with(x0, &y, f0, direct, cached)
-                    }
-                    _ => self.pair(x0, &y, v, f0),
                 };
-                // A photon whose previous vertex was reached straight from the light closes a
-                // one-bounce path light→y→x₀ (weights that tell path kinds apart read this).
-                if prev.depth == 0 {
-                    pair.path = PathKind::OneBounce;
-                } else if self.needs.x1_scattering {
-                    pair.x1_scattering = self.x1_scattering(&y, prev.incoming, v);
-                }
-                if self.needs.densities {
-                    let incoming = if prev.depth == 0 {
-                        self.light_direction(prev.light as usize, y.p)
-                    } else {
-                        prev.incoming
-                    };
-                    let (pc, pl) = self.densities(x0, &y, v, dist2, incoming);
-                    pair.camera_density = pc;
-                    pair.light_density = pl;
-                    if prev.depth == 0 {
-                        pair.path = PathKind::OneBounce;
-                        pair.emission_density = self.emission_density(prev.light as usize, &y);
-                    } else if self.heuristic == Heuristic::Camis {
-                        // y_p = x₁ was scattered into from x₂, the vertex stored before it.
-                        pair.light_suffix = self.light_suffix(map, x0, &y, ph.prev - 1, pc);
-                    }
-                }
                 1.0 - self.w1(&pair, pixel, stats)
             };
             weighted += c * w0 as f32;

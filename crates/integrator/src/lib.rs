@@ -11,6 +11,7 @@
 
 pub mod bdpm;
 mod film;
+mod inputs;
 mod light;
 mod memory;
 pub mod path;

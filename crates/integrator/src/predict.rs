@@ -49,7 +49,9 @@
 //! Units: every term is a variance of a radiance, W²·m⁻⁴·sr⁻².
 use bdpm_bdf::luminance;
 use bdpm_geometry::{Domain, Rng};
-use bdpm_mis::{Budget, Heuristic, Pair, PathKind, effective_samples};
+use bdpm_mis::{Budget, Heuristic, effective_samples};
+
+use crate::inputs::Arrival;
 use rayon::prelude::*;
 
 use crate::bdpm::{FirstVertex, Mix};
@@ -359,35 +361,14 @@ fn direction(
     let pair = mix.pair(x0, &x1, v, mix.f_at_x0(x0, v));
     let dist2 = (x1.p - x0.sh.p).length_squared();
     let per_light = h.needs().densities;
-    let w_merge = if per_light {
-        // The longer paths' weight with the photon arriving along x₁'s normal.
-        let (pc, pl) = mix.densities(x0, &x1, v, dist2, x1.n);
-        let merge = Pair {
-            path: PathKind::Merge,
-            camera_density: pc,
-            light_density: pl,
-            ..pair
-        };
-        h.weight(budget, &merge, terms).w1
-    } else {
-        // `optimal-path` weighs each photon by its own f₁ at x₁; the model has only the cell's
-        // average, β = b/L_d (which makes it `optimal-split`).
-        let merge = Pair {
-            x1_scattering: if pair.indirect > 0.0 {
-                pair.b / pair.indirect
-            } else {
-                0.0
-            },
-            ..pair
-        };
-        h.weight(budget, &merge, terms).w1
-    };
+    // The longer paths' weight for the model's stand-in light path (`optimal-path` weighs each
+    // photon by its own f₁ at x₁; the model has only the cell's average, which makes it
+    // `optimal-split`).
+    let merge = mix.path_pair(x0, &x1, (v, dist2), Arrival::Modelled, pair);
+    let w_merge = h.weight(budget, &merge, terms).w1;
     // Weights that tell one-bounce paths from merge paths (`optimal-split`, `optimal-path`).
     let w_direct = if h.needs().path_kinds {
-        let one = Pair {
-            path: PathKind::OneBounce,
-            ..pair
-        };
+        let one = mix.path_pair(x0, &x1, (v, dist2), Arrival::Light(0), pair);
         h.weight(budget, &one, terms).w1
     } else {
         w_merge
@@ -402,7 +383,7 @@ fn direction(
             continue;
         }
         let w = if per_light {
-            let one_bounce = mix.one_bounce_pair(x0, &x1, v, dist2, l, pair);
+            let one_bounce = mix.path_pair(x0, &x1, (v, dist2), Arrival::Light(l), pair);
             h.weight(budget, &one_bounce, terms).w1
         } else {
             w_direct

@@ -1,0 +1,631 @@
+//! One assembly of a weight's inputs (the [`Pair`] of method.md §2 and §8) for every caller:
+//! the camera side of the mix (BDD=1 at x₁), the photon side (BDD=0, a photon's previous
+//! vertex as x₁), `predict`'s model, the pixel table and the weight map.
+//!
+//! The mix is unbiased only if both techniques of a full path …→x₁→x₀ see the same inputs
+//! (w₀ + w₁ = 1 per path). Each input is therefore computed by one function here from data
+//! both sides hold alike: x₀, the vertex x₁, the direction x₀→x₁ and how the light reached
+//! x₁ ([`Arrival`]). [`Mix::camera_side_pair`] and [`Mix::photon_side_pair`] are the two
+//! ways in; a test checks, for stored light paths, that they agree bit for bit.
+use bdpm_bdf::luminance;
+use bdpm_cache::{CacheSlot, RadianceCache};
+use bdpm_geometry::Frame;
+use bdpm_mis::{Heuristic, Pair, PathKind, acceptance_probability};
+use bdpm_photon::{Photon, PhotonMap, survival_at};
+use bdpm_scene::WeightVertex;
+use glam::Vec3;
+use rayon::prelude::*;
+use std::f32::consts::PI;
+
+use crate::bdpm::{FirstVertex, Mix};
+
+/// How the light subpath of a full path …→x₁→x₀ reaches x₁: what the path's own inputs (its
+/// kind, f₁ at x₁, the densities, `camis`'s β) are read from.
+#[derive(Clone, Copy)]
+pub(crate) enum Arrival<'m> {
+    /// Straight from light `light`: the one-bounce path light→x₁→x₀. Its direction at x₁ is
+    /// computed from the light's position (a photon's stored direction at its first vertex is
+    /// the emitted ray's, which the camera side does not have).
+    Light(usize),
+    /// Scattered at the stored light-path vertex `from` of `map` (x₂) and arriving at x₁ along
+    /// `incoming` (unit, pointing away from x₁): a merge path …→x₂→x₁→x₀.
+    Vertex {
+        map: &'m PhotonMap,
+        from: u32,
+        incoming: Vec3,
+    },
+    /// `predict`'s stand-in for the light paths it does not follow: arriving along x₁'s
+    /// normal, with f₁ at x₁ replaced by the cache's average over arrivals, b/L_d.
+    Modelled,
+}
+
+/// `camis` stops walking a light path once its β has fallen below this fraction of the camera
+/// prefix's a: every further factor is ≤ 1, so β only shrinks, and r = a/(a + β(1 − a)) is
+/// then within 1e-9 of 1. The cut is a deterministic function of the path, so both techniques
+/// still evaluate the same weight.
+const SUFFIX_CUTOFF: f64 = 1e-9;
+
+impl<'a> Mix<'a> {
+    /// f̃ = f/µ at x₀ for direction `v` (luminances), sr⁻¹.
+    fn f_tilde(&self, x0: &FirstVertex<'_>, f: Vec3) -> f64 {
+        if x0.albedo > 0.0 {
+            (luminance(f) / x0.albedo) as f64
+        } else {
+            0.0
+        }
+    }
+
+    /// f(u, v) at x₀ for the unit direction `v`, sr⁻¹ per channel: the BDF value the weights'
+    /// f̃ is made of. Evaluated, never taken from the BDF sample that chose v, so that a
+    /// camera sample and a photon reaching x₀ from the same x₁ compute the same bits.
+    pub(crate) fn f_at_x0(&self, x0: &FirstVertex<'_>, v: Vec3) -> Vec3 {
+        self.scene.eval_with(&x0.bdf, &x0.sh, x0.u, v)
+    }
+
+    /// The pair data shared by both path kinds for x₀ and a candidate x₁ at `x1`.
+    pub(crate) fn pair(&self, x0: &FirstVertex<'_>, x1: &WeightVertex, v: Vec3, f0: Vec3) -> Pair {
+        self.pair_at(x0, x1, v, f0, self.cache_slot(x1.prim, x1.p, -v))
+    }
+
+    /// Where the weights' radiance-cache lookup for the point `p` of triangle `prim` towards
+    /// `wo` reads (None without a cache); see [`Self::pair_at`].
+    pub(crate) fn cache_slot(&self, prim: u32, p: Vec3, wo: Vec3) -> Option<CacheSlot> {
+        self.cache_needed().and_then(|c| c.slot(prim, p, wo))
+    }
+
+    /// [`Self::pair`] with the cache slot of (x₁, −v) found beforehand by [`Self::cache_slot`],
+    /// so that its read could be fetched ahead.
+    pub(crate) fn pair_at(
+        &self,
+        x0: &FirstVertex<'_>,
+        x1: &WeightVertex,
+        v: Vec3,
+        f0: Vec3,
+        slot: Option<CacheSlot>,
+    ) -> Pair {
+        let direct = if self.needs.direct_at_x1 {
+            luminance(self.scene.direct_masked(x1, -v))
+        } else {
+            0.0
+        };
+        let cached = self
+            .cache_needed()
+            .map(|cache| slot.map_or((0.0, 0.0), |s| self.cache_read(cache, s, x1)));
+        self.pair_with(x0, x1, f0, direct, cached)
+    }
+
+    /// [`Self::pair_at`] from L₀(x₁→x₀) (luminance, `direct`) and the cache's (L_d, b) at
+    /// x₁ towards x₀ (`cached`, None without a cache) found beforehand.
+    fn pair_with(
+        &self,
+        x0: &FirstVertex<'_>,
+        x1: &WeightVertex,
+        f0: Vec3,
+        direct: f32,
+        cached: Option<(f32, f32)>,
+    ) -> Pair {
+        let mut pair = Pair {
+            f_tilde: self.f_tilde(x0, f0),
+            acceptance_area: x0.acceptance_area,
+            primary_density: x0.primary_density,
+            direct: direct as f64,
+            ..Pair::default()
+        };
+        if let (Some(_), Some((ld, b))) = (self.cache, cached) {
+            pair.indirect = ld as f64;
+            pair.b = b as f64;
+        }
+        if let Heuristic::Threshold { .. } = self.heuristic {
+            pair.light_distance = self
+                .scene
+                .lights()
+                .iter()
+                .map(|l| (l.position - x1.p).length())
+                .fold(f32::INFINITY, f32::min) as f64;
+        }
+        pair
+    }
+
+    /// The inputs of the weight of one full path through (x₀, x₁): `base` (the part every
+    /// path through the pair shares, from [`Self::pair`]) completed with the path's own part
+    /// as the heuristic needs it. `v` is the unit direction x₀→x₁ and `dist2` = |x₁ − x₀|²
+    /// (m²).
+    pub(crate) fn path_pair(
+        &self,
+        x0: &FirstVertex<'_>,
+        x1: &WeightVertex,
+        (v, dist2): (Vec3, f32),
+        arrival: Arrival<'_>,
+        base: Pair,
+    ) -> Pair {
+        let mut pair = base;
+        match arrival {
+            Arrival::Light(light) => {
+                pair.path = PathKind::OneBounce;
+                if self.needs.densities {
+                    let incoming = self.light_direction(light, x1.p);
+                    let (pc, pl) = self.densities(x0, x1, v, dist2, incoming);
+                    pair.camera_density = pc;
+                    pair.light_density = pl;
+                    pair.emission_density = self.emission_density(light, x1);
+                }
+            }
+            Arrival::Vertex {
+                map,
+                from,
+                incoming,
+            } => {
+                pair.path = PathKind::Merge;
+                if self.needs.x1_scattering {
+                    pair.x1_scattering = self.x1_scattering(x1, incoming, v);
+                }
+                if self.needs.densities {
+                    let (pc, pl) = self.densities(x0, x1, v, dist2, incoming);
+                    pair.camera_density = pc;
+                    pair.light_density = pl;
+                    if self.heuristic == Heuristic::Camis {
+                        pair.light_suffix = self.light_suffix(map, x0, x1, from, pc);
+                    }
+                }
+            }
+            Arrival::Modelled => {
+                pair.path = PathKind::Merge;
+                if self.needs.x1_scattering && pair.indirect > 0.0 {
+                    pair.x1_scattering = pair.b / pair.indirect;
+                }
+                if self.needs.densities {
+                    let (pc, pl) = self.densities(x0, x1, v, dist2, x1.n);
+                    pair.camera_density = pc;
+                    pair.light_density = pl;
+                }
+            }
+        }
+        pair
+    }
+
+    /// The camera side's part shared by every path through its x₀ and x₁ (`x1`, reached along
+    /// the unit direction `v`), with the cache slot of (x₁, −v) found beforehand
+    /// ([`Self::cache_slot`]) so that its read could be fetched ahead.
+    pub(crate) fn camera_side_base(
+        &self,
+        x0: &FirstVertex<'_>,
+        x1: &WeightVertex,
+        v: Vec3,
+        slot: Option<CacheSlot>,
+    ) -> Pair {
+        self.pair_at(x0, x1, v, self.f_at_x0(x0, v), slot)
+    }
+
+    /// The camera side's inputs for the merge path through the photon `ph` found around the
+    /// camera's x₁ (`x1`, with `base` = [`Self::pair`] there): the photon's light path
+    /// arrives at x₁ from its previous vertex, along its stored direction.
+    pub(crate) fn camera_side_pair(
+        &self,
+        map: &PhotonMap,
+        x0: &FirstVertex<'_>,
+        x1: &WeightVertex,
+        v_dist2: (Vec3, f32),
+        ph: &Photon,
+        base: Pair,
+    ) -> Pair {
+        let arrival = Arrival::Vertex {
+            map,
+            from: ph.prev,
+            incoming: ph.incoming,
+        };
+        self.path_pair(x0, x1, v_dist2, arrival, base)
+    }
+
+    /// The photon side's inputs for the path that ends with the photon `ph` (index `i` of
+    /// `map`'s photons) landing at x₀: x₁ is the photon's previous vertex y_p, and the light
+    /// arrived there from the light (a one-bounce path) or from the vertex stored before it.
+    /// `prev_inputs` is [`Self::prev_inputs`]'s table (or empty). Returns the unit direction
+    /// x₀→y_p and the pair, or None where y_p is x₀ itself.
+    pub(crate) fn photon_side_pair(
+        &self,
+        (map, prev_inputs): (&PhotonMap, &[[f32; 3]]),
+        x0: &FirstVertex<'_>,
+        i: usize,
+        ph: &Photon,
+    ) -> Option<Pair> {
+        let prev = map.vertex(ph.prev);
+        let y = prev.at;
+        let to_prev = y.p - x0.sh.p;
+        let dist2 = to_prev.length_squared();
+        if dist2 <= 0.0 {
+            return None;
+        }
+        let v = to_prev / dist2.sqrt();
+        let f0 = self.f_at_x0(x0, v);
+        let base = match prev_inputs.get(i) {
+            Some(&[l0, ld, b]) if !l0.is_nan() && self.same_cache_side(&y, -v) => {
+                // direct_masked's own test of the side; the rest of L₀ is the same number for
+                // any direction on it (method-notes.md, "Precomputed inputs").
+                let direct = if y.n.dot(-v) <= 0.0 { 0.0 } else { l0 };
+                let cached = self.cache_needed().map(|_| (ld, b));
+                self.pair_with(x0, &y, f0, direct, cached)
+            }
+            _ => self.pair(x0, &y, v, f0),
+        };
+        let arrival = if prev.depth == 0 {
+            Arrival::Light(prev.light as usize)
+        } else {
+            // Light paths are stored vertex after vertex: x₂ is the vertex before y_p.
+            Arrival::Vertex {
+                map,
+                from: ph.prev - 1,
+                incoming: prev.incoming,
+            }
+        };
+        Some(self.path_pair(x0, &y, (v, dist2), arrival, base))
+    }
+
+    /// Area-measure densities of §8 for a full path …→x₁→x₀ whose light path arrives at x₁
+    /// from direction `incoming` (unit, pointing away from x₁). Returns (p_C(x₀→x₁), p_L(x₁→x₀)).
+    pub(crate) fn densities(
+        &self,
+        x0: &FirstVertex<'_>,
+        x1: &WeightVertex,
+        v: Vec3,
+        dist2: f32,
+        incoming: Vec3,
+    ) -> (f64, f64) {
+        let cos1 = x1.n.dot(v).abs();
+        let cos0 = x0.sh.ng.dot(v).abs();
+        let p_c = x0.bdf.pdf_at(&x0.out, x0.sh.frame.to_local(v)) * cos1 / dist2;
+        let frame1 = Frame::from_normal(x1.n);
+        let bdf1 = self.scene.bdf_at_vertex(x1);
+        let in_l = bdf1.outgoing(frame1.to_local(incoming));
+        let q = survival_at(&bdf1, &in_l);
+        let p_l = q * bdf1.pdf_at(&in_l, frame1.to_local(-v)) * cos0 / dist2;
+        (p_c as f64, p_l as f64)
+    }
+
+    /// f₁(ω₂, x₁→x₀): the BDF at the candidate x₁ (luminance, sr⁻¹) for a light path arriving
+    /// from `incoming` (unit, pointing away from x₁) and leaving towards x₀ (along −`v`), in
+    /// the geometric-normal frame: the same evaluation for the camera's x₁ and a photon's
+    /// previous vertex, so both techniques see the same weight (method.md §2).
+    fn x1_scattering(&self, x1: &WeightVertex, incoming: Vec3, v: Vec3) -> f64 {
+        let bdf = self.scene.bdf_at_vertex(x1);
+        if bdf.is_lambert() {
+            // The BDF's own test without the frame: the local z of a direction is its dot
+            // with the normal, and finite directions stay finite in any orthonormal frame.
+            let inside = x1.n.dot(-v) > 0.0 && x1.n.dot(incoming) > 0.0;
+            let finite = v.is_finite() && incoming.is_finite();
+            return if inside && finite {
+                luminance(bdf.kd() * std::f32::consts::FRAC_1_PI) as f64
+            } else {
+                0.0
+            };
+        }
+        let frame = Frame::from_normal(x1.n);
+        luminance(bdf.eval(frame.to_local(-v), frame.to_local(incoming))) as f64
+    }
+
+    /// `camis`'s β for a merge path …→x₂→x₁→x₀ (method-notes.md, "camis"): the product of
+    /// min(p_L·A, 1) over the light path's densities of x₁ (from x₂), of x₂ (from x₃), … and
+    /// of its first vertex (from the light). `start` is x₂'s index in the photon map, whose
+    /// vertices are stored path by path, so each vertex of depth k > 0 follows its
+    /// predecessor. `camera_density` is p_C(x₀→x₁) (m⁻²), which sets the cut-off.
+    ///
+    /// The camera's x₁ and a photon's previous vertex y_p enter only through their position
+    /// and normal, and everything beyond them is read from the same stored vertices, so both
+    /// techniques get the same β for the same path.
+    fn light_suffix(
+        &self,
+        map: &PhotonMap,
+        x0: &FirstVertex<'_>,
+        x1: &WeightVertex,
+        start: u32,
+        camera_density: f64,
+    ) -> f64 {
+        let area = x0.acceptance_area;
+        let camera = acceptance_probability(x0.primary_density, area)
+            * acceptance_probability(camera_density, area);
+        let cutoff = camera * SUFFIX_CUTOFF;
+        let (mut to_p, mut to_n) = (x1.p, x1.n);
+        let mut index = start;
+        let mut beta = 1.0;
+        loop {
+            let y = map.vertex(index);
+            let d = to_p - y.at.p;
+            let d2 = d.length_squared();
+            if d2 <= 0.0 {
+                return beta;
+            }
+            let dir = d / d2.sqrt();
+            let frame = Frame::from_normal(y.at.n);
+            let bdf = self.scene.bdf_at_vertex(&y.at);
+            let out = bdf.outgoing(frame.to_local(y.incoming));
+            let p = y.survival * bdf.pdf_at(&out, frame.to_local(dir)) * to_n.dot(dir).abs() / d2;
+            beta *= acceptance_probability(p as f64, area);
+            if beta <= cutoff {
+                return beta;
+            }
+            if y.depth == 0 {
+                let emission = self.emission_density(y.light as usize, &y.at);
+                return beta * acceptance_probability(emission, area);
+            }
+            // A map not stored path by path (hand-made in tests) ends the walk here.
+            if index == 0 || map.vertex(index - 1).depth + 1 != y.depth {
+                debug_assert!(false, "light-path vertices are not consecutive");
+                return beta;
+            }
+            (to_p, to_n) = (y.at.p, y.at.n);
+            index -= 1;
+        }
+    }
+
+    /// Unit direction from `at` to light `light`: a one-bounce path's arrival direction at
+    /// x₁, computed from the positions on both sides of the mix (a photon's stored direction
+    /// at its first vertex is the emitted ray's, which the camera side does not have).
+    fn light_direction(&self, light: usize, at: Vec3) -> Vec3 {
+        (self.scene.lights()[light].position - at).normalize_or_zero()
+    }
+
+    /// Emission density p_L(light→x₁) in area measure (choice of light included).
+    pub(crate) fn emission_density(&self, light: usize, x1: &WeightVertex) -> f64 {
+        let l = self.scene.lights()[light];
+        let to = l.position - x1.p;
+        let d2 = to.length_squared();
+        let cos = x1.n.dot(to).abs() / d2.sqrt();
+        (self.scene.light_probability(light) / (4.0 * PI) * cos / d2) as f64
+    }
+
+    /// The cache's (L_d, b) at `slot` for the vertex `x1`. A Lambert-only cache derives b
+    /// from the triangle's kd (its material's); where the material is textured, b is
+    /// kd/π·L_d with the kd at the actual point instead.
+    fn cache_read(&self, cache: &RadianceCache, slot: CacheSlot, x1: &WeightVertex) -> (f32, f32) {
+        let (ld, b) = cache.at(slot);
+        if self.scene.texture(x1.material).is_some() && !cache.stats().stores_b {
+            let kd = self.scene.kd_at(x1.material, x1.prim, x1.bary);
+            return (ld, luminance(kd) * std::f32::consts::FRAC_1_PI * ld);
+        }
+        (ld, b)
+    }
+
+    /// The radiance cache, when the mode's weights read it.
+    fn cache_needed(&self) -> Option<&'a RadianceCache> {
+        self.cache.filter(|_| self.needs.radiance_cache)
+    }
+
+    /// Whether a cache lookup at `y` towards `wo` reads the side that [`Self::prev_inputs`]
+    /// read (towards y's normal); true without a cache.
+    fn same_cache_side(&self, y: &WeightVertex, wo: Vec3) -> bool {
+        self.cache_needed()
+            .is_none_or(|c| c.same_side(y.prim, wo, y.n))
+    }
+
+    /// The weight inputs of every photon's previous vertex y_p that do not depend on where
+    /// the photon landed, one [L₀, L_d, b] (luminances: W·m⁻²·sr⁻¹, b in W·m⁻²·sr⁻²) per photon of `map`, in its
+    /// order: for a Lambert y_p, L₀(y_p) and the cache's L_d and b on the side of y_p's normal
+    /// (isotropic there; `merge_at_x0` checks the side), NaN for the others. Empty when the
+    /// mode's weights at x₀ read neither, or the cache has directional bins or stores b.
+    ///
+    /// A merge at x₀ visits a photon once per camera sample whose disk holds it, several
+    /// times per pass at high resolution; computing these once per photon gives the same
+    /// numbers, bit for bit, as [`Self::pair`] would for each visit.
+    pub(crate) fn prev_inputs(&self, map: &PhotonMap) -> Vec<[f32; 3]> {
+        let reads_inputs = self.needs.direct_at_x1 || self.needs.radiance_cache;
+        let per_visit = matches!(self.heuristic, Heuristic::Bdd0)
+            || self.camera_x1_weighting
+            || self.per_visit_inputs;
+        let isotropic = self
+            .cache_needed()
+            .is_none_or(|c| c.is_isotropic() && !c.stats().stores_b);
+        if !(self.needs.photons_at_x0 && reads_inputs && isotropic) || per_visit {
+            return Vec::new();
+        }
+        map.photons()
+            .par_iter()
+            .map(|ph| {
+                let prev = map.vertex(ph.prev);
+                if !self.scene.bdf(prev.at.material).is_lambert() {
+                    return [f32::NAN; 3];
+                }
+                let y = prev.at;
+                let l0 = if self.needs.direct_at_x1 {
+                    luminance(self.scene.direct_masked(&y, y.n))
+                } else {
+                    0.0
+                };
+                let (ld, b) = self.cache_needed().map_or((0.0, 0.0), |c| {
+                    self.cache_slot(y.prim, y.p, y.n)
+                        .map_or((0.0, 0.0), |s| self.cache_read(c, s, &y))
+                });
+                [l0, ld, b]
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! The agreement of the two ways in: for stored light paths, the inputs the camera side
+    //! assembles for the path …→x₂→x₁→x₀ (x₁ its own vertex, the photon stored at x₁ found
+    //! around it) are the inputs the photon side assembles when that path's next photon lands
+    //! at x₀ (x₁ its previous vertex), bit for bit, for every mixing mode.
+    use std::collections::HashMap;
+
+    use bdpm_bdf::Bdf;
+    use bdpm_geometry::{Domain, Geometry, TriangleMesh};
+    use bdpm_photon::{PhotonMap, TraceOptions};
+    use bdpm_scene::{Camera, Material, PointLight, Scene};
+    use bdpm_settings::{Mode, RenderSettings};
+    use glam::Vec3;
+
+    use super::Arrival;
+    use crate::Renderer;
+
+    /// An open box: Lambert floor and left wall, a back wall that is Lambert or glossy, two
+    /// point lights.
+    fn open_box(glossy_back: bool) -> Scene {
+        let mut mesh = TriangleMesh::default();
+        let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+        mesh.push_quad(
+            [
+                p(-1., 0., -1.),
+                p(-1., 0., 1.),
+                p(1., 0., 1.),
+                p(1., 0., -1.),
+            ],
+            0,
+        );
+        mesh.push_quad(
+            [
+                p(-1., 0., -1.),
+                p(1., 0., -1.),
+                p(1., 2., -1.),
+                p(-1., 2., -1.),
+            ],
+            1,
+        );
+        mesh.push_quad(
+            [
+                p(-1., 0., -1.),
+                p(-1., 2., -1.),
+                p(-1., 2., 1.),
+                p(-1., 0., 1.),
+            ],
+            0,
+        );
+        let back = if glossy_back {
+            Bdf::new(Vec3::splat(0.2), Vec3::splat(0.6), 0.15)
+        } else {
+            Bdf::lambert(Vec3::new(0.7, 0.5, 0.3))
+        };
+        let materials = vec![
+            Material {
+                name: "lambert".into(),
+                bdf: Bdf::lambert(Vec3::splat(0.6)).expect("valid albedo"),
+            },
+            Material {
+                name: "back".into(),
+                bdf: back.expect("valid BDF"),
+            },
+        ];
+        let lights = vec![
+            PointLight {
+                position: p(0.3, 1.5, 0.2),
+                flux: Vec3::splat(20.0),
+            },
+            PointLight {
+                position: p(-0.5, 0.6, 0.5),
+                flux: Vec3::new(5.0, 8.0, 10.0),
+            },
+        ];
+        let camera = Camera::look_at(p(0.5, 1.2, 3.0), p(-0.2, 0.6, -0.5), Vec3::Y, 50.0, 8, 8)
+            .expect("a valid camera");
+        Scene::new(
+            Geometry::new(mesh).expect("a valid mesh"),
+            materials,
+            lights,
+            camera,
+        )
+        .expect("a valid scene")
+    }
+
+    /// Paths compared, (one-bounce, merge), over every mixing mode of `scene`; panics at the
+    /// first disagreement.
+    fn check_agreement(scene: &Scene) -> (usize, usize) {
+        let modes = [
+            "balance",
+            "power",
+            "camis",
+            "threshold",
+            "algebraic-direct",
+            "algebraic",
+            "optimal",
+            "optimal-split",
+            "optimal-path",
+        ];
+        let (mut one_bounce, mut merge) = (0, 0);
+        for name in modes {
+            let mut settings = RenderSettings {
+                width: 8,
+                height: 8,
+                photons: 3000,
+                cache_photons: Some(20_000),
+                pixel_table_rays: Some(16),
+                radius: Some(0.05),
+                ..RenderSettings::default()
+            };
+            settings.select(Mode::parse(name).expect("a mode"));
+            let renderer = Renderer::new(scene, &settings).expect("valid settings");
+            let h = renderer.heuristic().expect("a mixing mode");
+            let mix = renderer.mix(h);
+            let options = TraceOptions {
+                photons: settings.photons,
+                seed: 7,
+                domain: Domain::Photon,
+                pass: 0,
+                light_visibility: mix.needs.direct_at_x1,
+                max_depth: 1024,
+            };
+            let map = PhotonMap::trace(scene, &options, 0.05);
+            let prev_inputs = mix.prev_inputs(&map);
+            // The photon stored at each vertex a path went on from, by its previous vertex.
+            let by_prev: HashMap<u32, usize> = map
+                .photons()
+                .iter()
+                .enumerate()
+                .map(|(i, ph)| (ph.prev, i))
+                .collect();
+            let cam = scene.camera();
+            for (px, py) in [(1.5, 2.5), (4.5, 4.5), (6.5, 1.5), (2.5, 6.5), (7.5, 7.5)] {
+                let dir = cam.ray_direction(px, py);
+                let hit = scene
+                    .geometry()
+                    .intersect(cam.position(), dir, f32::INFINITY)
+                    .expect("the camera sees the box");
+                let x0 = mix.first_vertex(&hit, -dir).expect("x0 faces the camera");
+                for (i, ph) in map.photons().iter().enumerate() {
+                    let prev = map.vertex(ph.prev);
+                    let Some(photon_side) = mix.photon_side_pair((&map, &prev_inputs), &x0, i, ph)
+                    else {
+                        continue;
+                    };
+                    let x1 = prev.at;
+                    let to = x1.p - x0.sh.p;
+                    let dist2 = to.length_squared();
+                    let v = to / dist2.sqrt();
+                    let slot = mix.cache_slot(x1.prim, x1.p, -v);
+                    let base = mix.camera_side_base(&x0, &x1, v, slot);
+                    let camera_side = if prev.depth == 0 {
+                        one_bounce += 1;
+                        let arrival = Arrival::Light(prev.light as usize);
+                        mix.path_pair(&x0, &x1, (v, dist2), arrival, base)
+                    } else {
+                        merge += 1;
+                        // The photon that light path stored at x₁ itself.
+                        let at_x1 = &map.photons()[by_prev[&(ph.prev - 1)]];
+                        assert_eq!(at_x1.position, x1.p);
+                        mix.camera_side_pair(&map, &x0, &x1, (v, dist2), at_x1, base)
+                    };
+                    // Debug prints the shortest text that reads back to the same f64: equal
+                    // text is equal bits, NaN included.
+                    assert_eq!(
+                        format!("{camera_side:?}"),
+                        format!("{photon_side:?}"),
+                        "{name}: photon {i} (depth {}) at x0 {:?}",
+                        prev.depth + 1,
+                        x0.sh.p
+                    );
+                }
+            }
+        }
+        (one_bounce, merge)
+    }
+
+    #[test]
+    fn camera_and_photon_side_inputs_agree_lambert() {
+        let (one_bounce, merge) = check_agreement(&open_box(false));
+        assert!(one_bounce > 1000 && merge > 1000, "{one_bounce} {merge}");
+    }
+
+    #[test]
+    fn camera_and_photon_side_inputs_agree_glossy() {
+        let (one_bounce, merge) = check_agreement(&open_box(true));
+        assert!(one_bounce > 1000 && merge > 1000, "{one_bounce} {merge}");
+    }
+}
