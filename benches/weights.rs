@@ -23,7 +23,7 @@
 use std::sync::LazyLock;
 
 use bdpm_geometry::{Domain, Rng};
-use bdpm_mis::{Budget, Heuristic, Pair, PathKind, PixelTerms};
+use bdpm_mis::{Budget, Heuristic, Pair, PathInputs, PathKind, PixelTerms, X0Inputs, X1Inputs};
 use bdpm_suite::thread_pool;
 use divan::Bencher;
 use divan::counter::ItemsCount;
@@ -80,30 +80,37 @@ static INPUTS: LazyLock<Vec<Input>> = LazyLock::new(|| {
             };
             let indirect = log_uniform(&mut rng, 1e-4, 1e-1);
             let mut pair = Pair {
-                f_tilde,
-                direct,
-                indirect,
-                b: (direct + indirect) * log_uniform(&mut rng, 1e-1, 1e1),
-                light_distance: 3.0 * rng.uniform_f64(),
-                path: if rng.uniform() < 0.5 {
-                    PathKind::Merge
-                } else {
-                    PathKind::OneBounce
+                x0: X0Inputs {
+                    f_tilde,
+                    ..Default::default()
                 },
-                camera_density: log_uniform(&mut rng, 1e-2, 1e2),
-                light_density: log_uniform(&mut rng, 1e-2, 1e2),
-                emission_density: log_uniform(&mut rng, 1e-3, 1e1),
-                ..Pair::default()
+                x1: X1Inputs {
+                    direct,
+                    indirect,
+                    b: (direct + indirect) * log_uniform(&mut rng, 1e-1, 1e1),
+                    light_distance: 3.0 * rng.uniform_f64(),
+                },
+                path: PathInputs {
+                    kind: if rng.uniform() < 0.5 {
+                        PathKind::Merge
+                    } else {
+                        PathKind::OneBounce
+                    },
+                    camera_density: log_uniform(&mut rng, 1e-2, 1e2),
+                    light_density: log_uniform(&mut rng, 1e-2, 1e2),
+                    emission_density: log_uniform(&mut rng, 1e-3, 1e1),
+                    ..Default::default()
+                },
             };
             let pixel = PixelTerms {
                 a: log_uniform(&mut rng, 1e-4, 1.0),
                 b: log_uniform(&mut rng, 1e-4, 1.0),
             };
             // Drawn last so that the other modes' inputs stay those of earlier runs.
-            pair.acceptance_area = log_uniform(&mut rng, 1e-3, 1e-1);
-            pair.primary_density = log_uniform(&mut rng, 1e2, 1e4);
-            pair.light_suffix = log_uniform(&mut rng, 1e-9, 1.0);
-            pair.x1_scattering = log_uniform(&mut rng, 1e-2, 1e2);
+            pair.x0.acceptance_area = log_uniform(&mut rng, 1e-3, 1e-1);
+            pair.x0.primary_density = log_uniform(&mut rng, 1e2, 1e4);
+            pair.path.light_suffix = log_uniform(&mut rng, 1e-9, 1.0);
+            pair.path.x1_scattering = log_uniform(&mut rng, 1e-2, 1e2);
             Input { pair, pixel }
         })
         .collect()

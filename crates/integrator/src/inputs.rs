@@ -10,7 +10,7 @@
 use bdpm_bdf::luminance;
 use bdpm_cache::{CacheSlot, RadianceCache};
 use bdpm_geometry::Frame;
-use bdpm_mis::{Heuristic, Pair, PathKind, acceptance_probability};
+use bdpm_mis::{Heuristic, Pair, PathKind, X0Inputs, X1Inputs, acceptance_probability};
 use bdpm_photon::{Photon, PhotonMap, survival_at};
 use bdpm_scene::WeightVertex;
 use glam::Vec3;
@@ -105,18 +105,23 @@ impl<'a> Mix<'a> {
         cached: Option<(f32, f32)>,
     ) -> Pair {
         let mut pair = Pair {
-            f_tilde: self.f_tilde(x0, f0),
-            acceptance_area: x0.acceptance_area,
-            primary_density: x0.primary_density,
-            direct: direct as f64,
+            x0: X0Inputs {
+                f_tilde: self.f_tilde(x0, f0),
+                acceptance_area: x0.acceptance_area,
+                primary_density: x0.primary_density,
+            },
+            x1: X1Inputs {
+                direct: direct as f64,
+                ..X1Inputs::default()
+            },
             ..Pair::default()
         };
         if let (Some(_), Some((ld, b))) = (self.cache, cached) {
-            pair.indirect = ld as f64;
-            pair.b = b as f64;
+            pair.x1.indirect = ld as f64;
+            pair.x1.b = b as f64;
         }
         if let Heuristic::Threshold { .. } = self.heuristic {
-            pair.light_distance = self
+            pair.x1.light_distance = self
                 .scene
                 .lights()
                 .iter()
@@ -141,13 +146,13 @@ impl<'a> Mix<'a> {
         let mut pair = base;
         match arrival {
             Arrival::Light(light) => {
-                pair.path = PathKind::OneBounce;
+                pair.path.kind = PathKind::OneBounce;
                 if self.needs.densities {
                     let incoming = self.light_direction(light, x1.p);
                     let (pc, pl) = self.densities(x0, x1, v, dist2, incoming);
-                    pair.camera_density = pc;
-                    pair.light_density = pl;
-                    pair.emission_density = self.emission_density(light, x1);
+                    pair.path.camera_density = pc;
+                    pair.path.light_density = pl;
+                    pair.path.emission_density = self.emission_density(light, x1);
                 }
             }
             Arrival::Vertex {
@@ -155,28 +160,28 @@ impl<'a> Mix<'a> {
                 from,
                 incoming,
             } => {
-                pair.path = PathKind::Merge;
+                pair.path.kind = PathKind::Merge;
                 if self.needs.x1_scattering {
-                    pair.x1_scattering = self.x1_scattering(x1, incoming, v);
+                    pair.path.x1_scattering = self.x1_scattering(x1, incoming, v);
                 }
                 if self.needs.densities {
                     let (pc, pl) = self.densities(x0, x1, v, dist2, incoming);
-                    pair.camera_density = pc;
-                    pair.light_density = pl;
+                    pair.path.camera_density = pc;
+                    pair.path.light_density = pl;
                     if self.heuristic == Heuristic::Camis {
-                        pair.light_suffix = self.light_suffix(map, x0, x1, from, pc);
+                        pair.path.light_suffix = self.light_suffix(map, x0, x1, from, pc);
                     }
                 }
             }
             Arrival::Modelled => {
-                pair.path = PathKind::Merge;
-                if self.needs.x1_scattering && pair.indirect > 0.0 {
-                    pair.x1_scattering = pair.b / pair.indirect;
+                pair.path.kind = PathKind::Merge;
+                if self.needs.x1_scattering && pair.x1.indirect > 0.0 {
+                    pair.path.x1_scattering = pair.x1.b / pair.x1.indirect;
                 }
                 if self.needs.densities {
                     let (pc, pl) = self.densities(x0, x1, v, dist2, x1.n);
-                    pair.camera_density = pc;
-                    pair.light_density = pl;
+                    pair.path.camera_density = pc;
+                    pair.path.light_density = pl;
                 }
             }
         }

@@ -391,7 +391,7 @@ fn direction(
         l0_w += c * w;
         l0_w0_sq += c * (1.0 - w) * (1.0 - w);
     }
-    let ld = pair.indirect;
+    let ld = pair.x1.indirect;
     let f = luminance(s.f) as f64;
     let cos = s.wi.z as f64;
     let pdf = s.pdf as f64;
@@ -400,6 +400,6 @@ fn direction(
     Some(Direction {
         value: e * (l0_w + ld * w_merge),
         photons_x0: (l0_w0_sq + ld * (1.0 - w_merge).powi(2)) * f * f * cos / pdf,
-        photons_x1: w_merge * w_merge * e * e * pair.b,
+        photons_x1: w_merge * w_merge * e * e * pair.x1.b,
     })
 }

@@ -91,14 +91,19 @@ pub(crate) fn pixel_terms(
         let pair = mix.pair(x0, &x1, v, mix.f_at_x0(x0, v));
         let cos_over_pdf = (s.wi.z / s.pdf) as f64;
         if split {
-            let wl =
-                split_weighted_radiance(budget, pair.f_tilde, pair.direct, pair.indirect, pair.b);
-            a += wl * pair.f_tilde * cos_over_pdf;
+            let wl = split_weighted_radiance(
+                budget,
+                pair.x0.f_tilde,
+                pair.x1.direct,
+                pair.x1.indirect,
+                pair.x1.b,
+            );
+            a += wl * pair.x0.f_tilde * cos_over_pdf;
             b += wl * cos_over_pdf;
         } else {
-            let l = pair.direct + pair.indirect;
-            let w1 = w1_partial(budget, pair.f_tilde, l, pair.b);
-            a += w1 * pair.f_tilde * l * cos_over_pdf;
+            let l = pair.x1.direct + pair.x1.indirect;
+            let w1 = w1_partial(budget, pair.x0.f_tilde, l, pair.x1.b);
+            a += w1 * pair.x0.f_tilde * l * cos_over_pdf;
             b += w1 * l * cos_over_pdf;
         }
     }

@@ -8,7 +8,7 @@
 
 use std::f64::consts::PI;
 
-use bdpm_mis::{Budget, Heuristic, Pair};
+use bdpm_mis::{Budget, Heuristic, Pair, X0Inputs, X1Inputs};
 
 fn main() {
     // The renderer's settings for one pass: 16 camera samples per pixel, a million photons,
@@ -24,11 +24,16 @@ fn main() {
     // x₁ towards x₀ is 0.8 W·m⁻²·sr⁻¹ direct and 0.3 indirect (from the renderer's own
     // radiance cache; b = (k_d/π)·L_d for Lambert).
     let pair = Pair {
-        f_tilde: 1.0 / PI,
-        direct: 0.8,
-        indirect: 0.3,
-        b: 0.5 / PI * 0.3,
-        light_distance: 0.4,
+        x0: X0Inputs {
+            f_tilde: 1.0 / PI,
+            ..Default::default()
+        },
+        x1: X1Inputs {
+            direct: 0.8,
+            indirect: 0.3,
+            b: 0.5 / PI * 0.3,
+            light_distance: 0.4,
+        },
         ..Pair::default()
     };
     // The renderer's two estimates of this pair's contribution (any numbers: the check below
@@ -56,7 +61,7 @@ fn main() {
     // Eq. 10 by hand: the algebraic weight at a Lambert x₀ is 1/(1 + π κ(L)/N_B), with
     // κ(L) = S·L·N_F/Φ the expected photons in the merge disk per steradian.
     let w = Heuristic::Algebraic.weight(&budget, &pair, None);
-    let kappa = budget.kappa(pair.direct + pair.indirect);
+    let kappa = budget.kappa(pair.x1.direct + pair.x1.indirect);
     let by_hand = 1.0 / (1.0 + PI * kappa / budget.camera_samples);
     println!(
         "algebraic w1 = {:.6}, by hand (eq. 10) = {by_hand:.6}",

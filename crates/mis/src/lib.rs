@@ -34,7 +34,10 @@
 //! use std::f64::consts::PI;
 //!
 //! let budget = Budget { camera_samples: 30.0, photons: 1e6, merge_area: 1e-5, flux: 1.0 };
-//! let pair = Pair { f_tilde: 1.0 / PI, direct: 2.0, indirect: 0.5, ..Pair::default() };
+//! let mut pair = Pair::default();
+//! pair.x0.f_tilde = 1.0 / PI;
+//! pair.x1.direct = 2.0;
+//! pair.x1.indirect = 0.5;
 //! let heuristic = Heuristic::parse("algebraic").unwrap();
 //! assert!(heuristic.needs().radiance_cache);
 //!
@@ -134,21 +137,47 @@ pub struct Needs {
     /// [`Budget::camera_samples`] (`algebraic-direct`, `algebraic`, `optimal`).
     pub effective_samples: bool,
     /// The BDF at x₁ for each light path's incoming direction towards x₀
-    /// ([`Pair::x1_scattering`]; `optimal-path`).
+    /// ([`PathInputs::x1_scattering`]; `optimal-path`).
     pub x1_scattering: bool,
     /// One-bounce paths (L₀(x₁)) get another weight than merge paths at the same (x₀, x₁),
-    /// so the two are weighted apart ([`Pair::path`]; `optimal-split`, `optimal-path`).
+    /// so the two are weighted apart ([`PathInputs::kind`]; `optimal-split`, `optimal-path`).
     pub path_kinds: bool,
 }
 
-/// What the weight of one (x₀, x₁) pair may depend on.
+/// What the weight of one full path through the pair (x₀, x₁) may depend on, in three groups:
+/// what x₀ alone sets, what x₁ sends towards x₀ (the same for every path through the pair),
+/// and what the path's light subpath adds.
 ///
 /// The integrator fills what [`Heuristic::needs`] asks for; the rest may be 0.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Pair {
+    /// Inputs of the camera's first vertex x₀ (and the direction x₀→x₁).
+    pub x0: X0Inputs,
+    /// Radiance data of x₁ towards x₀.
+    pub x1: X1Inputs,
+    /// Inputs of the full path's light subpath.
+    pub path: PathInputs,
+}
+
+/// The part of a [`Pair`] that x₀ and the direction v = x₀→x₁ set.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct X0Inputs {
     /// f̃(v, u; x₀) = f/µ at x₀ for v = x₀→x₁ and u towards the camera, sr⁻¹
     /// (Lambert: 1/π).
     pub f_tilde: f64,
+    /// A, the acceptance area of `camis`'s surrogate probabilities, m²: a disk of angular
+    /// radius 1° seen from the camera at x₀'s distance ([`acceptance_area`]). 0 (unset) makes
+    /// the correlation factor 1, i.e. `camis` = `balance`.
+    pub acceptance_area: f64,
+    /// p_C(x₀), the camera's density of x₀ within its pixel, area measure, m⁻² (the inverse
+    /// of the pixel's footprint area at x₀; `camis` only).
+    pub primary_density: f64,
+}
+
+/// The part of a [`Pair`] that x₁ sets: the radiance it sends towards x₀, the same for every
+/// path through the pair.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct X1Inputs {
     /// L₀(x₁→x₀), radiance leaving x₁ towards x₀ due to direct light, W·m⁻²·sr⁻¹.
     pub direct: f64,
     /// L_d(x₁→x₀), secondary radiance from the cache, W·m⁻²·sr⁻¹.
@@ -157,9 +186,15 @@ pub struct Pair {
     pub b: f64,
     /// The smallest distance |x₁ − x_LS| over all lights, m (`threshold` only).
     pub light_distance: f64,
+}
+
+/// The part of a [`Pair`] that the full path's light subpath sets (density-based weights and
+/// `optimal-path`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PathInputs {
     /// Which full path this weight is for (`balance`, `power`, `camis`, `optimal-split`,
     /// `optimal-path`).
-    pub path: PathKind,
+    pub kind: PathKind,
     /// f₁(ω₂, x₁→x₀): the BDF at x₁ (luminance, sr⁻¹) for the light path's incoming
     /// direction ω₂ and the outgoing direction towards x₀ (`optimal-path`, merge paths only).
     pub x1_scattering: f64,
@@ -170,13 +205,6 @@ pub struct Pair {
     /// p_L(light→x₁), area measure, m⁻², including the choice of light
     /// ([`PathKind::OneBounce`] only).
     pub emission_density: f64,
-    /// A, the acceptance area of `camis`'s surrogate probabilities, m²: a disk of angular
-    /// radius 1° seen from the camera at x₀'s distance ([`acceptance_area`]). 0 (unset) makes
-    /// the correlation factor 1, i.e. `camis` = `balance`.
-    pub acceptance_area: f64,
-    /// p_C(x₀), the camera's density of x₀ within its pixel, area measure, m⁻² (the inverse
-    /// of the pixel's footprint area at x₀; `camis` only).
-    pub primary_density: f64,
     /// β, dimensionless in [0, 1]: the surrogate probability that the light subpath of a
     /// [`PathKind::Merge`] path lands in its acceptance regions, ∏ [`acceptance_probability`]
     /// over the light's densities of x₁ (from x₂), of x₂ (from x₃), … and of the first vertex
@@ -284,7 +312,7 @@ pub enum Heuristic {
     /// with one camera prefix (x₀, x₁), so those N_F paths are correlated through the prefix.
     /// The paper scales that merge's sample count by r = a/(a + β − a·β), with
     /// a = [`acceptance_probability`](p_C(x₀))·[`acceptance_probability`](p_C(x₀→x₁)) the
-    /// camera prefix's and β ([`Pair::light_suffix`]) the light subpath's surrogate
+    /// camera prefix's and β ([`PathInputs::light_suffix`]) the light subpath's surrogate
     /// probability, giving w₁ = r·p_C/(r·p_C + p_L). BDD=0 merges at the primary vertex,
     /// which the paper (and its code) leaves uncorrelated (factor 1): x₀ is fixed by the
     /// pixel up to its footprint. For a [`PathKind::OneBounce`] path BDD=1 is a connection
@@ -447,18 +475,18 @@ impl Heuristic {
             Heuristic::Bdd0 => Weight::plain(0.0),
             Heuristic::Bdd1 => Weight::plain(1.0),
             // method.md §4, eq. 11.
-            Heuristic::Threshold { radius } => Weight::plain(if pair.light_distance >= radius {
+            Heuristic::Threshold { radius } => Weight::plain(if pair.x1.light_distance >= radius {
                 1.0
             } else {
                 0.0
             }),
             // method.md §4, eq. 10 with L_d dropped.
             Heuristic::AlgebraicDirect => {
-                Weight::plain(algebraic(budget, pair.f_tilde, pair.direct))
+                Weight::plain(algebraic(budget, pair.x0.f_tilde, pair.x1.direct))
             }
             // method.md §4, eq. 10.
             Heuristic::Algebraic => {
-                Weight::plain(algebraic(budget, pair.f_tilde, total_radiance(pair)))
+                Weight::plain(algebraic(budget, pair.x0.f_tilde, total_radiance(pair)))
             }
             // method.md §4, eq. 8–9.
             Heuristic::Optimal { clamp_weights } => optimal(budget, pair, pixel, clamp_weights),
@@ -467,8 +495,8 @@ impl Heuristic {
                 optimal_per_path(budget, pair, pixel, f1, clamp_weights)
             }
             Heuristic::OptimalPath { clamp_weights } => {
-                let f1 = match pair.path {
-                    PathKind::Merge => nonneg(pair.x1_scattering),
+                let f1 = match pair.path.kind {
+                    PathKind::Merge => nonneg(pair.path.x1_scattering),
                     PathKind::OneBounce => 0.0,
                 };
                 optimal_per_path(budget, pair, pixel, f1, clamp_weights)
@@ -535,7 +563,7 @@ pub fn split_weighted_radiance(
 
 /// L = L₀ + L_d of one pair, W·m⁻²·sr⁻¹.
 fn total_radiance(pair: &Pair) -> f64 {
-    sat(nonneg(pair.direct) + nonneg(pair.indirect))
+    sat(nonneg(pair.x1.direct) + nonneg(pair.x1.indirect))
 }
 
 /// Eq. 10: w₁ = N_B f̃ / (N_B f̃ + κ(L)).
@@ -585,7 +613,7 @@ impl OptimalTerms {
 /// Eq. 8–9 in the division-safe form of method.md §4:
 /// G̃ = A/(1 − c·B), w₁ = N_B (f̃ + c·G̃)/D = W₁ + N_B·c·G̃/D.
 fn optimal(budget: &Budget, pair: &Pair, pixel: Option<&PixelTerms>, clamp: bool) -> Weight {
-    let terms = OptimalTerms::new(budget, pair.f_tilde, total_radiance(pair), pair.b);
+    let terms = OptimalTerms::new(budget, pair.x0.f_tilde, total_radiance(pair), pair.x1.b);
     let (a, b) = pixel.map_or((0.0, 0.0), |p| (p.a, p.b));
     let a = nonneg(a);
     let (one_minus_cb, clamped_cb) = budget.one_minus_cb(b);
@@ -642,14 +670,14 @@ impl SplitTerms {
 /// The x₁ scattering that `optimal-split` assumes for a path: none for one-bounce paths (L₀(x₁)
 /// is exact), the cell's average β = b/L_d for merge paths.
 fn split_scattering(pair: &Pair) -> f64 {
-    match pair.path {
+    match pair.path.kind {
         PathKind::OneBounce => 0.0,
         PathKind::Merge => {
-            let indirect = nonneg(pair.indirect);
+            let indirect = nonneg(pair.x1.indirect);
             if indirect == 0.0 {
                 0.0
             } else {
-                ratio_sat(nonneg(pair.b), indirect)
+                ratio_sat(nonneg(pair.x1.b), indirect)
             }
         }
     }
@@ -669,7 +697,13 @@ fn optimal_per_path(
     f1: f64,
     clamp: bool,
 ) -> Weight {
-    let t = SplitTerms::new(budget, pair.f_tilde, pair.direct, pair.indirect, pair.b);
+    let t = SplitTerms::new(
+        budget,
+        pair.x0.f_tilde,
+        pair.x1.direct,
+        pair.x1.indirect,
+        pair.x1.b,
+    );
     let (a, b) = pixel.map_or((0.0, 0.0), |p| (p.a, p.b));
     let a = nonneg(a);
     let (one_minus_cb, clamped_cb) = budget.one_minus_cb(b);
@@ -699,16 +733,16 @@ fn optimal_per_path(
 /// Method.md §8: the balance (`power` = 1) or power (`power` = 2) heuristic on
 /// area-measure path densities. Both densities 0 (or both infinite) give w₁ = ½.
 fn density_share(budget: &Budget, pair: &Pair, power: i32) -> f64 {
-    let camera = nonneg(pair.camera_density);
-    let light = match pair.path {
+    let camera = nonneg(pair.path.camera_density);
+    let light = match pair.path.kind {
         // η = S·N_F and the common prefix …x₂→x₁ cancel.
-        PathKind::Merge => nonneg(pair.light_density),
+        PathKind::Merge => nonneg(pair.path.light_density),
         // The photon technique pays η = S·N_F for the merge at x₀.
         PathKind::OneBounce => product(&[
             nonneg(budget.merge_area),
             nonneg(budget.photons),
-            nonneg(pair.emission_density),
-            nonneg(pair.light_density),
+            nonneg(pair.path.emission_density),
+            nonneg(pair.path.light_density),
         ]),
     };
     share(camera, light, power, 0.5)
@@ -749,23 +783,23 @@ pub fn correlation_factor(camera: f64, light: f64) -> f64 {
 
 /// [`Heuristic::Camis`]: the balance heuristic with BDD=1's merge at x₁ counted r times.
 fn camis(budget: &Budget, pair: &Pair) -> f64 {
-    match pair.path {
+    match pair.path.kind {
         // BDD=1 connects to the light at x₁ and BDD=0 merges at the primary vertex: neither
         // merge is correlated in the paper's sense, so this is `balance` bit for bit.
         PathKind::OneBounce => density_share(budget, pair, 1),
         PathKind::Merge => {
-            let area = nonneg(pair.acceptance_area);
+            let area = nonneg(pair.x0.acceptance_area);
             // Without an acceptance area there is no surrogate to compare: no correction.
             let r = if area == 0.0 {
                 1.0
             } else {
-                let camera = acceptance_probability(pair.primary_density, area)
-                    * acceptance_probability(pair.camera_density, area);
-                correlation_factor(camera, pair.light_suffix)
+                let camera = acceptance_probability(pair.x0.primary_density, area)
+                    * acceptance_probability(pair.path.camera_density, area);
+                correlation_factor(camera, pair.path.light_suffix)
             };
             // Unsaturated, with 0·∞ = 0, so that r = 1 reproduces `balance` exactly, ∞ included.
-            let camera_density = product(&[r, nonneg(pair.camera_density)]);
-            share(camera_density, nonneg(pair.light_density), 1, 0.5)
+            let camera_density = product(&[r, nonneg(pair.path.camera_density)]);
+            share(camera_density, nonneg(pair.path.light_density), 1, 0.5)
         }
     }
 }

@@ -26,10 +26,16 @@ fn assert_close(actual: f64, expected: f64) {
 
 fn lit(f_tilde: f64, direct: f64, indirect: f64, b: f64) -> Pair {
     Pair {
-        f_tilde,
-        direct,
-        indirect,
-        b,
+        x0: X0Inputs {
+            f_tilde,
+            ..Default::default()
+        },
+        x1: X1Inputs {
+            direct,
+            indirect,
+            b,
+            ..Default::default()
+        },
         ..Pair::default()
     }
 }
@@ -234,7 +240,7 @@ fn pure_strategies_and_threshold() {
     assert_eq!(Heuristic::Bdd1.weight(&SIMPLE, &pair, None).w1, 1.0);
     let threshold = Heuristic::Threshold { radius: 0.2 };
     for (distance, expected) in [(0.0, 0.0), (0.199, 0.0), (0.2, 1.0), (3.0, 1.0)] {
-        pair.light_distance = distance;
+        pair.x1.light_distance = distance;
         assert_eq!(
             threshold.weight(&SIMPLE, &pair, None).w1,
             expected,
@@ -245,10 +251,13 @@ fn pure_strategies_and_threshold() {
 
 fn densities(path: PathKind, camera: f64, light: f64, emission: f64) -> Pair {
     Pair {
-        path,
-        camera_density: camera,
-        light_density: light,
-        emission_density: emission,
+        path: PathInputs {
+            kind: path,
+            camera_density: camera,
+            light_density: light,
+            emission_density: emission,
+            ..Default::default()
+        },
         ..Pair::default()
     }
 }
@@ -320,11 +329,12 @@ fn density_guards() {
 
 /// A merge pair for `camis`: A = 2 m², p_C(x₀) = 1 m⁻² (so the primary factor is 1).
 fn camis_merge(camera: f64, light: f64, suffix: f64) -> Pair {
-    Pair {
-        acceptance_area: 2.0,
-        primary_density: 1.0,
-        light_suffix: suffix,
-        ..densities(PathKind::Merge, camera, light, 0.0)
+    {
+        let mut pair = densities(PathKind::Merge, camera, light, 0.0);
+        pair.x0.acceptance_area = 2.0;
+        pair.x0.primary_density = 1.0;
+        pair.path.light_suffix = suffix;
+        pair
     }
 }
 
@@ -373,9 +383,10 @@ fn camis_matches_hand_values() {
     assert!(!w.outside_unit && !w.clamped_cb);
     // A pixel footprint larger than A (p_C(x₀)·A = ½) halves a: a = ¼, β = ½ → r = 0.4;
     // w₁ = 0.1/(0.1 + ⅛) = 4/9.
-    let pair = Pair {
-        primary_density: 0.25,
-        ..camis_merge(0.25, 0.125, 0.5)
+    let pair = {
+        let mut pair = camis_merge(0.25, 0.125, 0.5);
+        pair.x0.primary_density = 0.25;
+        pair
     };
     assert_close(Heuristic::Camis.weight(&SIMPLE, &pair, None).w1, 4.0 / 9.0);
     // The factor only ever moves weight to BDD=0.
@@ -400,22 +411,21 @@ fn camis_with_factor_one_is_balance() {
             )
             .w1;
         // β = 0 (light subpath never concentrated), or A = 0 (no surrogate at all).
-        for pair in [
-            camis_merge(camera, light, 0.0),
-            Pair {
-                acceptance_area: 0.0,
-                ..camis_merge(camera, light, 0.7)
-            },
-        ] {
+        for pair in [camis_merge(camera, light, 0.0), {
+            let mut pair = camis_merge(camera, light, 0.7);
+            pair.x0.acceptance_area = 0.0;
+            pair
+        }] {
             assert_eq!(Heuristic::Camis.weight(&SIMPLE, &pair, None).w1, balance);
         }
     }
     // One-bounce paths: BDD=1 is a connection, so camis is balance whatever β says.
-    let one_bounce = Pair {
-        acceptance_area: 2.0,
-        primary_density: 1.0,
-        light_suffix: 1.0,
-        ..densities(PathKind::OneBounce, 0.25, 0.5, 0.3)
+    let one_bounce = {
+        let mut pair = densities(PathKind::OneBounce, 0.25, 0.5, 0.3);
+        pair.x0.acceptance_area = 2.0;
+        pair.x0.primary_density = 1.0;
+        pair.path.light_suffix = 1.0;
+        pair
     };
     assert_eq!(
         Heuristic::Camis.weight(&SIMPLE, &one_bounce, None).w1,
@@ -434,9 +444,10 @@ fn camis_guards() {
     assert_eq!(camis(&camis_merge(0.0, 0.0, 0.5)), 0.5);
     assert_eq!(camis(&camis_merge(0.0, 1.0, 0.5)), 0.0);
     // A camera prefix that never lands (p_C(x₀) = 0) against a light subpath that does: r = 0.
-    let unseen = Pair {
-        primary_density: 0.0,
-        ..camis_merge(0.25, 0.125, 0.5)
+    let unseen = {
+        let mut pair = camis_merge(0.25, 0.125, 0.5);
+        pair.x0.primary_density = 0.0;
+        pair
     };
     assert_eq!(camis(&unseen), 0.0);
     // NaN and negative inputs count as 0; infinite A and β saturate the probabilities at 1.
@@ -445,13 +456,15 @@ fn camis_guards() {
             camis_merge(x, 0.125, 0.5),
             camis_merge(0.25, x, 0.5),
             camis_merge(0.25, 0.125, x),
-            Pair {
-                acceptance_area: x,
-                ..camis_merge(0.25, 0.125, 0.5)
+            {
+                let mut pair = camis_merge(0.25, 0.125, 0.5);
+                pair.x0.acceptance_area = x;
+                pair
             },
-            Pair {
-                primary_density: x,
-                ..camis_merge(0.25, 0.125, 0.5)
+            {
+                let mut pair = camis_merge(0.25, 0.125, 0.5);
+                pair.x0.primary_density = x;
+                pair
             },
         ] {
             let w = camis(&pair);
@@ -599,7 +612,11 @@ const PATH: Heuristic = Heuristic::OptimalPath {
 };
 
 fn kind(pair: Pair, path: PathKind) -> Pair {
-    Pair { path, ..pair }
+    {
+        let mut pair = pair;
+        pair.path.kind = path;
+        pair
+    }
 }
 
 #[test]
@@ -641,20 +658,23 @@ fn split_weights_match_hand_values() {
         0.3,
     );
     // optimal-path with the photon's own f₁ = 2 instead of β: 1·1.5·(1/(1 + 2))/5 = 0.1.
-    let photon = Pair {
-        x1_scattering: 2.0,
-        ..kind(pair, PathKind::Merge)
+    let photon = {
+        let mut pair = kind(pair, PathKind::Merge);
+        pair.path.x1_scattering = 2.0;
+        pair
     };
     assert_close(PATH.weight(&SIMPLE, &photon, None).w1, 0.1);
     // With f₁ = β it is the split weight, and one-bounce paths ignore f₁.
-    let at_beta = Pair {
-        x1_scattering: 0.5,
-        ..photon
+    let at_beta = {
+        let mut pair = photon;
+        pair.path.x1_scattering = 0.5;
+        pair
     };
     assert_close(PATH.weight(&SIMPLE, &at_beta, None).w1, 0.2);
-    let one = Pair {
-        path: PathKind::OneBounce,
-        ..photon
+    let one = {
+        let mut pair = photon;
+        pair.path.kind = PathKind::OneBounce;
+        pair
     };
     assert_close(PATH.weight(&SIMPLE, &one, None).w1, 0.3);
 }
@@ -732,9 +752,10 @@ fn split_and_path_weights_guard_degenerate_inputs() {
             // Huge and NaN inputs.
             let w = h.weight(
                 &SIMPLE,
-                &Pair {
-                    x1_scattering: f64::NAN,
-                    ..kind(lit(1e300, 1e300, 1e300, f64::NAN), path)
+                &{
+                    let mut pair = kind(lit(1e300, 1e300, 1e300, f64::NAN), path);
+                    pair.path.x1_scattering = f64::NAN;
+                    pair
                 },
                 Some(&PixelTerms { a: 1e300, b: 1e300 }),
             );

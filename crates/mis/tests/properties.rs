@@ -1,7 +1,9 @@
 //! Property tests over wide input ranges: every weight is finite, w₀ + w₁ = 1, the
 //! bounded modes stay in [0, 1], and eq. 10 is monotone in the radiance at x₁.
 
-use bdpm_mis::{Budget, Heuristic, Pair, PathKind, PixelTerms, w1_partial};
+use bdpm_mis::{
+    Budget, Heuristic, Pair, PathInputs, PathKind, PixelTerms, X0Inputs, X1Inputs, w1_partial,
+};
 use proptest::prelude::*;
 
 /// 10ˣ for x uniform in [lo, hi]: log-uniform over many decades.
@@ -62,19 +64,25 @@ fn pair() -> impl Strategy<Value = Pair> {
                 (acceptance_area, primary_density, light_suffix),
             )| {
                 Pair {
-                    f_tilde,
-                    direct,
-                    indirect,
-                    b,
-                    light_distance,
-                    path,
-                    camera_density: camera,
-                    light_density: light,
-                    emission_density: emission,
-                    x1_scattering,
-                    acceptance_area,
-                    primary_density,
-                    light_suffix,
+                    x0: X0Inputs {
+                        f_tilde,
+                        acceptance_area,
+                        primary_density,
+                    },
+                    x1: X1Inputs {
+                        direct,
+                        indirect,
+                        b,
+                        light_distance,
+                    },
+                    path: PathInputs {
+                        kind: path,
+                        camera_density: camera,
+                        light_density: light,
+                        emission_density: emission,
+                        x1_scattering,
+                        light_suffix,
+                    },
                 }
             },
         )
@@ -115,9 +123,9 @@ proptest! {
     fn camis_never_exceeds_balance(budget in budget(), pair in pair()) {
         let camis = Heuristic::Camis.weight(&budget, &pair, None).w1;
         let balance = Heuristic::Balance.weight(&budget, &pair, None).w1;
-        if pair.path == PathKind::OneBounce {
+        if pair.path.kind == PathKind::OneBounce {
             prop_assert_eq!(camis, balance);
-        } else if pair.camera_density > 0.0 || pair.light_density > 0.0 {
+        } else if pair.path.camera_density > 0.0 || pair.path.light_density > 0.0 {
             prop_assert!(camis <= balance, "{camis} > {balance}");
         }
     }
@@ -128,7 +136,7 @@ proptest! {
         let clamped = Heuristic::Optimal { clamp_weights: true }.weight(&budget, &pair, pixel.as_ref());
         prop_assert!(free.w1.is_finite() && free.w0().is_finite(), "{free:?}");
         // The correlation term is non-negative: w₁ ≥ W₁ ≥ 0.
-        let partial = w1_partial(&budget, pair.f_tilde, pair.direct + pair.indirect, pair.b);
+        let partial = w1_partial(&budget, pair.x0.f_tilde, pair.x1.direct + pair.x1.indirect, pair.x1.b);
         prop_assert!((0.0..=1.0).contains(&partial));
         prop_assert!(free.w1 >= partial);
         prop_assert_eq!(free.outside_unit, !(0.0..=1.0).contains(&free.w1));
@@ -146,10 +154,11 @@ proptest! {
         extra_direct in zero_or(-30.0, 30.0),
         extra_indirect in zero_or(-30.0, 30.0),
     ) {
-        let brighter = Pair {
-            direct: pair.direct + extra_direct,
-            indirect: pair.indirect + extra_indirect,
-            ..pair
+        let brighter = {
+            let mut pair = pair;
+            pair.x1.direct += extra_direct;
+            pair.x1.indirect += extra_indirect;
+            pair
         };
         for heuristic in [Heuristic::AlgebraicDirect, Heuristic::Algebraic] {
             let dim = heuristic.weight(&budget, &pair, None).w1;
