@@ -44,32 +44,12 @@ mod bdf;
 mod error;
 mod lobe;
 mod quadrature;
-
-use glam::Vec3;
+mod survival;
 
 pub use bdf::{Bdf, BdfSample, Outgoing};
 pub use error::BdfError;
 pub use lobe::{LOBE_EPSILON, LOBE_WIDTH_MAX, LOBE_WIDTH_MIN};
+pub use survival::{MAX_SURVIVAL, survival_at, survival_probability};
 
-/// The Rec. 709 luminance weights of linear R, G, B: the one definition every luminance in
-/// bdpm uses (f32 here, f64 in the tools).
-pub const LUMINANCE_WEIGHTS: [f64; 3] = [0.2126, 0.7152, 0.0722];
-
-/// Rec. 709 luminance of a linear RGB colour ([`LUMINANCE_WEIGHTS`] in f32).
-pub fn luminance(c: Vec3) -> f32 {
-    let [r, g, b] = LUMINANCE_WEIGHTS;
-    c.dot(Vec3::new(r as f32, g as f32, b as f32))
-}
-
-#[cfg(test)]
-mod luminance_tests {
-    use super::*;
-
-    /// The f32 weights are the f64 ones rounded, bit for bit the literals they replaced.
-    #[test]
-    fn f32_weights_are_the_f64_weights_rounded() {
-        let [r, g, b] = LUMINANCE_WEIGHTS;
-        assert_eq!([r as f32, g as f32, b as f32], [0.2126f32, 0.7152, 0.0722]);
-        assert_eq!(luminance(Vec3::X), 0.2126f32);
-    }
-}
+// Luminance is shared with the crates below the BDFs (photon tracing, the cache).
+pub use bdpm_core::{LUMINANCE_WEIGHTS, luminance};

@@ -33,10 +33,8 @@
 
 use std::f32::consts::PI;
 
-use bdpm_bdf::luminance;
-use bdpm_geometry::{Domain, Frame};
+use bdpm_core::{Domain, Frame, luminance};
 use bdpm_photon::{PhotonScene, TraceOptions, trace_photons};
-use bdpm_scene::Scene;
 use glam::{Vec2, Vec3};
 
 /// How to build a cache.
@@ -75,28 +73,6 @@ pub trait CacheSurfaces: Sync {
     /// Luminance of the Lambert albedo k_d of triangle `prim`'s material (dimensionless, in
     /// [0, 1]); read only when [`Self::lambert_only`].
     fn lambert_albedo(&self, prim: u32) -> f32;
-}
-
-/// bdpm's own scene: its triangle mesh and materials.
-impl CacheSurfaces for Scene {
-    fn triangle_count(&self) -> usize {
-        self.geometry().triangle_count()
-    }
-    fn triangle(&self, prim: u32) -> [Vec3; 3] {
-        self.geometry().vertices(prim)
-    }
-    fn normal(&self, prim: u32) -> Vec3 {
-        self.geometry().normal(prim)
-    }
-    fn area(&self, prim: u32) -> f32 {
-        self.geometry().area(prim)
-    }
-    fn lambert_only(&self) -> bool {
-        self.all_lambert()
-    }
-    fn lambert_albedo(&self, prim: u32) -> f32 {
-        luminance(self.bdf(self.geometry().material(prim)).kd())
-    }
 }
 
 /// One scattering of secondary light at a surface, as the cache accumulates it: a photon
@@ -621,7 +597,7 @@ impl RadianceCache {
     #[inline]
     pub fn prefetch(&self, slot: CacheSlot) {
         if let Some(v) = self.values.get(slot.index * self.stride) {
-            bdpm_geometry::prefetch(v);
+            bdpm_core::prefetch(v);
         }
     }
 
@@ -670,8 +646,8 @@ impl RadianceCache {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use bdpm_geometry::Rng;
-    use bdpm_geometry::sampling::uniform_sphere;
+    use bdpm_core::Rng;
+    use bdpm_core::sampling::uniform_sphere;
 
     /// A unit square in z = 0 of two triangles, Lambert-only or not.
     struct Square {
@@ -828,7 +804,7 @@ mod tests {
         let mut rng = Rng::new(2, Domain::Other, [0; 3]);
         for _ in 0..10_000 {
             let u = rng.uniform2();
-            let d = bdpm_geometry::sampling::concentric_disk(u);
+            let d = bdpm_core::sampling::concentric_disk(u);
             let z = (1.0 - d.length_squared()).max(0.0);
             // Equal-area concentric hemisphere: disk point (r, φ) ↦ z = 1 − r².
             let r = d.length();

@@ -28,14 +28,10 @@
 //! ```
 
 mod build;
-mod frame;
 mod mesh;
-mod prefetch;
-mod rng;
-pub mod sampling;
 mod wide;
 
-pub use frame::Frame;
+// Frames, warps, random streams and prefetch live in bdpm-core (crates below the BVH use
+// them); re-exported so that a user of the geometry needs one dependency.
+pub use bdpm_core::{Domain, Frame, Rng, prefetch, sampling};
 pub use mesh::{Geometry, GeometryError, Hit, Kernel, MAX_COORDINATE, SurfaceSample, TriangleMesh};
-pub use prefetch::prefetch;
-pub use rng::{Domain, Rng};

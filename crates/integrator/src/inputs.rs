@@ -7,11 +7,11 @@
 //! both sides hold alike: x₀, the vertex x₁, the direction x₀→x₁ and how the light reached
 //! x₁ ([`Arrival`]). [`Mix::camera_side_pair`] and [`Mix::photon_side_pair`] are the two
 //! ways in; a test checks, for stored light paths, that they agree bit for bit.
-use bdpm_bdf::luminance;
+use bdpm_bdf::{luminance, survival_at};
 use bdpm_cache::{CacheSlot, RadianceCache};
 use bdpm_geometry::Frame;
 use bdpm_mis::{Heuristic, Pair, PathKind, X0Inputs, X1Inputs, acceptance_probability};
-use bdpm_photon::{Photon, PhotonMap, survival_at};
+use bdpm_photon::{Photon, PhotonMap};
 use bdpm_scene::WeightVertex;
 use glam::Vec3;
 use rayon::prelude::*;

@@ -4,7 +4,7 @@
 //! - emission ([`emit`]): N_F photons per pass shared between the point lights in proportion
 //!   to flux luminance, isotropic directions, power Φ_l/(p_l·N_F);
 //! - the random walk ([`trace_photons`], [`for_each_arrival`]): BDF sampling with Russian
-//!   roulette of survival q = [`survival_probability`] (depends only on the vertex and the
+//!   roulette of survival q given by the scene (bdpm's: `bdpm_bdf::survival_probability`, which depends only on the vertex and the
 //!   arrival direction, as the balance heuristic of §8 needs), recording every surface
 //!   vertex ([`PathVertex`]) with its depth, arrival direction, q and optionally which
 //!   lights it sees;
@@ -76,7 +76,8 @@
 //! assert!(irradiance.is_finite());
 //! ```
 
-pub mod grid;
+/// The hashed grid of the map's gathers, its own crate (it needs only plain points).
+pub use bdpm_grid as grid;
 mod map;
 mod scene;
 mod trace;
@@ -84,6 +85,6 @@ mod trace;
 pub use map::{Photon, PhotonMap, PhotonQuery};
 pub use scene::PhotonScene;
 pub use trace::{
-    Emission, MAX_SURVIVAL, PathVertex, PhotonArrival, Scatter, TraceOptions, emit,
-    for_each_arrival, survival_at, survival_probability, trace_photons,
+    Emission, PathVertex, PhotonArrival, Scatter, TraceOptions, emit, for_each_arrival,
+    trace_photons,
 };

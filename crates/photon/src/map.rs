@@ -3,9 +3,9 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::grid::{GridQuery, HashGrid};
 use crate::scene::PhotonScene;
 use crate::trace::{PathVertex, TraceOptions, trace_chunks};
+use bdpm_grid::{GridQuery, HashGrid};
 
 /// A stored photon: an arrival at a surface after ≥ 1 scattering (method.md §1). The first
 /// arrival from a light is direct light, which the integrators compute exactly, so it is not
@@ -257,7 +257,7 @@ impl PhotonMap {
     pub fn advance_query(&self, q: &mut PhotonQuery) {
         if !q.grid.ready() {
             self.grid.advance(&mut q.grid, |i| {
-                bdpm_geometry::prefetch(&self.positions[i]);
+                bdpm_core::prefetch(&self.positions[i]);
             });
             if q.grid.empty() {
                 q.n_found = 0;
@@ -280,7 +280,7 @@ impl PhotonMap {
                 q.found = found;
                 q.n_found = n as u8;
                 for &i in &q.found[..n] {
-                    bdpm_geometry::prefetch(&self.photons[i as usize]);
+                    bdpm_core::prefetch(&self.photons[i as usize]);
                 }
                 q.scan = if overflow {
                     Scan::Overflow
@@ -292,8 +292,8 @@ impl PhotonMap {
                 for &i in &q.found[..q.n_found as usize] {
                     let v = &self.vertices[self.photons[i as usize].prev as usize];
                     // A vertex may straddle two cache lines.
-                    bdpm_geometry::prefetch(v);
-                    bdpm_geometry::prefetch(&v.survival);
+                    bdpm_core::prefetch(v);
+                    bdpm_core::prefetch(&v.survival);
                 }
                 q.scan = Scan::Fetched;
             }

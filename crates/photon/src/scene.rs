@@ -1,10 +1,10 @@
 //! What photon tracing needs from a scene, as a trait: a renderer with its own scene type
 //! implements [`PhotonScene`] and gets bdpm's photon walk, photon map and radiance-cache pass.
 
-use bdpm_scene::{PointLight, Scene, Shading};
+use bdpm_core::{PointLight, Shading};
 use glam::Vec3;
 
-use crate::trace::{Scatter, survival_at};
+use crate::trace::Scatter;
 
 /// The scene queries of the photon random walk (method.md §1). Every method must be a pure
 /// function of its arguments (the walk's determinism rests on it) and callable from many
@@ -32,7 +32,7 @@ pub trait PhotonScene: Sync {
     /// At the surface point `sh`, for light arriving from the unit world direction
     /// `incoming` (pointing away from the surface): the Russian-roulette survival
     /// probability q (dimensionless; it must depend only on the point and `incoming`, as the
-    /// weights of method.md §8 recompute it, see [`crate::survival_probability`]) and a BDF
+    /// weights of method.md §8 recompute it; bdpm's scene uses `bdpm_bdf::survival_probability`) and a BDF
     /// sample drawn with the uniform numbers `u`, the direction in world space. `None` if
     /// sampling failed. The tracer drops samples below the geometric normal itself.
     fn scatter(&self, sh: &Shading, incoming: Vec3, u: [f32; 3]) -> (f32, Option<Scatter>);
@@ -45,49 +45,4 @@ pub trait PhotonScene: Sync {
     /// only when [`TraceOptions::light_visibility`](crate::TraceOptions::light_visibility) is
     /// on (the MIS weights read it at photons' previous vertices).
     fn visible_light_mask(&self, sh: &Shading) -> u32;
-}
-
-/// bdpm's own scene: flux-proportional light choice, its BVH, its BDFs (shading-frame
-/// sampling, q = [`survival_at`]) and [`Scene::visible_light_mask`].
-impl PhotonScene for Scene {
-    #[inline]
-    fn pick_light(&self, u: f32) -> (usize, f32) {
-        Scene::pick_light(self, u)
-    }
-
-    #[inline]
-    fn light(&self, index: usize) -> PointLight {
-        self.lights()[index]
-    }
-
-    #[inline]
-    fn intersect(&self, origin: Vec3, dir: Vec3) -> Option<Shading> {
-        self.geometry()
-            .intersect(origin, dir, f32::INFINITY)
-            .map(|hit| self.shade(&hit, -dir))
-    }
-
-    #[inline]
-    fn scatter(&self, sh: &Shading, incoming: Vec3, u: [f32; 3]) -> (f32, Option<Scatter>) {
-        let bdf = self.bdf_at(sh);
-        let in_local = bdf.outgoing(sh.frame.to_local(incoming));
-        let survival = survival_at(&bdf, &in_local);
-        let scatter = bdf.sample_at(&in_local, u).map(|s| Scatter {
-            direction: sh.frame.to_world(s.wi),
-            f: s.f,
-            pdf: s.pdf,
-            weight: s.weight,
-        });
-        (survival, scatter)
-    }
-
-    #[inline]
-    fn spawn(&self, sh: &Shading, dir: Vec3) -> Vec3 {
-        Scene::spawn(self, sh, dir)
-    }
-
-    #[inline]
-    fn visible_light_mask(&self, sh: &Shading) -> u32 {
-        Scene::visible_light_mask(self, sh)
-    }
 }

@@ -1,9 +1,7 @@
 //! Emission from point lights and the random walk of photons (method.md §1).
 
-use bdpm_bdf::{Bdf, Outgoing};
-use bdpm_geometry::sampling::uniform_sphere;
-use bdpm_geometry::{Domain, Rng};
-use bdpm_scene::{Shading, WeightVertex};
+use bdpm_core::sampling::uniform_sphere;
+use bdpm_core::{Domain, Rng, Shading, WeightVertex};
 
 use crate::scene::PhotonScene;
 use glam::Vec3;
@@ -12,10 +10,6 @@ use rayon::prelude::*;
 /// Photons per parallel work item. Fixed (not derived from the thread count) so that the
 /// chunking, and therefore every output, is the same on any number of threads.
 pub(crate) const CHUNK: u64 = 4096;
-
-/// Upper bound on the Russian-roulette survival probability: even a white (non-absorbing)
-/// surface ends a path with probability ≥ 5 % per scattering, so every walk terminates.
-pub const MAX_SURVIVAL: f32 = 0.95;
 
 /// One surface vertex of a light path: every surface hit, including the first hit from the
 /// light (which is direct light and not itself stored as a [`Photon`](crate::Photon)).
@@ -35,8 +29,8 @@ pub struct PathVertex {
     /// Number of scatterings before this arrival: 0 = reached directly from the light.
     pub depth: u16,
     /// Russian-roulette survival probability q used when scattering at this vertex
-    /// (dimensionless): [`survival_probability`] of the material for `incoming`. Recorded even
-    /// where the path ended (absorbed, failed BDF sample or the depth cap), because the weights
+    /// (dimensionless): the scene's survival probability of the material for `incoming`
+    /// (bdpm's: `bdpm_bdf::survival_probability`). Recorded even where the path ended (absorbed, failed BDF sample or the depth cap), because the weights
     /// need the density with which the walk *would* continue.
     pub survival: f32,
 }
@@ -113,22 +107,6 @@ pub fn emit<S: PhotonScene + ?Sized>(
         direction: uniform_sphere(u_dir),
         power: l.flux / (p * photons as f32),
     })
-}
-
-/// Russian-roulette survival probability q = min(0.95, max channel of the albedo µ(ω_in)),
-/// with `incoming_local` the arrival direction in the BDF's local frame (pointing away from the
-/// surface). It depends only on the vertex and the incoming direction, never on the photon's
-/// power, so the photon density p_L(x₁→x₀) that the balance heuristic needs (method.md §8) is
-/// `q · pdf` and can be recomputed from a stored vertex. Zero below the surface.
-pub fn survival_probability(bdf: &Bdf, incoming_local: Vec3) -> f32 {
-    survival_at(bdf, &bdf.outgoing(incoming_local))
-}
-
-/// [`survival_probability`] for an arrival direction prepared by [`Bdf::outgoing`].
-pub fn survival_at(bdf: &Bdf, incoming: &Outgoing) -> f32 {
-    bdf.albedo_at(incoming)
-        .max_element()
-        .clamp(0.0, MAX_SURVIVAL)
 }
 
 /// The BDF sample drawn at an arrival (before the roulette decision).

@@ -27,35 +27,20 @@
 
 mod camera;
 mod texture;
+mod traits;
 mod vertex;
 
 pub use camera::Camera;
 pub use texture::{SceneTextures, Texture, TextureError, Wrap, srgb_to_linear};
-pub use vertex::{MASKED_LIGHTS, WeightVertex};
+// The plain data the photon tracer, the cache and the weights share lives in bdpm-core.
+pub use bdpm_core::{MASKED_LIGHTS, PointLight, Shading, WeightVertex};
 
 use std::borrow::Cow;
-use std::f32::consts::PI;
 use std::fmt;
 
 use bdpm_bdf::{Bdf, luminance};
 use bdpm_geometry::{Frame, Geometry, Hit};
 use glam::{Vec2, Vec3};
-
-/// An isotropic point light.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PointLight {
-    /// Position, metres.
-    pub position: Vec3,
-    /// Emitted flux Φ per RGB channel, W.
-    pub flux: Vec3,
-}
-
-impl PointLight {
-    /// Radiant intensity Φ/(4π), W·sr⁻¹ per channel.
-    pub fn intensity(&self) -> Vec3 {
-        self.flux / (4.0 * PI)
-    }
-}
 
 /// A named scattering model.
 #[derive(Clone, Debug)]
@@ -151,25 +136,6 @@ impl fmt::Display for SceneError {
 }
 
 impl std::error::Error for SceneError {}
-
-/// A surface point prepared for shading from the side of `wo`: normals flipped towards `wo`
-/// (surfaces are two-sided), and the shading frame.
-#[derive(Clone, Copy, Debug)]
-pub struct Shading {
-    /// Position, metres.
-    pub p: Vec3,
-    /// Geometric normal on the side of `wo`.
-    pub ng: Vec3,
-    /// Shading frame whose normal is the shading normal on the side of `wo`.
-    pub frame: Frame,
-    /// Material index.
-    pub material: u32,
-    /// Triangle index.
-    pub prim: u32,
-    /// Barycentric coordinates (b1, b2) of `p` in the triangle (where texture coordinates
-    /// are interpolated).
-    pub bary: Vec2,
-}
 
 /// Geometry, materials, lights and camera of one render.
 ///

@@ -6,50 +6,9 @@ use std::borrow::Cow;
 
 use bdpm_bdf::Bdf;
 use bdpm_geometry::Frame;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
-use crate::{Scene, Shading};
-
-/// Lights whose visibility a [`WeightVertex`] records (bit `l` of [`WeightVertex::lights`]);
-/// lights beyond these are tested with a shadow ray where they are needed.
-pub const MASKED_LIGHTS: usize = 32;
-
-/// What the weights know about a candidate x₁: where it is, which way it faces, what it is made
-/// of and which lights it sees. Built only by [`WeightVertex::at`] and
-/// [`Scene::visible_light_mask`], for camera vertices and photon vertices alike.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct WeightVertex {
-    /// Position, m.
-    pub p: Vec3,
-    /// Unit geometric normal on the side the vertex was reached from (the side x₀ sees for a
-    /// camera vertex, the side the light arrived from for a photon vertex).
-    pub n: Vec3,
-    /// Material index.
-    pub material: u32,
-    /// Triangle index.
-    pub prim: u32,
-    /// Barycentric coordinates of `p` in the triangle (for a textured material's kd).
-    pub bary: Vec2,
-    /// Bit `l` set iff light `l < MASKED_LIGHTS` lies on the side of `n` and nothing blocks the
-    /// segment to it; 0 where visibility was not computed.
-    pub lights: u32,
-}
-
-impl WeightVertex {
-    /// The vertex at a shading point, with the given light-visibility bits (from
-    /// [`Scene::visible_light_mask`] of the same point, or 0 where the weights never read them).
-    #[inline]
-    pub fn at(sh: &Shading, lights: u32) -> WeightVertex {
-        WeightVertex {
-            p: sh.p,
-            n: sh.ng,
-            material: sh.material,
-            prim: sh.prim,
-            bary: sh.bary,
-            lights,
-        }
-    }
-}
+use crate::{MASKED_LIGHTS, Scene, Shading, WeightVertex};
 
 impl Scene {
     /// [`Scene::bdf_on`] at a weight vertex.

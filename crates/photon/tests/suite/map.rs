@@ -2,8 +2,9 @@
 
 use crate::common::*;
 use bdpm_bdf::Bdf;
+use bdpm_bdf::survival_probability;
 use bdpm_geometry::{Domain, Rng};
-use bdpm_photon::{PathVertex, Photon, PhotonMap, TraceOptions, survival_probability};
+use bdpm_photon::{PathVertex, Photon, PhotonMap, TraceOptions};
 use bdpm_scene::WeightVertex;
 use glam::Vec3;
 

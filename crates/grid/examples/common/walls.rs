@@ -1,7 +1,7 @@
-// Test points shared by the `grid_build` example and the grid's sort-path measurement
+// Test points shared by the `grid_build` benchmark and the grid's sort-path measurement
 // (`grid::measure`): photons as a Cornell pass stores them, on walls.
 
-use bdpm_geometry::{Domain, Rng};
+use bdpm_core::{Domain, Rng};
 use glam::Vec3;
 
 /// `n` points (m) uniform over five walls of a box of side 5.5 m, from a fixed seed.

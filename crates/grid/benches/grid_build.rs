@@ -3,12 +3,12 @@
 //! median and fastest of 21 builds each, in milliseconds. The grid's counting sort used to be a
 //! serial stretch of every photon pass (docs/performance.md).
 //!
-//! Run: `cargo run --release -p bdpm-photon --example grid_build [-- N]`
+//! Run: `cargo bench -p bdpm-grid --bench grid_build [-- N]`
 
-#[path = "common/walls.rs"]
+#[path = "../examples/common/walls.rs"]
 mod walls;
 
-use bdpm_photon::grid::HashGrid;
+use bdpm_grid::HashGrid;
 
 fn main() {
     let n: usize = match std::env::args().nth(1).map(|s| s.parse()) {

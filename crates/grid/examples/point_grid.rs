@@ -2,12 +2,12 @@
 //! positions (no bdpm scene, camera or BDF), run range queries, and check them against brute
 //! force. Then a density estimate the way a photon-mapping renderer would make one.
 //!
-//! `cargo run --release -p bdpm-photon --example point_grid`
+//! `cargo run --release -p bdpm-grid --example point_grid`
 
 use std::f32::consts::PI;
 use std::time::Instant;
 
-use bdpm_photon::grid::PointGrid;
+use bdpm_grid::PointGrid;
 use glam::Vec3;
 
 /// A small deterministic generator (SplitMix64), so the example needs no extra crates.

@@ -13,7 +13,7 @@
 //! order that depends only on the points and the radius, never on the thread count.
 //!
 //! ```
-//! use bdpm_photon::grid::PointGrid;
+//! use bdpm_grid::PointGrid;
 //! use glam::Vec3;
 //!
 //! let points = [Vec3::ZERO, Vec3::new(0.05, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0)];
@@ -414,11 +414,11 @@ impl HashGrid {
                         Some(k) => q.tags[k] |= tag_bit(h),
                         None => {
                             let entry = &self.table[b as usize];
-                            bdpm_geometry::prefetch(entry);
+                            bdpm_core::prefetch(entry);
                             // The bucket's end is the next entry's start, in the next
                             // cache line when this entry is its line's last.
                             if (entry as *const u64 as usize) % 64 == 56 {
-                                bdpm_geometry::prefetch(&self.table[b as usize + 1]);
+                                bdpm_core::prefetch(&self.table[b as usize + 1]);
                             }
                             q.buckets[n] = b;
                             q.tags[n] = tag_bit(h);
@@ -583,7 +583,7 @@ mod tests {
             f32::NEG_INFINITY,
             f32::NAN,
         ];
-        let mut rng = bdpm_geometry::Rng::new(9, bdpm_geometry::Domain::Other, [0; 3]);
+        let mut rng = bdpm_core::Rng::new(9, bdpm_core::Domain::Other, [0; 3]);
         xs.extend(
             (0..100_000)
                 .map(|_| (rng.uniform() - 0.5) * 10f32.powi((rng.uniform() * 40.0) as i32 - 20)),
@@ -615,7 +615,7 @@ mod tests {
     /// threads.
     #[test]
     fn parallel_sort_equals_the_one_thread_sort() {
-        let mut rng = bdpm_geometry::Rng::new(7, bdpm_geometry::Domain::Other, [0; 3]);
+        let mut rng = bdpm_core::Rng::new(7, bdpm_core::Domain::Other, [0; 3]);
         let mut random = || rng.next_u64();
         for (n, distinct) in [
             (0usize, 1u64),
@@ -660,7 +660,7 @@ mod tests {
     /// the table instead of eight scattered entries.
     #[test]
     fn a_blocks_cells_take_consecutive_buckets() {
-        let mut rng = bdpm_geometry::Rng::new(3, bdpm_geometry::Domain::Other, [0; 3]);
+        let mut rng = bdpm_core::Rng::new(3, bdpm_core::Domain::Other, [0; 3]);
         for _ in 0..1000 {
             let c0 = [0; 3].map(|_| (rng.next_u64() as i64 >> 20) & !1);
             for mask in [7u64, (1 << 20) - 1] {
@@ -682,7 +682,7 @@ mod tests {
     /// The simple API reports exactly the points brute force finds, each once.
     #[test]
     fn point_grid_matches_brute_force() {
-        let mut rng = bdpm_geometry::Rng::new(5, bdpm_geometry::Domain::Other, [0; 3]);
+        let mut rng = bdpm_core::Rng::new(5, bdpm_core::Domain::Other, [0; 3]);
         let points: Vec<Vec3> = (0..5_000)
             .map(|_| Vec3::from(rng.uniform3()) * 2.0 - 1.0)
             .collect();
@@ -704,7 +704,7 @@ mod tests {
 
 /// A measurement, not a test: the two sort paths timed side by side (interleaved, medians and
 /// fastest of 25), which sets [`PARALLEL_SORT_MIN`] and the one-thread rule. Run:
-/// `cargo test --release -p bdpm-photon --lib measure_sort_paths -- --ignored --nocapture`.
+/// `cargo test --release -p bdpm-grid --lib measure_sort_paths -- --ignored --nocapture`.
 #[cfg(test)]
 mod measure {
     use super::*;

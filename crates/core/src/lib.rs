@@ -1,0 +1,45 @@
+//! The plain data and small helpers that every bdpm crate shares, with no geometry, BDF or
+//! scene behind them, so that a crate needing only these (the photon tracer, the grid, the
+//! radiance cache) compiles without the BVH or the material models:
+//! - [`Rng`] and [`Domain`]: deterministic random streams keyed by (seed, domain, indices), so
+//!   that every sample is a pure function of its keys whatever the thread count;
+//! - [`Frame`] and the [`sampling`] warps (uniform sphere, concentric disk);
+//! - [`Shading`] and [`WeightVertex`]: a surface point as shading and the MIS weights see it;
+//!   [`PointLight`];
+//! - [`luminance`] (Rec. 709) and [`prefetch`].
+//!
+//! Units: positions and distances in metres, flux in W per RGB channel, solid angles in sr.
+
+mod frame;
+mod prefetch;
+mod rng;
+pub mod sampling;
+mod surface;
+
+pub use frame::Frame;
+pub use prefetch::prefetch;
+pub use rng::{Domain, Rng};
+pub use surface::{MASKED_LIGHTS, PointLight, Shading, WeightVertex};
+
+/// Rec. 709 luminance weights of linear RGB, the one definition of luminance that all of
+/// bdpm uses (f32 here, f64 in the tools).
+pub const LUMINANCE_WEIGHTS: [f64; 3] = [0.2126, 0.7152, 0.0722];
+
+/// Rec. 709 luminance of a linear RGB colour ([`LUMINANCE_WEIGHTS`] in f32).
+pub fn luminance(c: glam::Vec3) -> f32 {
+    let [r, g, b] = LUMINANCE_WEIGHTS;
+    c.dot(glam::Vec3::new(r as f32, g as f32, b as f32))
+}
+
+#[cfg(test)]
+mod luminance_tests {
+    use super::*;
+
+    /// The f32 weights are the f64 ones rounded, bit for bit the literals they replaced.
+    #[test]
+    fn f32_weights_are_the_f64_weights_rounded() {
+        let [r, g, b] = LUMINANCE_WEIGHTS;
+        assert_eq!([r as f32, g as f32, b as f32], [0.2126f32, 0.7152, 0.0722]);
+        assert_eq!(luminance(glam::Vec3::X), 0.2126f32);
+    }
+}

@@ -1,0 +1,77 @@
+//! bdpm's [`Scene`] as the photon tracer and the radiance cache see it: the trait impls live
+//! here, with the scene, so that `bdpm-photon` and `bdpm-cache` need neither the BVH nor the
+//! BDF models.
+
+use bdpm_bdf::{luminance, survival_at};
+use bdpm_cache::CacheSurfaces;
+use bdpm_photon::{PhotonScene, Scatter};
+use glam::Vec3;
+
+use crate::{PointLight, Scene, Shading};
+
+/// bdpm's own scene: flux-proportional light choice, its BVH, its BDFs (shading-frame
+/// sampling, q = [`survival_at`]) and [`Scene::visible_light_mask`].
+impl PhotonScene for Scene {
+    #[inline]
+    fn pick_light(&self, u: f32) -> (usize, f32) {
+        Scene::pick_light(self, u)
+    }
+
+    #[inline]
+    fn light(&self, index: usize) -> PointLight {
+        self.lights()[index]
+    }
+
+    #[inline]
+    fn intersect(&self, origin: Vec3, dir: Vec3) -> Option<Shading> {
+        self.geometry()
+            .intersect(origin, dir, f32::INFINITY)
+            .map(|hit| self.shade(&hit, -dir))
+    }
+
+    #[inline]
+    fn scatter(&self, sh: &Shading, incoming: Vec3, u: [f32; 3]) -> (f32, Option<Scatter>) {
+        let bdf = self.bdf_at(sh);
+        let in_local = bdf.outgoing(sh.frame.to_local(incoming));
+        let survival = survival_at(&bdf, &in_local);
+        let scatter = bdf.sample_at(&in_local, u).map(|s| Scatter {
+            direction: sh.frame.to_world(s.wi),
+            f: s.f,
+            pdf: s.pdf,
+            weight: s.weight,
+        });
+        (survival, scatter)
+    }
+
+    #[inline]
+    fn spawn(&self, sh: &Shading, dir: Vec3) -> Vec3 {
+        Scene::spawn(self, sh, dir)
+    }
+
+    #[inline]
+    fn visible_light_mask(&self, sh: &Shading) -> u32 {
+        Scene::visible_light_mask(self, sh)
+    }
+}
+
+/// bdpm's own scene: its triangle mesh and materials.
+impl CacheSurfaces for Scene {
+    fn triangle_count(&self) -> usize {
+        self.geometry().triangle_count()
+    }
+    fn triangle(&self, prim: u32) -> [Vec3; 3] {
+        self.geometry().vertices(prim)
+    }
+    fn normal(&self, prim: u32) -> Vec3 {
+        self.geometry().normal(prim)
+    }
+    fn area(&self, prim: u32) -> f32 {
+        self.geometry().area(prim)
+    }
+    fn lambert_only(&self) -> bool {
+        self.all_lambert()
+    }
+    fn lambert_albedo(&self, prim: u32) -> f32 {
+        luminance(self.bdf(self.geometry().material(prim)).kd())
+    }
+}
