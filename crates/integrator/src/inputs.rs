@@ -454,6 +454,7 @@ mod tests {
 
     use bdpm_bdf::Bdf;
     use bdpm_geometry::{Domain, Geometry, TriangleMesh};
+    use bdpm_mis::Heuristic;
     use bdpm_photon::{PhotonMap, TraceOptions};
     use bdpm_scene::{Camera, Material, PointLight, Scene};
     use bdpm_settings::{Mode, RenderSettings};
@@ -533,19 +534,13 @@ mod tests {
     /// Paths compared, (one-bounce, merge), over every mixing mode of `scene`; panics at the
     /// first disagreement.
     fn check_agreement(scene: &Scene) -> (usize, usize) {
-        let modes = [
-            "balance",
-            "power",
-            "camis",
-            "threshold",
-            "algebraic-direct",
-            "algebraic",
-            "optimal",
-            "optimal-split",
-            "optimal-path",
-        ];
         let (mut one_bounce, mut merge) = (0, 0);
-        for name in modes {
+        // Every mode that mixes the two techniques (the pure ones weigh nothing).
+        let mixing = Heuristic::ALL_NAMES.iter().filter(|name| {
+            let needs = Heuristic::parse(name).expect("a listed name").needs();
+            needs.photons_at_x0 && needs.second_vertex
+        });
+        for &name in mixing {
             let mut settings = RenderSettings {
                 width: 8,
                 height: 8,
