@@ -598,8 +598,9 @@ mod tests {
                     } else {
                         merge += 1;
                         // The photon that light path stored at x₁ itself.
-                        let at_x1 = &map.photons()[by_prev[&(ph.prev - 1)]];
-                        assert_eq!(at_x1.position, x1.p);
+                        let at_x1 = by_prev[&(ph.prev - 1)];
+                        assert_eq!(map.positions()[at_x1], x1.p);
+                        let at_x1 = &map.photons()[at_x1];
                         mix.camera_side_pair(&map, &x0, &x1, (v, dist2), at_x1, base)
                     };
                     // Debug prints the shortest text that reads back to the same f64: equal

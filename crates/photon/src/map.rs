@@ -9,12 +9,11 @@ use bdpm_grid::{GridQuery, HashGrid};
 
 /// A stored photon: an arrival at a surface after ≥ 1 scattering (method.md §1). The first
 /// arrival from a light is direct light, which the integrators compute exactly, so it is not
-/// stored.
+/// stored. Its position is kept apart, in the map's [`PhotonMap::positions`] (the range test
+/// reads only those), at the same index.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Photon {
-    /// Position, m.
-    pub position: Vec3,
-    /// Unit direction from `position` back towards where the light came from (the previous
+    /// Unit direction from the photon's position back towards where the light came from (the previous
     /// vertex): the arrival direction of the ray that stored it, as its previous vertex's
     /// successor would record it. Stored rather than recomputed from the positions so that a
     /// merge at the camera's x₁ and a merge at x₀ through this vertex read the same number
@@ -24,13 +23,13 @@ pub struct Photon {
     pub power: Vec3,
     /// Index into [`PhotonMap::vertices()`] of the previous vertex y_p (where it was scattered
     /// from); this photon's depth is that vertex's depth + 1, and its incoming direction points
-    /// from `position` to that vertex. No two photons share a previous vertex (a path goes on
+    /// from its position to that vertex. No two photons share a previous vertex (a path goes on
     /// from a vertex once), so `prev` also identifies the photon within its pass.
     pub prev: u32,
 }
 
 // Photons are the bulk of a pass's memory: keep them small.
-const _: () = assert!(size_of::<Photon>() <= 48);
+const _: () = assert!(size_of::<Photon>() <= 28);
 
 /// The concatenation of `parts`, each element passed through `adjust(part index, element)`,
 /// copied in parallel: a pass's photon map is a hundred megabytes, and copying (and
@@ -104,7 +103,7 @@ pub struct PhotonMap {
     /// and `grid`: they are derived together, and editing one alone would make queries wrong
     /// without any error.
     photons: Vec<Photon>,
-    /// `photons[i].position` for every i, packed densely: the range test of a gather reads
+    /// The position of `photons[i]` for every i, packed densely: the range test of a gather reads
     /// only these 12 bytes per candidate, so the candidates of a query share fewer cache lines
     /// and the array stays in the last-level cache for a million photons.
     positions: Vec<Vec3>,
@@ -133,13 +132,16 @@ impl PhotonMap {
         let chunks = trace_chunks(
             scene,
             options,
-            |_| (Vec::<PathVertex>::new(), Vec::<Photon>::new()),
-            |(vertices, photons), a| {
+            |_| {
+                let vertices = Vec::<PathVertex>::new();
+                (vertices, Vec::<Vec3>::new(), Vec::<Photon>::new())
+            },
+            |(vertices, positions, photons), a| {
                 if a.vertex.depth >= 1 {
                     // The path went on from its previous arrival, which was therefore the last
                     // vertex pushed.
+                    positions.push(a.vertex.at.p);
                     photons.push(Photon {
-                        position: a.vertex.at.p,
                         incoming: a.vertex.incoming,
                         power: a.power,
                         prev: vertices.len() as u32 - 1,
@@ -151,7 +153,7 @@ impl PhotonMap {
             },
         );
         let n_vertices: usize = chunks.iter().map(|c| c.0.len()).sum();
-        let n_photons: usize = chunks.iter().map(|c| c.1.len()).sum();
+        let n_photons: usize = chunks.iter().map(|c| c.2.len()).sum();
         assert!(
             n_vertices < u32::MAX as usize,
             "too many path vertices for u32 indices"
@@ -167,8 +169,10 @@ impl PhotonMap {
             })
             .collect();
         let vertex_parts: Vec<&[PathVertex]> = chunks.iter().map(|c| c.0.as_slice()).collect();
-        let photon_parts: Vec<&[Photon]> = chunks.iter().map(|c| c.1.as_slice()).collect();
+        let position_parts: Vec<&[Vec3]> = chunks.iter().map(|c| c.1.as_slice()).collect();
+        let photon_parts: Vec<&[Photon]> = chunks.iter().map(|c| c.2.as_slice()).collect();
         let vertices = concat_parallel(&vertex_parts, |_, v| v);
+        let positions = concat_parallel(&position_parts, |_, p| p);
         let photons = concat_parallel(&photon_parts, |chunk, p| Photon {
             prev: p.prev + offsets[chunk],
             ..p
@@ -176,17 +180,18 @@ impl PhotonMap {
         // The parts are freed before the grid's sort arrays are allocated: holding both was
         // the photon stage's memory peak.
         drop(chunks);
-        PhotonMap::from_parts(photons, vertices, options.photons, radius)
+        PhotonMap::from_parts(positions, photons, vertices, options.photons, radius)
     }
 
-    /// Builds a map from photons and vertices made elsewhere (e.g. tests, or a rebuild with a
-    /// new radius): reorders `photons` into grid order for merge radius `radius` (m).
-    /// `emitted` is N_F. `prev`/`vertex` indices are not checked here; [`PhotonMap::vertex`]
-    /// panics on a bad one.
+    /// Builds a map from photons, their positions (m, `positions[i]` is `photons[i]`'s) and
+    /// vertices made elsewhere (e.g. tests, or a rebuild with a new radius): reorders both
+    /// into grid order for merge radius `radius` (m). `emitted` is N_F. `prev`/`vertex`
+    /// indices are not checked here; [`PhotonMap::vertex`] panics on a bad one.
     ///
     /// # Panics
-    /// If `radius` is not positive and finite.
+    /// If `radius` is not positive and finite, or `positions` and `photons` differ in length.
     pub fn from_parts(
+        positions: Vec<Vec3>,
         photons: Vec<Photon>,
         vertices: Vec<PathVertex>,
         emitted: u64,
@@ -196,7 +201,7 @@ impl PhotonMap {
             radius > 0.0 && radius.is_finite(),
             "merge radius must be positive and finite, got {radius}"
         );
-        let positions: Vec<Vec3> = photons.par_iter().map(|p| p.position).collect();
+        assert_eq!(positions.len(), photons.len(), "one position per photon");
         let (grid, order) = HashGrid::build(&positions, radius);
         let photons = order.par_iter().map(|&i| photons[i as usize]).collect();
         let positions = order.par_iter().map(|&i| positions[i as usize]).collect();
@@ -212,7 +217,13 @@ impl PhotonMap {
 
     /// The same photons in a grid for another radius (m), e.g. for a shrinking radius.
     pub fn with_radius(self, radius: f32) -> PhotonMap {
-        PhotonMap::from_parts(self.photons, self.vertices, self.emitted, radius)
+        PhotonMap::from_parts(
+            self.positions,
+            self.photons,
+            self.vertices,
+            self.emitted,
+            radius,
+        )
     }
 
     /// The merge radius r the grid was built for, m.
@@ -220,7 +231,7 @@ impl PhotonMap {
         self.radius
     }
 
-    /// Calls `f` for every photon with |x − photon.position| ≤ radius (compared as squared
+    /// Calls `f` for every photon whose position p has |x − p| ≤ radius (compared as squared
     /// distances in f32). The order is deterministic (grid order); nothing is allocated. At
     /// most 8 grid cells are visited, so the cost is the photons in a (4r)³ box.
     #[inline]
@@ -347,7 +358,8 @@ impl PhotonMap {
         &self.photons
     }
 
-    /// `photons()[i].position` for every i, m, packed densely (what the range test reads).
+    /// The position of `photons()[i]` for every i, m, packed densely (what the range test
+    /// reads).
     #[inline]
     pub fn positions(&self) -> &[Vec3] {
         &self.positions
@@ -362,10 +374,10 @@ impl PhotonMap {
         &self.vertices
     }
 
-    /// Takes the map apart into its photons (grid order) and vertices, e.g. to rebuild it
-    /// with [`Self::from_parts`] after editing photons.
-    pub fn into_parts(self) -> (Vec<Photon>, Vec<PathVertex>) {
-        (self.photons, self.vertices)
+    /// Takes the map apart into its positions and photons (grid order) and vertices, e.g. to
+    /// rebuild it with [`Self::from_parts`] after editing photons.
+    pub fn into_parts(self) -> (Vec<Vec3>, Vec<Photon>, Vec<PathVertex>) {
+        (self.positions, self.photons, self.vertices)
     }
 
     /// The path vertex with index `i` (a [`Photon::prev`]).

@@ -25,13 +25,11 @@ fn dummy_vertex() -> PathVertex {
     }
 }
 
-/// Photons whose `prev` field is a unique id, so results can be compared as id sets.
+/// Photons (one per position) whose `prev` field is a unique id, so results can be compared as
+/// id sets.
 fn synthetic(positions: &[Vec3]) -> Vec<Photon> {
-    positions
-        .iter()
-        .enumerate()
-        .map(|(i, &position)| Photon {
-            position,
+    (0..positions.len())
+        .map(|i| Photon {
             incoming: Vec3::Z,
             power: Vec3::ONE,
             prev: i as u32,
@@ -40,18 +38,26 @@ fn synthetic(positions: &[Vec3]) -> Vec<Photon> {
 }
 
 /// Checks `for_each_near` against brute force at `queries` and returns the total hits.
-fn check_against_brute_force(photons: &[Photon], queries: &[Vec3], radius: f32) -> usize {
-    let map = PhotonMap::from_parts(photons.to_vec(), vec![dummy_vertex()], 1, radius);
+fn check_against_brute_force(positions: &[Vec3], queries: &[Vec3], radius: f32) -> usize {
+    let photons = synthetic(positions);
+    let map = PhotonMap::from_parts(
+        positions.to_vec(),
+        photons.clone(),
+        vec![dummy_vertex()],
+        1,
+        radius,
+    );
     assert_eq!(map.photons().len(), photons.len());
     let r2 = radius * radius;
     let mut total = 0;
     for &x in queries {
         let mut got = Vec::new();
         map.for_each_near(x, |p| got.push(p.prev));
-        let mut want: Vec<u32> = photons
+        let mut want: Vec<u32> = positions
             .iter()
-            .filter(|p| (p.position - x).length_squared() <= r2)
-            .map(|p| p.prev)
+            .zip(&photons)
+            .filter(|(p, _)| (**p - x).length_squared() <= r2)
+            .map(|(_, ph)| ph.prev)
             .collect();
         got.sort_unstable();
         want.sort_unstable();
@@ -72,7 +78,6 @@ fn range_queries_match_brute_force() {
     positions.extend_from_within(..50);
     // Points far outside, and with negative coordinates (floor, not truncation).
     positions.extend([Vec3::new(-3.0, -0.001, 2.5), Vec3::new(100.0, -100.0, 0.0)]);
-    let photons = synthetic(&positions);
     let mut queries: Vec<Vec3> = (0..200)
         .map(|_| Vec3::from(rng.uniform3()) * 1.4 - 0.2)
         .collect();
@@ -80,7 +85,7 @@ fn range_queries_match_brute_force() {
     queries.extend(positions.iter().step_by(97));
     queries.push(Vec3::new(-3.0, -0.001, 2.5));
     for radius in [1e-6, 1e-3, 0.01, 0.05, 0.2, 1.0, 1000.0] {
-        let total = check_against_brute_force(&photons, &queries, radius);
+        let total = check_against_brute_force(&positions, &queries, radius);
         assert!(total > 0, "radius {radius}: the test would be vacuous");
     }
 }
@@ -93,16 +98,15 @@ fn shared_buckets_do_not_duplicate_or_lose_photons() {
         Vec3::new(0.35, 0.1, 0.1),
         Vec3::new(0.1, 0.3, 0.35),
     ];
-    let photons = synthetic(&positions);
     let mut rng = Rng::new(2, Domain::Other, [0; 3]);
     let queries: Vec<Vec3> = (0..2000)
         .map(|_| Vec3::from(rng.uniform3()) * 0.6 - 0.05)
         .collect();
     for radius in [0.05, 0.13, 0.3] {
-        check_against_brute_force(&photons, &queries, radius);
+        check_against_brute_force(&positions, &queries, radius);
     }
     // Empty map: queries find nothing and do not panic.
-    let empty = PhotonMap::from_parts(Vec::new(), Vec::new(), 0, 0.1);
+    let empty = PhotonMap::from_parts(Vec::new(), Vec::new(), Vec::new(), 0, 0.1);
     empty.for_each_near(Vec3::ZERO, |_| panic!("photon in an empty map"));
 }
 
@@ -112,14 +116,15 @@ fn traced_map_queries_match_brute_force() {
     let map = PhotonMap::trace(&scene, &TraceOptions::new(20_000, 4, 1), 0.03);
     let mut rng = Rng::new(3, Domain::Other, [0; 3]);
     for _ in 0..100 {
-        let x = map.photons()[(rng.uniform() * map.photons().len() as f32) as usize].position;
+        let x = map.positions()[(rng.uniform() * map.photons().len() as f32) as usize];
         let mut got: Vec<u32> = Vec::new();
         map.for_each_near(x, |p| got.push(p.prev));
         let mut want: Vec<u32> = map
-            .photons()
+            .positions()
             .iter()
-            .filter(|p| (p.position - x).length_squared() <= 0.03 * 0.03)
-            .map(|p| p.prev)
+            .zip(map.photons())
+            .filter(|(p, _)| (**p - x).length_squared() <= 0.03 * 0.03)
+            .map(|(_, ph)| ph.prev)
             .collect();
         got.sort_unstable();
         want.sort_unstable();
@@ -164,8 +169,9 @@ fn shelf_scene(kd: f32) -> bdpm_scene::Scene {
 
 fn bits(map: &PhotonMap) -> Vec<u32> {
     let mut out = Vec::new();
-    for p in map.photons() {
-        out.extend(p.position.to_array().map(f32::to_bits));
+    for (x, p) in map.positions().iter().zip(map.photons()) {
+        out.extend(x.to_array().map(f32::to_bits));
+        out.extend(p.incoming.to_array().map(f32::to_bits));
         out.extend(p.power.to_array().map(f32::to_bits));
         out.push(p.prev);
     }
@@ -214,9 +220,9 @@ fn photons_point_back_to_their_previous_vertex() {
     let map = PhotonMap::trace(&scene, &options, 0.02);
     assert!(!map.photons().is_empty());
     // A photon at y_p's successor: the light left y_p on the side of its normal.
-    for p in map.photons() {
+    for (x, p) in map.positions().iter().zip(map.photons()) {
         let y = map.vertex(p.prev);
-        assert!(y.at.n.dot(p.position - y.at.p) > 0.0);
+        assert!(y.at.n.dot(*x - y.at.p) > 0.0);
     }
     // Within a path, each kept vertex's incoming direction points back at the vertex before it.
     let mut continued_from = 0;
