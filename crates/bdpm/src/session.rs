@@ -37,7 +37,7 @@ pub(crate) struct Job {
     pub(crate) scene: PathBuf,
     /// The settings given on the command line (or stored in the parts of a merge).
     pub(crate) overrides: Overrides,
-    /// The output EXR (default: the scene's `output`, else out/<scene>.exr).
+    /// The output EXR (default: the scene's `output`, else `out/<scene>.exr`).
     pub(crate) output: Option<PathBuf>,
     /// Draw no progress bar.
     pub(crate) quiet: bool,

@@ -127,9 +127,11 @@ pub(crate) struct Mix<'a> {
     pub(crate) cache: Option<&'a RadianceCache>,
     /// Test-only variant: weight the x₀ photon sum with w₁(x₀, x₁ᶜ) of the camera's x₁, as
     /// the preprint's eq. 2–3 read literally. It is biased; a test shows it.
+    #[cfg(feature = "test-hooks")]
     pub(crate) camera_x1_weighting: bool,
     /// Test-only: compute a photon's y_p inputs at every visit, not once per photon
     /// ([`Mix::prev_inputs`]); the image bits must not change.
+    #[cfg(feature = "test-hooks")]
     pub(crate) per_visit_inputs: bool,
 }
 
@@ -437,8 +439,8 @@ impl<'a> Mix<'a> {
     pub(crate) fn prev_inputs(&self, map: &PhotonMap) -> Vec<[f32; 3]> {
         let reads_inputs = self.needs.direct_at_x1 || self.needs.radiance_cache;
         let per_visit = matches!(self.heuristic, Heuristic::Bdd0)
-            || self.camera_x1_weighting
-            || self.per_visit_inputs;
+            || self.camera_x1_weighting()
+            || self.per_visit_inputs();
         let isotropic = self
             .cache_needed()
             .is_none_or(|c| c.is_isotropic() && !c.stats().stores_b);
@@ -764,7 +766,7 @@ impl<'a> Mix<'a> {
             raw += c;
             let w0 = if pure {
                 1.0
-            } else if self.camera_x1_weighting {
+            } else if self.camera_x1_weighting() {
                 1.0 - camera_w1.unwrap_or(0.0)
             } else {
                 let dist2 = to_prev.length_squared();

@@ -1,9 +1,9 @@
 //! Photon tracing from point lights and a fixed-radius photon map (method.md §1, §7, §8).
 //!
 //! This crate owns:
-//! - emission ([`emit`]): N_F photons per pass shared between the point lights in proportion
-//!   to flux luminance, isotropic directions, power Φ_l/(p_l·N_F);
-//! - the random walk ([`trace_photons`], [`for_each_arrival`]): BDF sampling with Russian
+//! - emission (the start of [`trace_photons`]): N_F photons per pass shared between the point
+//!   lights in proportion to flux luminance, isotropic directions, power Φ_l/(p_l·N_F);
+//! - the random walk ([`trace_photons`]): BDF sampling with Russian
 //!   roulette of survival q = [`survival_probability`] (depends only on the vertex and the
 //!   arrival direction, as the balance heuristic of §8 needs), recording every surface
 //!   vertex ([`PathVertex`]) with its depth, arrival direction, q and optionally which
@@ -84,6 +84,6 @@ mod trace;
 pub use map::{Photon, PhotonMap, PhotonQuery};
 pub use scene::PhotonScene;
 pub use trace::{
-    Emission, MAX_SURVIVAL, PathVertex, PhotonArrival, Scatter, TraceOptions, emit,
-    for_each_arrival, survival_at, survival_probability, trace_photons,
+    MAX_SURVIVAL, PathVertex, PhotonArrival, Scatter, TraceOptions, survival_at,
+    survival_probability, trace_photons,
 };
