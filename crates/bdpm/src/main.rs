@@ -4,6 +4,7 @@
 //! compare, predict) come from `bdpm-lab` with the default feature `lab`.
 
 mod render;
+mod session;
 mod signal;
 mod weights;
 

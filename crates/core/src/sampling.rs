@@ -1,6 +1,6 @@
 //! Warps from uniform numbers in [0, 1)² to directions, with their solid-angle densities.
 use glam::{Vec2, Vec3};
-use std::f32::consts::{FRAC_1_PI, PI};
+use std::f32::consts::PI;
 
 /// Shirley–Chiu concentric map from the unit square to the unit disk (area preserving).
 #[inline]
@@ -16,20 +16,6 @@ pub fn concentric_disk(u: [f32; 2]) -> Vec2 {
         (b, PI / 2.0 - (PI / 4.0) * (a / b))
     };
     Vec2::new(r * phi.cos(), r * phi.sin())
-}
-
-/// Cosine-weighted direction on the +z hemisphere; density `cos θ / π` per steradian.
-#[inline]
-pub fn cosine_hemisphere(u: [f32; 2]) -> Vec3 {
-    let d = concentric_disk(u);
-    let z = (1.0 - d.length_squared()).max(0.0).sqrt();
-    Vec3::new(d.x, d.y, z)
-}
-
-/// Density of [`cosine_hemisphere`] in sr⁻¹.
-#[inline]
-pub fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
-    cos_theta.max(0.0) * FRAC_1_PI
 }
 
 /// Uniform direction on the unit sphere; density `1/(4π)` per steradian.
@@ -56,25 +42,6 @@ pub fn uniform_triangle(u: [f32; 2]) -> (f32, f32) {
 mod tests {
     use super::*;
     use crate::{Domain, Rng};
-
-    #[test]
-    fn cosine_hemisphere_has_the_right_moments() {
-        // E[cos θ] = 2/3 and E[cos² θ] = 1/2 under the cos/π density.
-        let mut rng = Rng::new(3, Domain::Other, [0; 3]);
-        let n = 200_000;
-        let (mut m1, mut m2) = (0.0f64, 0.0f64);
-        for _ in 0..n {
-            let d = cosine_hemisphere(rng.uniform2());
-            assert!((d.length() - 1.0).abs() < 1e-4 && d.z >= 0.0);
-            m1 += d.z as f64;
-            m2 += (d.z * d.z) as f64;
-        }
-        m1 /= n as f64;
-        m2 /= n as f64;
-        // Standard deviations of cos θ and cos² θ are below 0.3; 5 SE ≈ 3.4e-3.
-        assert!((m1 - 2.0 / 3.0).abs() < 3.4e-3, "{m1}");
-        assert!((m2 - 0.5).abs() < 3.4e-3, "{m2}");
-    }
 
     #[test]
     fn uniform_sphere_is_centred() {

@@ -6,7 +6,7 @@
 //! - [`Geometry`]: the mesh with a BVH for closest-hit and occlusion queries (a 4-wide BVH with
 //!   f32 boxes by default, obvhs's compressed CWBVH as the [`Kernel`] it replaced), per-triangle
 //!   areas and area-weighted surface sampling;
-//! - [`Frame`] and the [`sampling`] warps (cosine hemisphere, uniform sphere);
+//! - [`Frame`] and the [`sampling`] warps (concentric disk, uniform sphere, uniform triangle);
 //! - [`Rng`]: deterministic random streams keyed by (seed, domain, indices), so that every
 //!   sample is a pure function of its keys whatever the thread count.
 //!

@@ -469,6 +469,44 @@ fn local_origin(mesh: &TriangleMesh) -> Vec3 {
     }
 }
 
+/// Checks that the mesh's arrays agree in length, its positions are finite and within
+/// [`MAX_COORDINATE`], and its indices name existing vertices.
+fn validate(mesh: &TriangleMesh) -> Result<(), GeometryError> {
+    if mesh.materials.len() != mesh.indices.len() {
+        return Err(GeometryError::MaterialCount {
+            triangles: mesh.indices.len(),
+            materials: mesh.materials.len(),
+        });
+    }
+    if !mesh.normals.is_empty() && mesh.normals.len() != mesh.positions.len() {
+        return Err(GeometryError::NormalCount {
+            vertices: mesh.positions.len(),
+            normals: mesh.normals.len(),
+        });
+    }
+    if let Some(vertex) = mesh.positions.iter().position(|p| !p.is_finite()) {
+        return Err(GeometryError::NonFinitePosition { vertex });
+    }
+    if let Some(vertex) = mesh
+        .positions
+        .iter()
+        .position(|p| p.abs().max_element() > MAX_COORDINATE)
+    {
+        return Err(GeometryError::PositionTooLarge { vertex });
+    }
+    for (i, idx) in mesh.indices.iter().enumerate() {
+        for &k in idx {
+            if k as usize >= mesh.positions.len() {
+                return Err(GeometryError::IndexOutOfRange {
+                    triangle: i,
+                    index: k,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
 impl Geometry {
     /// Validates the mesh and builds the BVH of the default [`Kernel`].
     pub fn new(mesh: TriangleMesh) -> Result<Geometry, GeometryError> {
@@ -477,38 +515,7 @@ impl Geometry {
 
     /// Validates the mesh and builds the BVH of `kernel`.
     pub fn with_kernel(mesh: TriangleMesh, kernel: Kernel) -> Result<Geometry, GeometryError> {
-        if mesh.materials.len() != mesh.indices.len() {
-            return Err(GeometryError::MaterialCount {
-                triangles: mesh.indices.len(),
-                materials: mesh.materials.len(),
-            });
-        }
-        if !mesh.normals.is_empty() && mesh.normals.len() != mesh.positions.len() {
-            return Err(GeometryError::NormalCount {
-                vertices: mesh.positions.len(),
-                normals: mesh.normals.len(),
-            });
-        }
-        if let Some(vertex) = mesh.positions.iter().position(|p| !p.is_finite()) {
-            return Err(GeometryError::NonFinitePosition { vertex });
-        }
-        if let Some(vertex) = mesh
-            .positions
-            .iter()
-            .position(|p| p.abs().max_element() > MAX_COORDINATE)
-        {
-            return Err(GeometryError::PositionTooLarge { vertex });
-        }
-        for (i, idx) in mesh.indices.iter().enumerate() {
-            for &k in idx {
-                if k as usize >= mesh.positions.len() {
-                    return Err(GeometryError::IndexOutOfRange {
-                        triangle: i,
-                        index: k,
-                    });
-                }
-            }
-        }
+        validate(&mesh)?;
         let origin = local_origin(&mesh);
         let mut tris = Vec::with_capacity(mesh.indices.len());
         let mut offsets = Vec::with_capacity(mesh.indices.len());

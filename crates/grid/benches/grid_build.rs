@@ -3,15 +3,22 @@
 //! median and fastest of 21 builds each, in milliseconds. The grid's counting sort used to be a
 //! serial stretch of every photon pass (docs/performance.md).
 //!
-//! Run: `cargo bench -p bdpm-grid --bench grid_build [-- N]`
+//! Run: `cargo bench -p bdpm-grid --bench grid_build [-- N]` (a benchmark target without the
+//! test harness: `cargo bench` runs its `main`, `cargo test` does not).
 
-#[path = "../examples/common/walls.rs"]
+#[path = "common/walls.rs"]
 mod walls;
 
 use bdpm_grid::HashGrid;
 
 fn main() {
-    let n: usize = match std::env::args().nth(1).map(|s| s.parse()) {
+    // `cargo bench` passes `--bench` (and any filter given) to a harness-less bench: flags
+    // are not N.
+    let n: usize = match std::env::args()
+        .skip(1)
+        .find(|a| !a.starts_with('-'))
+        .map(|s| s.parse())
+    {
         None => 640_000,
         Some(Ok(n)) => n,
         Some(Err(e)) => {

@@ -712,7 +712,7 @@ mod measure {
     mod walls {
         include!(concat!(
             env!("CARGO_MANIFEST_DIR"),
-            "/examples/common/walls.rs"
+            "/benches/common/walls.rs"
         ));
     }
 

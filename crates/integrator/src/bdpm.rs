@@ -126,9 +126,11 @@ pub(crate) struct Mix<'a> {
     pub(crate) cache: Option<&'a RadianceCache>,
     /// Test-only variant: weight the x₀ photon sum with w₁(x₀, x₁ᶜ) of the camera's x₁, as
     /// the preprint's eq. 2–3 read literally. It is biased; a test shows it.
+    #[cfg(feature = "test-hooks")]
     pub(crate) camera_x1_weighting: bool,
     /// Test-only: compute a photon's y_p inputs at every visit, not once per photon
     /// ([`Mix::prev_inputs`]); the image bits must not change.
+    #[cfg(feature = "test-hooks")]
     pub(crate) per_visit_inputs: bool,
 }
 
@@ -468,7 +470,7 @@ impl<'a> Mix<'a> {
             raw += c;
             let w0 = if pure {
                 1.0
-            } else if self.camera_x1_weighting {
+            } else if self.camera_x1_weighting() {
                 1.0 - camera_w1.unwrap_or(0.0)
             } else {
                 let Some(pair) = self.photon_side_pair(photons, x0, i, ph) else {

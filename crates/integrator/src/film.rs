@@ -108,7 +108,7 @@ impl<T: PassValue> PassSums<T> {
 /// Accumulates per-pixel pass estimates of RGB radiance (a [`PassSums`] over [`DVec3`]) with
 /// the image size and the count of dropped samples.
 ///
-/// The size is private: the buffers and [`Film::index`] are laid out for it.
+/// The size is private: the buffers are laid out for it (row-major).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Film {
     width: u32,
@@ -175,11 +175,6 @@ impl Film {
             .into_iter()
             .map(|v| (v / k).map(f64::sqrt))
             .collect()
-    }
-
-    /// Index of pixel (x, y) in the row-major buffers.
-    pub fn index(&self, x: u32, y: u32) -> usize {
-        y as usize * self.width as usize + x as usize
     }
 }
 

@@ -413,8 +413,8 @@ impl<'a> Mix<'a> {
     pub(crate) fn prev_inputs(&self, map: &PhotonMap) -> Vec<[f32; 3]> {
         let reads_inputs = self.needs.direct_at_x1 || self.needs.radiance_cache;
         let per_visit = matches!(self.heuristic, Heuristic::Bdd0)
-            || self.camera_x1_weighting
-            || self.per_visit_inputs;
+            || self.camera_x1_weighting()
+            || self.per_visit_inputs();
         let isotropic = self
             .cache_needed()
             .is_none_or(|c| c.is_isotropic() && !c.stats().stores_b);

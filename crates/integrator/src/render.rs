@@ -143,7 +143,9 @@ pub struct Renderer<'a> {
     radius: f32,
     footprint: Option<f32>,
     techniques: bool,
+    #[cfg(feature = "test-hooks")]
     camera_x1_weighting: bool,
+    #[cfg(feature = "test-hooks")]
     per_visit_inputs: bool,
     cache: Option<RadianceCache>,
     table: Option<PixelTable>,
@@ -178,7 +180,9 @@ impl<'a> Renderer<'a> {
             radius,
             footprint,
             techniques: false,
+            #[cfg(feature = "test-hooks")]
             camera_x1_weighting: false,
+            #[cfg(feature = "test-hooks")]
             per_visit_inputs: false,
             cache: None,
             table: None,
@@ -316,7 +320,9 @@ impl<'a> Renderer<'a> {
             budget: self.budget(),
             inv_area: 1.0 / (std::f32::consts::PI * self.radius * self.radius),
             cache: self.cache.as_ref(),
+            #[cfg(feature = "test-hooks")]
             camera_x1_weighting: self.camera_x1_weighting,
+            #[cfg(feature = "test-hooks")]
             per_visit_inputs: self.per_visit_inputs,
         }
     }
@@ -329,7 +335,8 @@ impl<'a> Renderer<'a> {
 
     /// Test-only: weight the photon sum at x₀ with the camera's w₁(x₀, x₁ᶜ) as the preprint's
     /// eq. 2–3 read literally. This estimator is biased (method.md §2); it exists so that a test
-    /// can show the bias.
+    /// can show the bias. Only with the feature `test-hooks`.
+    #[cfg(feature = "test-hooks")]
     #[doc(hidden)]
     pub fn with_camera_x1_weighting(mut self, on: bool) -> Self {
         self.camera_x1_weighting = on;
@@ -337,7 +344,9 @@ impl<'a> Renderer<'a> {
     }
 
     /// Test-only: compute the weight inputs of a photon's previous vertex at each visit of a
-    /// merge at x₀ instead of once per photon per pass; the image bits must not change.
+    /// merge at x₀ instead of once per photon per pass; the image bits must not change. Only
+    /// with the feature `test-hooks`.
+    #[cfg(feature = "test-hooks")]
     #[doc(hidden)]
     pub fn with_per_visit_inputs(mut self, on: bool) -> Self {
         self.per_visit_inputs = on;
@@ -435,6 +444,38 @@ impl<'a> Renderer<'a> {
     /// Units of progress one pass reports.
     pub fn work_per_pass(&self) -> u64 {
         self.settings.height as u64
+    }
+}
+
+// The test hooks are read through these, so that without the feature `test-hooks` the mix
+// has no fields for them and its branches on them are constant.
+impl Mix<'_> {
+    /// Test hook: weight the photon sum at x₀ with the camera's w₁.
+    #[cfg(feature = "test-hooks")]
+    #[inline]
+    pub(crate) fn camera_x1_weighting(&self) -> bool {
+        self.camera_x1_weighting
+    }
+
+    /// Test hook: compute a photon's y_p inputs at every visit.
+    #[cfg(feature = "test-hooks")]
+    #[inline]
+    pub(crate) fn per_visit_inputs(&self) -> bool {
+        self.per_visit_inputs
+    }
+
+    /// Without the feature `test-hooks`: never.
+    #[cfg(not(feature = "test-hooks"))]
+    #[inline]
+    pub(crate) fn camera_x1_weighting(&self) -> bool {
+        false
+    }
+
+    /// Without the feature `test-hooks`: never.
+    #[cfg(not(feature = "test-hooks"))]
+    #[inline]
+    pub(crate) fn per_visit_inputs(&self) -> bool {
+        false
     }
 }
 

@@ -22,7 +22,7 @@ use clap::Args;
 use serde::Serialize;
 
 use bdpm_output::accum::{check_scene_hash, estimator_hash, scene_hash};
-use bdpm_output::cli::{CliResult, Overrides, prepare, thread_pool};
+use bdpm_output::cli::{CliResult, Overrides, Prepared, prepare as cli_prepare, thread_pool};
 use bdpm_output::colormap::{Canvas, ColourMap, Legend, compose, format_value};
 use bdpm_output::files::stem_of;
 use bdpm_output::{exr, files, say};
@@ -315,10 +315,56 @@ fn default_output(measured: &Path) -> PathBuf {
     measured.with_file_name(format!("{stem}-predict.exr"))
 }
 
-/// Runs the subcommand.
+/// Runs the subcommand: [`prepare`] (scene, measured render, checks), [`Setup::predict`]
+/// (the model's V, and the floor with `--headroom`), [`Setup::compare`] (the agreement
+/// figures), [`Setup::write`] (EXR, PNGs, JSON, summary).
 pub(crate) fn run(args: PredictArgs) -> CliResult<()> {
-    let loaded = prepare(&args.scene, &args.overrides)?;
-    let (scene, settings) = (loaded.scene, loaded.settings);
+    let setup = prepare(&args)?;
+    let predicted = setup.predict()?;
+    let comparison = setup.compare(&predicted);
+    setup.write(&predicted, &comparison)
+}
+
+/// A prediction after [`prepare`]: the scene and settings, the measured render and the
+/// output paths, all checked.
+struct Setup<'a> {
+    args: &'a PredictArgs,
+    loaded: Prepared,
+    measured: Measured,
+    /// Passes the measured render did.
+    passes: u32,
+    scene_hash: String,
+    exr_path: PathBuf,
+    png_path: PathBuf,
+    json_path: PathBuf,
+    headroom_path: PathBuf,
+    pool: rayon::ThreadPool,
+}
+
+/// What the model predicts: the mode's V, the floor's (with `--headroom`) and the merge
+/// radius the renderer used, m.
+struct Predicted {
+    prediction: Prediction,
+    floor: Option<Prediction>,
+    radius: f32,
+}
+
+/// The prediction set against the measurement: the report and the per-pixel maps written.
+struct Comparison<'a> {
+    report: Report<'a>,
+    /// Predicted over measured V per pixel.
+    ratio: Vec<f64>,
+    /// Measured V where the model sees a surface, NaN elsewhere.
+    measured_on_surface: Vec<f64>,
+    /// Predicted V over the floor per pixel (with `--headroom`).
+    headroom_ratio: Option<Vec<f64>>,
+}
+
+/// Loads the scene, reads the measured render and checks that it is a render of this scene
+/// with these settings and enough passes, and that no output would overwrite an input.
+fn prepare(args: &PredictArgs) -> CliResult<Setup<'_>> {
+    let loaded = cli_prepare(&args.scene, &args.overrides)?;
+    let settings = &loaded.settings;
     let mode = settings.mode;
     if matches!(mode, Mode::Path | Mode::Light) {
         return Err(format!(
@@ -364,6 +410,7 @@ pub(crate) fn run(args: PredictArgs) -> CliResult<()> {
     )?;
     let exr_path = args
         .output
+        .clone()
         .unwrap_or_else(|| default_output(&args.measured))
         .with_extension("exr");
     let png_path = exr_path.with_extension("png");
@@ -375,208 +422,273 @@ pub(crate) fn run(args: PredictArgs) -> CliResult<()> {
     }
     files::refuse_inputs(&members, &[&args.measured, &args.scene], &[])?;
     let pool = thread_pool(args.overrides.threads)?;
+    Ok(Setup {
+        args,
+        loaded,
+        measured,
+        passes,
+        scene_hash: expected_hash,
+        exr_path,
+        png_path,
+        json_path,
+        headroom_path,
+        pool,
+    })
+}
 
-    let renderer = pool
-        .install(|| Renderer::new(&scene, &settings).map(Renderer::with_model_inputs))
-        .map_err(|e| format!("{}: {e}", args.scene.display()))?;
-    check_settings(&measured, &settings, &renderer, &args.measured)?;
-    // Every other setting (depth, cache, table, clamp, …), which the header lists no field of.
-    let estimator = estimator_hash(&settings);
-    if measured.attribute("estimator_hash") != Some(estimator.as_str()) {
-        return Err(format!(
-            "{}: rendered with other settings (estimator hash {}, the prediction's is {estimator}): \
-             give predict the render's settings",
-            args.measured.display(),
-            measured.attribute("estimator_hash").unwrap_or("missing")
-        ));
-    }
-    let prediction = pool
-        .install(|| renderer.predict_variance())
-        .map_err(|e| e.to_string())?;
-
-    let floor = if args.headroom {
-        // The unclamped `optimal-split` reads its own A and B, so its renderer must build the
-        // pixel table.
-        let floor = Heuristic::OptimalSplit {
-            clamp_weights: false,
-        };
-        let mut s = settings.clone();
-        s.mode = Mode::Bdpm(floor);
-        let r = pool
-            .install(|| Renderer::new(&scene, &s).map(Renderer::with_model_inputs))
+impl Setup<'_> {
+    /// Prepares the renderer, checks that the measured render used its settings, and
+    /// evaluates the model (and, with `--headroom`, the floor).
+    fn predict(&self) -> CliResult<Predicted> {
+        let (args, scene, settings, pool) = (
+            self.args,
+            &self.loaded.scene,
+            &self.loaded.settings,
+            &self.pool,
+        );
+        let renderer = pool
+            .install(|| Renderer::new(scene, settings).map(Renderer::with_model_inputs))
             .map_err(|e| format!("{}: {e}", args.scene.display()))?;
-        Some(
-            pool.install(|| r.predict_variance_for(floor))
-                .map_err(|e| e.to_string())?,
-        )
-    } else {
-        None
-    };
+        check_settings(&self.measured, settings, &renderer, &args.measured)?;
+        // Every other setting (depth, cache, table, clamp, …), which the header lists no
+        // field of.
+        let estimator = estimator_hash(settings);
+        if self.measured.attribute("estimator_hash") != Some(estimator.as_str()) {
+            return Err(format!(
+                "{}: rendered with other settings (estimator hash {}, the prediction's is {estimator}): \
+                 give predict the render's settings",
+                args.measured.display(),
+                self.measured
+                    .attribute("estimator_hash")
+                    .unwrap_or("missing")
+            ));
+        }
+        let prediction = pool
+            .install(|| renderer.predict_variance())
+            .map_err(|e| e.to_string())?;
+        let floor = if args.headroom {
+            // The unclamped `optimal-split` reads its own A and B, so its renderer must build
+            // the pixel table.
+            let floor = Heuristic::OptimalSplit {
+                clamp_weights: false,
+            };
+            let mut s = settings.clone();
+            s.mode = Mode::Bdpm(floor);
+            let r = pool
+                .install(|| Renderer::new(scene, &s).map(Renderer::with_model_inputs))
+                .map_err(|e| format!("{}: {e}", args.scene.display()))?;
+            Some(
+                pool.install(|| r.predict_variance_for(floor))
+                    .map_err(|e| e.to_string())?,
+            )
+        } else {
+            None
+        };
+        Ok(Predicted {
+            prediction,
+            floor,
+            radius: renderer.radius(),
+        })
+    }
 
-    let p = &prediction;
-    let mv = &measured.variance;
-    let ratio: Vec<f64> = p
-        .total
-        .iter()
-        .zip(mv)
-        .map(|(p, m)| if *m > 0.0 { p / m } else { f64::NAN })
-        .collect();
-    let surface: Vec<usize> = (0..mv.len()).filter(|&i| p.total[i].is_finite()).collect();
-    let compared: Vec<usize> = surface
-        .iter()
-        .copied()
-        .filter(|&i| mv[i].is_finite() && mv[i] > 0.0)
-        .collect();
+    /// Compares the prediction with the measured V: per pixel, over blocks, term shares and,
+    /// with `--headroom`, against the floor.
+    fn compare(&self, predicted: &Predicted) -> Comparison<'static> {
+        let (settings, measured) = (&self.loaded.settings, &self.measured);
+        let (p, floor) = (&predicted.prediction, &predicted.floor);
+        let mv = &measured.variance;
+        let ratio: Vec<f64> = p
+            .total
+            .iter()
+            .zip(mv)
+            .map(|(p, m)| if *m > 0.0 { p / m } else { f64::NAN })
+            .collect();
+        let surface: Vec<usize> = (0..mv.len()).filter(|&i| p.total[i].is_finite()).collect();
+        let compared: Vec<usize> = surface
+            .iter()
+            .copied()
+            .filter(|&i| mv[i].is_finite() && mv[i] > 0.0)
+            .collect();
+        let sum = |v: &[f64]| compared.iter().map(|&i| v[i]).sum::<f64>();
+        let total = sum(&p.total);
+        let share = |v: &[f64]| {
+            if total > 0.0 {
+                sum(v) / total
+            } else {
+                f64::NAN
+            }
+        };
+        let n = compared.len().max(1) as f64;
+        // relV over the compared pixels, with the measured render's mean as R (study's ε).
+        let lum: Vec<f64> = compared.iter().map(|&i| measured.mean[i]).collect();
+        let pick = |v: &[f64]| -> Vec<f64> { compared.iter().map(|&i| v[i]).collect() };
+        let rel_v = |v: &[f64]| crate::study::rel_mean(&pick(v), &lum);
+        let pairs: Vec<(f64, f64)> = p.total.iter().copied().zip(mv.iter().copied()).collect();
+        // Blocks: only surface pixels count, in both sums.
+        let measured_on_surface: Vec<f64> = mv
+            .iter()
+            .zip(&p.total)
+            .map(|(m, t)| if t.is_finite() { *m } else { f64::NAN })
+            .collect();
+        let blocks = block_sums(
+            &p.total,
+            &measured_on_surface,
+            settings.width,
+            settings.height,
+        );
+        let headroom_ratio: Option<Vec<f64>> = floor.as_ref().map(|f| {
+            p.total
+                .iter()
+                .zip(&f.total)
+                .map(|(m, f)| if *f > 0.0 { m / f } else { f64::NAN })
+                .collect()
+        });
+        let headroom = floor
+            .as_ref()
+            .map(|f| headroom(p, f, &compared, total, n, (settings.width, settings.height)));
+        let report = Report {
+            scene: self.args.scene.display().to_string(),
+            measured: self.args.measured.display().to_string(),
+            mode: settings.mode.name(),
+            width: settings.width,
+            height: settings.height,
+            spp: settings.spp,
+            photons_per_pass: settings.photons,
+            pixel_jitter: settings.pixel_jitter,
+            noise_model: settings.noise_model.name(),
+            sampler: settings.sampler.name(),
+            radius_m: predicted.radius,
+            pixel_table_rays: settings
+                .pixel_table_rays
+                .unwrap_or(bdpm_integrator::PINHOLE_TABLE_RAYS),
+            passes: self.passes,
+            measured_relative_se_per_pixel: (2.0 / (self.passes as f64 - 1.0)).sqrt(),
+            pixels_without_surface: mv.len() - surface.len(),
+            pixels_without_measured_noise: surface.len() - compared.len(),
+            image_mean_predicted_v: total / n,
+            image_mean_measured_v: sum(mv) / n,
+            rel_v_predicted: rel_v(&p.total),
+            rel_v_measured: rel_v(mv),
+            term_shares: Shares {
+                t0: share(&p.t0),
+                t1: share(&p.t1),
+                t2: share(&p.t2),
+                t_jitter: share(&p.t_jitter),
+            },
+            per_pixel: agreement(&pairs),
+            block_size: BLOCK,
+            blocks: agreement(&blocks),
+            headroom,
+        };
+        Comparison {
+            report,
+            ratio,
+            measured_on_surface,
+            headroom_ratio,
+        }
+    }
+
+    /// Writes OUT.exr, OUT.png (and OUT-headroom.png), OUT.json, and prints the summary.
+    fn write(&self, predicted: &Predicted, c: &Comparison<'_>) -> CliResult<()> {
+        let (args, settings) = (self.args, &self.loaded.settings);
+        let (p, floor) = (&predicted.prediction, &predicted.floor);
+        let (exr_path, png_path, json_path) = (&self.exr_path, &self.png_path, &self.json_path);
+        let attributes = vec![
+            ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
+            ("scene".into(), args.scene.display().to_string()),
+            ("scene_hash".into(), self.scene_hash.clone()),
+            ("measured".into(), args.measured.display().to_string()),
+            ("mode".into(), settings.mode.name().into()),
+            ("passes".into(), self.passes.to_string()),
+            ("spp".into(), settings.spp.to_string()),
+            ("photons_per_pass".into(), settings.photons.to_string()),
+            ("radius_m".into(), predicted.radius.to_string()),
+            ("units".into(), "V and terms in W2 m-4 sr-2".into()),
+        ];
+        let mut layers: Vec<(&str, &[f64])> = vec![
+            ("predicted_V", &p.total),
+            ("measured_V", &c.measured_on_surface),
+            ("ratio", &c.ratio),
+            ("T0", &p.t0),
+            ("T1", &p.t1),
+            ("T2", &p.t2),
+            ("T_jitter", &p.t_jitter),
+        ];
+        if let (Some(f), Some(h)) = (floor, &c.headroom_ratio) {
+            layers.push(("floor_V", &f.total));
+            layers.push(("headroom", h));
+        }
+        exr::write_exr_channels(
+            exr_path,
+            (settings.width, settings.height),
+            &layers,
+            &attributes,
+        )
+        .map_err(|e| format!("{}: {e}", exr_path.display()))?;
+        ratio_png(p, &c.ratio, LOG2_RANGE, "predicted / measured V")
+            .and_then(|canvas| canvas.write_png(png_path))
+            .map_err(|e| format!("{}: {e}", png_path.display()))?;
+        let mut written = vec![exr_path.clone(), png_path.clone(), json_path.clone()];
+        if let Some(h) = &c.headroom_ratio {
+            let path = &self.headroom_path;
+            ratio_png(p, h, HEADROOM_LOG2_RANGE, "predicted V / floor")
+                .and_then(|canvas| canvas.write_png(path))
+                .map_err(|e| format!("{}: {e}", path.display()))?;
+            written.push(path.clone());
+        }
+        let json = serde_json::to_string_pretty(&c.report).map_err(|e| format!("JSON: {e}"))?;
+        files::write_atomic(json_path, json.as_bytes())
+            .map_err(|e| format!("{}: {e}", json_path.display()))?;
+
+        print_summary(&c.report);
+        let names: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
+        say!("wrote {}", names.join(", "));
+        Ok(())
+    }
+}
+
+/// The mode's predicted V `p` against the floor `f` over the compared pixels (`total`: the
+/// sum of `p` over them, `n` their count).
+fn headroom(
+    p: &Prediction,
+    f: &Prediction,
+    compared: &[usize],
+    total: f64,
+    n: f64,
+    (width, height): (u32, u32),
+) -> Headroom {
     let sum = |v: &[f64]| compared.iter().map(|&i| v[i]).sum::<f64>();
-    let total = sum(&p.total);
-    let share = |v: &[f64]| {
-        if total > 0.0 {
-            sum(v) / total
+    let compared_pairs: Vec<(f64, f64)> =
+        compared.iter().map(|&i| (p.total[i], f.total[i])).collect();
+    let on_surface = |v: &[f64]| -> Vec<f64> {
+        (0..v.len())
+            .map(|i| {
+                if compared.binary_search(&i).is_ok() {
+                    v[i]
+                } else {
+                    f64::NAN
+                }
+            })
+            .collect()
+    };
+    let floor_sum = sum(&f.total);
+    Headroom {
+        floor: "optimal-split, unclamped",
+        image_mean_floor_v: floor_sum / n,
+        image_mean_ratio: total / floor_sum,
+        weight_independent_share: if total > 0.0 {
+            sum(&p.t_jitter) / total
         } else {
             f64::NAN
-        }
-    };
-    let n = compared.len().max(1) as f64;
-    // relV over the compared pixels, with the measured render's mean as R (study's ε).
-    let lum: Vec<f64> = compared.iter().map(|&i| measured.mean[i]).collect();
-    let pick = |v: &[f64]| -> Vec<f64> { compared.iter().map(|&i| v[i]).collect() };
-    let rel_v = |v: &[f64]| crate::study::rel_mean(&pick(v), &lum);
-    let pairs: Vec<(f64, f64)> = p.total.iter().copied().zip(mv.iter().copied()).collect();
-    // Blocks: only surface pixels count, in both sums.
-    let measured_on_surface: Vec<f64> = mv
-        .iter()
-        .zip(&p.total)
-        .map(|(m, t)| if t.is_finite() { *m } else { f64::NAN })
-        .collect();
-    let blocks = block_sums(
-        &p.total,
-        &measured_on_surface,
-        settings.width,
-        settings.height,
-    );
-    let headroom_ratio: Option<Vec<f64>> = floor.as_ref().map(|f| {
-        p.total
-            .iter()
-            .zip(&f.total)
-            .map(|(m, f)| if *f > 0.0 { m / f } else { f64::NAN })
-            .collect()
-    });
-    let headroom = floor.as_ref().map(|f| {
-        let compared_pairs: Vec<(f64, f64)> =
-            compared.iter().map(|&i| (p.total[i], f.total[i])).collect();
-        let on_surface = |v: &[f64]| -> Vec<f64> {
-            (0..v.len())
-                .map(|i| {
-                    if compared.binary_search(&i).is_ok() {
-                        v[i]
-                    } else {
-                        f64::NAN
-                    }
-                })
-                .collect()
-        };
-        let floor_sum = sum(&f.total);
-        Headroom {
-            floor: "optimal-split, unclamped",
-            image_mean_floor_v: floor_sum / n,
-            image_mean_ratio: total / floor_sum,
-            weight_independent_share: share(&p.t_jitter),
-            per_pixel: agreement(&compared_pairs),
-            blocks: agreement(&block_sums(
-                &on_surface(&p.total),
-                &on_surface(&f.total),
-                settings.width,
-                settings.height,
-            )),
-        }
-    });
-    let report = Report {
-        scene: args.scene.display().to_string(),
-        measured: args.measured.display().to_string(),
-        mode: mode.name(),
-        width: settings.width,
-        height: settings.height,
-        spp: settings.spp,
-        photons_per_pass: settings.photons,
-        pixel_jitter: settings.pixel_jitter,
-        noise_model: settings.noise_model.name(),
-        sampler: settings.sampler.name(),
-        radius_m: renderer.radius(),
-        pixel_table_rays: settings
-            .pixel_table_rays
-            .unwrap_or(bdpm_integrator::PINHOLE_TABLE_RAYS),
-        passes,
-        measured_relative_se_per_pixel: (2.0 / (passes as f64 - 1.0)).sqrt(),
-        pixels_without_surface: mv.len() - surface.len(),
-        pixels_without_measured_noise: surface.len() - compared.len(),
-        image_mean_predicted_v: total / n,
-        image_mean_measured_v: sum(mv) / n,
-        rel_v_predicted: rel_v(&p.total),
-        rel_v_measured: rel_v(mv),
-        term_shares: Shares {
-            t0: share(&p.t0),
-            t1: share(&p.t1),
-            t2: share(&p.t2),
-            t_jitter: share(&p.t_jitter),
         },
-        per_pixel: agreement(&pairs),
-        block_size: BLOCK,
-        blocks: agreement(&blocks),
-        headroom,
-    };
-
-    let attributes = vec![
-        ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
-        ("scene".into(), args.scene.display().to_string()),
-        ("scene_hash".into(), expected_hash.clone()),
-        ("measured".into(), args.measured.display().to_string()),
-        ("mode".into(), mode.name().into()),
-        ("passes".into(), passes.to_string()),
-        ("spp".into(), settings.spp.to_string()),
-        ("photons_per_pass".into(), settings.photons.to_string()),
-        ("radius_m".into(), renderer.radius().to_string()),
-        ("units".into(), "V and terms in W2 m-4 sr-2".into()),
-    ];
-    let measured_out: Vec<f64> = measured_on_surface;
-    let mut layers: Vec<(&str, &[f64])> = vec![
-        ("predicted_V", &p.total),
-        ("measured_V", &measured_out),
-        ("ratio", &ratio),
-        ("T0", &p.t0),
-        ("T1", &p.t1),
-        ("T2", &p.t2),
-        ("T_jitter", &p.t_jitter),
-    ];
-    if let (Some(f), Some(h)) = (&floor, &headroom_ratio) {
-        layers.push(("floor_V", &f.total));
-        layers.push(("headroom", h));
+        per_pixel: agreement(&compared_pairs),
+        blocks: agreement(&block_sums(
+            &on_surface(&p.total),
+            &on_surface(&f.total),
+            width,
+            height,
+        )),
     }
-    exr::write_exr_channels(
-        &exr_path,
-        (settings.width, settings.height),
-        &layers,
-        &attributes,
-    )
-    .map_err(|e| format!("{}: {e}", exr_path.display()))?;
-    ratio_png(p, &ratio, LOG2_RANGE, "predicted / measured V")
-        .and_then(|c| c.write_png(&png_path))
-        .map_err(|e| format!("{}: {e}", png_path.display()))?;
-    let mut written = vec![exr_path.clone(), png_path, json_path.clone()];
-    if let Some(h) = &headroom_ratio {
-        let path = headroom_path;
-        ratio_png(p, h, HEADROOM_LOG2_RANGE, "predicted V / floor")
-            .and_then(|c| c.write_png(&path))
-            .map_err(|e| format!("{}: {e}", path.display()))?;
-        written.push(path);
-    }
-    let json = serde_json::to_string_pretty(&report).map_err(|e| format!("JSON: {e}"))?;
-    files::write_atomic(&json_path, json.as_bytes())
-        .map_err(|e| format!("{}: {e}", json_path.display()))?;
-
-    print_summary(&report);
-    let names: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
-    say!("wrote {}", names.join(", "));
-    Ok(())
 }
 
 fn print_summary(r: &Report<'_>) {

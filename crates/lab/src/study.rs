@@ -13,13 +13,15 @@ use std::time::Instant;
 use bdpm_integrator::{Film, Renderer};
 use bdpm_output::accum::{check_scene_hash, scene_hash};
 use bdpm_output::cli::{
-    CliResult, Overrides, load_average, prepare, process_cpu_seconds, progress_bar, thread_pool,
+    CliResult, Overrides, Prepared, load_average, prepare as cli_prepare, process_cpu_seconds,
+    progress_bar, thread_pool,
 };
 use bdpm_output::files::{refuse_inputs, stem_of, write_atomic};
 use bdpm_output::plot;
 use bdpm_output::preview::write_png;
 use bdpm_output::stats::{PixelStats, luminance};
 use clap::Args;
+use indicatif::ProgressBar;
 
 use crate::reference;
 
@@ -437,8 +439,39 @@ fn preview_name(entry: &str) -> String {
     format!("{stem}.png")
 }
 
-/// Runs the subcommand.
+/// Runs the subcommand: [`prepare`] (scene, reference), [`Study::modes`] (every renderer),
+/// [`Study::run`] (the passes, round-robin), [`Study::write`] (previews, CSV, plots, report).
 pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
+    let study = prepare(&args)?;
+    let mut modes = study.modes()?;
+    study.run(&mut modes);
+    study.write(modes)
+}
+
+/// A study after [`prepare`]: the scene, the modes to run and the reference they are measured
+/// against.
+struct Study<'a> {
+    args: &'a StudyArgs,
+    variants: Vec<crate::Variant>,
+    loaded: Prepared,
+    pool: rayon::ThreadPool,
+    /// The scene file's stem, for titles.
+    stem: String,
+    /// The output directory.
+    dir: PathBuf,
+    /// The reference's luminance per pixel, and its image mean.
+    ref_lum: Vec<f64>,
+    ref_mean: f64,
+    floor: ErrorFloor,
+    refs: RefFacts,
+    /// The load average before the modes ran.
+    load_before: String,
+    /// Whether the time axis is the process CPU time.
+    use_cpu: bool,
+}
+
+/// Checks the arguments, loads the scene and reads or renders the reference.
+fn prepare(args: &StudyArgs) -> CliResult<Study<'_>> {
     if args.overrides.mode.is_some() {
         return Err("study: use --modes (a comma-separated list), not --mode".into());
     }
@@ -450,60 +483,15 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
         ));
     }
     let variants = crate::parse_modes(&args.modes)?;
-    let loaded = prepare(&args.scene, &args.overrides)?;
-    let (scene, settings) = (loaded.scene, loaded.settings);
+    let loaded = cli_prepare(&args.scene, &args.overrides)?;
     let pool = thread_pool(args.overrides.threads)?;
     let stem = stem_of(&args.scene, "scene");
     let dir = args
         .output
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(format!("study-{stem}")));
-    let (w, h) = (settings.width, settings.height);
-
-    // The reference.
-    let hash = scene_hash(&args.scene, &loaded.report.gltf_files)?;
-    if let Some(path) = &args.reference {
-        let mut members: Vec<PathBuf> = variants
-            .iter()
-            .map(|v| dir.join(preview_name(&v.name)))
-            .collect();
-        members.extend(["study.csv", "study.md"].map(|n| dir.join(n)));
-        for stem in ["error-vs-time", "sqrt-v"] {
-            members.extend(["png", "svg"].map(|e| dir.join(stem).with_extension(e)));
-        }
-        let members: Vec<&Path> = members.iter().map(PathBuf::as_path).collect();
-        refuse_inputs(&members, &[path], &[])?;
-    }
-    let reference = match &args.reference {
-        Some(path) => {
-            let mut r = reference::read_exr(path)?;
-            // A reference of another scene gives errors that mean nothing; one made by
-            // another program (no attribute) is taken on trust.
-            check_scene_hash(path, &r.attributes, &hash, "the reference", false)?;
-            r.origin = format!("read from {}", path.display());
-            r
-        }
-        None => {
-            let passes = match args.reference_passes {
-                Some(0) => return Err("--reference-passes must be at least 1".into()),
-                Some(p) => p,
-                None => settings.passes.saturating_mul(16),
-            };
-            let photons = match args.reference_photons {
-                Some(0) => return Err("--reference-photons must be at least 1".into()),
-                Some(n) => n,
-                None => settings.photons,
-            };
-            let rs = reference::reference_settings(&settings, passes, photons);
-            let path = reference::cache_path(&args.scene, &hash, &rs)?;
-            let mut r = reference::cached_or_render(&scene, &hash, &rs, &path, &pool, args.quiet)?;
-            r.origin = format!(
-                "`light` mode, {passes} passes of N_F = {photons}, N_B = {}, seed {}; {}",
-                rs.spp, rs.seed, r.origin
-            );
-            r
-        }
-    };
+    let reference = study_reference(args, &variants, &loaded, &dir, &pool)?;
+    let (w, h) = (loaded.settings.width, loaded.settings.height);
     if (reference.width, reference.height) != (w, h) {
         return Err(format!(
             "{}: reference is {}x{} but the study renders {w}x{h}",
@@ -533,203 +521,328 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
         floor: reference.stderr.as_ref().map(|_| floor.mse.sqrt()),
         rel_mse_floor: floor.rel_mse,
     };
-
-    // The modes: every renderer is prepared first, then the passes are taken round-robin, one
-    // pass of each mode in turn, so that a change in what else the machine runs (which moves
-    // every timing here by ±10 %) falls on all modes alike and their time ratios stay fair.
     let load_before = load_average();
     let use_cpu = args.clock == "cpu";
     if use_cpu && process_cpu_seconds().is_none() {
         return Err("--clock cpu: the process CPU time is not available here".into());
     }
-    let cpu_now = || process_cpu_seconds().unwrap_or(f64::NAN);
-    let mut states = Vec::new();
-    for variant in &variants {
-        let name = &variant.name;
-        let s = variant.settings(&settings)?;
-        let (t0, c0) = (Instant::now(), cpu_now());
-        let renderer = pool
-            .install(|| Renderer::new(&scene, &s))
-            .map_err(|e| format!("{}: mode {name}: {e}", args.scene.display()))?;
-        let stages = renderer
-            .stages()
+    Ok(Study {
+        args,
+        variants,
+        loaded,
+        pool,
+        stem,
+        dir,
+        ref_lum,
+        ref_mean,
+        floor,
+        refs,
+        load_before,
+        use_cpu,
+    })
+}
+
+/// The reference: read from `--reference` (which must not be one of the study's outputs) or
+/// a `light` render, cached.
+fn study_reference(
+    args: &StudyArgs,
+    variants: &[crate::Variant],
+    loaded: &Prepared,
+    dir: &Path,
+    pool: &rayon::ThreadPool,
+) -> CliResult<reference::Reference> {
+    let settings = &loaded.settings;
+    let hash = scene_hash(&args.scene, &loaded.report.gltf_files)?;
+    if let Some(path) = &args.reference {
+        let mut members: Vec<PathBuf> = variants
             .iter()
-            .map(|st| (st.name.to_string(), st.seconds))
+            .map(|v| dir.join(preview_name(&v.name)))
             .collect();
-        states.push(ModeState {
-            name: name.clone(),
-            passes: s.passes,
-            // The mode's clock: preparation plus its passes, not the metrics computed between.
-            wall: t0.elapsed().as_secs_f64(),
-            cpu: cpu_now() - c0,
-            renderer,
-            stages,
-            film: Film::new(w, h),
-            lum: PixelStats::new(w as usize * h as usize),
-            points: Vec::new(),
-        });
-    }
-    let len = args.time_budget.is_none().then(|| {
-        states
-            .iter()
-            .map(|m| m.passes as u64 * m.renderer.work_per_pass())
-            .sum()
-    });
-    let template = if len.is_some() {
-        "{prefix:>16} [{elapsed_precise}] {bar:32} {percent:>3}% {msg}"
-    } else {
-        "{prefix:>16} [{elapsed_precise}] {spinner} {msg}"
-    };
-    let bar = progress_bar(args.quiet, len, template);
-    bar.set_prefix("study");
-    let done = |m: &ModeState<'_>| match args.time_budget {
-        Some(budget) => (if use_cpu { m.cpu } else { m.wall }) >= budget,
-        None => m.points.len() as u32 >= m.passes,
-    };
-    while states.iter().any(|m| !done(m)) {
-        for m in states.iter_mut().filter(|m| !done(m)) {
-            let pass = m.points.len() as u32;
-            bar.set_message(format!("{} pass {}", m.name, pass + 1));
-            let (t, c) = (Instant::now(), cpu_now());
-            let out = pool.install(|| m.renderer.render_pass(pass, &|n| bar.inc(n)));
-            m.wall += t.elapsed().as_secs_f64();
-            m.cpu += cpu_now() - c;
-            m.film.add_pass(&out.estimates, out.dropped);
-            m.lum.add_pass(&out.estimates);
-            let image = m.lum.mean();
-            let e = without_floor(rmse(&image, &ref_lum).powi(2), floor.mse).sqrt();
-            let var = m.lum.variance();
-            let sqrt_v = var.as_ref().map_or(f64::NAN, |v| {
-                mean(&v.iter().map(|x| x.sqrt()).collect::<Vec<_>>())
-            });
-            let rel_sqrt_v = var.as_ref().map_or(f64::NAN, |v| {
-                let rel: Vec<f64> = v
-                    .iter()
-                    .zip(&ref_lum)
-                    .filter(|(_, r)| **r > 0.0)
-                    .map(|(x, r)| x.sqrt() / r)
-                    .collect();
-                mean(&rel)
-            });
-            m.points.push(PassPoint {
-                pass: pass + 1,
-                time: if use_cpu { m.cpu } else { m.wall },
-                wall_s: m.wall,
-                cpu_s: m.cpu,
-                rmse: e,
-                rel_rmse: e / ref_mean,
-                rel_mse: without_floor(rel_mse(&image, &ref_lum), floor.rel_mse),
-                mean_sqrt_v: sqrt_v,
-                mean_rel_sqrt_v: rel_sqrt_v,
-            });
+        members.extend(["study.csv", "study.md"].map(|n| dir.join(n)));
+        for stem in ["error-vs-time", "sqrt-v"] {
+            members.extend(["png", "svg"].map(|e| dir.join(stem).with_extension(e)));
         }
+        let members: Vec<&Path> = members.iter().map(PathBuf::as_path).collect();
+        refuse_inputs(&members, &[path], &[])?;
     }
-    bar.finish_and_clear();
-    let mut runs = Vec::new();
-    let mut files = Vec::new();
-    for m in states {
-        let variance = m.lum.variance();
-        let mean_v = variance.as_ref().map_or(f64::NAN, |v| mean(v));
-        let rel_v = variance
-            .as_ref()
-            .map_or(f64::NAN, |v| rel_mean(v, &ref_lum));
-        let preview = dir.join(preview_name(&m.name));
-        write_png(&preview, &m.film).map_err(|e| format!("{}: {e}", preview.display()))?;
-        files.push(preview.display().to_string());
-        let run = ModeRun {
-            name: m.name,
-            stages: m.stages,
-            points: m.points,
-            mean_v,
-            rel_v,
-            dropped: m.film.dropped(),
-        };
-        if !args.quiet {
-            let last = run.final_point().map(|p| p.rel_rmse).unwrap_or(f64::NAN);
-            bdpm_output::say_err!(
-                "{:>16}: {} passes in {:.1} s, rel. RMSE {:.3}%",
-                run.name,
-                run.points.len(),
-                run.total_seconds(),
-                100.0 * last
+    Ok(match &args.reference {
+        Some(path) => {
+            let mut r = reference::read_exr(path)?;
+            // A reference of another scene gives errors that mean nothing; one made by
+            // another program (no attribute) is taken on trust.
+            check_scene_hash(path, &r.attributes, &hash, "the reference", false)?;
+            r.origin = format!("read from {}", path.display());
+            r
+        }
+        None => {
+            let passes = match args.reference_passes {
+                Some(0) => return Err("--reference-passes must be at least 1".into()),
+                Some(p) => p,
+                None => settings.passes.saturating_mul(16),
+            };
+            let photons = match args.reference_photons {
+                Some(0) => return Err("--reference-photons must be at least 1".into()),
+                Some(n) => n,
+                None => settings.photons,
+            };
+            let rs = reference::reference_settings(settings, passes, photons);
+            let path = reference::cache_path(&args.scene, &hash, &rs)?;
+            let mut r =
+                reference::cached_or_render(&loaded.scene, &hash, &rs, &path, pool, args.quiet)?;
+            r.origin = format!(
+                "`light` mode, {passes} passes of N_F = {photons}, N_B = {}, seed {}; {}",
+                rs.spp, rs.seed, r.origin
             );
+            r
         }
-        runs.push(run);
+    })
+}
+
+impl Study<'_> {
+    /// The process CPU time, s (NaN where unknown).
+    fn cpu_now(&self) -> f64 {
+        process_cpu_seconds().unwrap_or(f64::NAN)
     }
 
-    // Outputs.
-    let csv_path = dir.join("study.csv");
-    write_atomic(&csv_path, csv(&runs).as_bytes())
-        .map_err(|e| format!("{}: {e}", csv_path.display()))?;
-    let plot_err = plot::LogLogPlot {
-        title: format!("{stem} {w}x{h}: error against time"),
-        x_label: format!("{} time, s (preparation included)", args.clock),
-        y_label: "relative RMSE of luminance".into(),
-        series: runs
-            .iter()
-            .map(|r| plot::Series {
-                name: r.name.clone(),
-                points: r.points.iter().map(|p| (p.time, p.rel_rmse)).collect(),
-            })
-            .collect(),
-        floor: refs
-            .floor
-            .map(|f| ("reference's own error".to_string(), f / ref_mean)),
-    };
-    let err_stem = dir.join("error-vs-time");
-    plot::write_loglog(&err_stem, &plot_err)?;
-    let plot_v = plot::BarPlot {
-        title: format!(
-            "{stem} {w}x{h}: mean per-pass noise (N_F = {}, N_B = {})",
-            settings.photons, settings.spp
-        ),
-        y_label: "mean √V of luminance, W·m⁻²·sr⁻¹".into(),
-        bars: runs
-            .iter()
-            .map(|r| {
-                (
-                    r.name.clone(),
-                    r.final_point().map_or(f64::NAN, |p| p.mean_sqrt_v),
-                )
-            })
-            .collect(),
-    };
-    let v_stem = dir.join("sqrt-v");
-    plot::write_bars(&v_stem, &plot_v)?;
-    let baseline = if variants.iter().any(|v| v.name == "bdd0") {
-        "bdd0".to_string()
-    } else {
-        variants[0].name.clone()
-    };
-    let mut all_files = vec![csv_path.display().to_string()];
-    for stem in [&err_stem, &v_stem] {
-        for ext in ["png", "svg"] {
-            all_files.push(stem.with_extension(ext).display().to_string());
+    /// Prepares every mode's renderer; its clock starts with its preparation.
+    fn modes(&self) -> CliResult<Vec<ModeState<'_>>> {
+        let (w, h) = (self.loaded.settings.width, self.loaded.settings.height);
+        let mut states = Vec::new();
+        for variant in &self.variants {
+            let name = &variant.name;
+            let s = variant.settings(&self.loaded.settings)?;
+            let (t0, c0) = (Instant::now(), self.cpu_now());
+            let renderer = self
+                .pool
+                .install(|| Renderer::new(&self.loaded.scene, &s))
+                .map_err(|e| format!("{}: mode {name}: {e}", self.args.scene.display()))?;
+            let stages = renderer
+                .stages()
+                .iter()
+                .map(|st| (st.name.to_string(), st.seconds))
+                .collect();
+            states.push(ModeState {
+                name: name.clone(),
+                passes: s.passes,
+                // The mode's clock: preparation plus its passes, not the metrics computed
+                // between.
+                wall: t0.elapsed().as_secs_f64(),
+                cpu: self.cpu_now() - c0,
+                renderer,
+                stages,
+                film: Film::new(w, h),
+                lum: PixelStats::new(w as usize * h as usize),
+                points: Vec::new(),
+            });
+        }
+        Ok(states)
+    }
+
+    /// Whether a mode has had its passes, or its time budget.
+    fn done(&self, m: &ModeState<'_>) -> bool {
+        match self.args.time_budget {
+            Some(budget) => (if self.use_cpu { m.cpu } else { m.wall }) >= budget,
+            None => m.points.len() as u32 >= m.passes,
         }
     }
-    all_files.extend(files);
-    let header = format!(
-        "## Study: {} at {w}x{h}, N_F = {} photons and N_B = {} camera samples per pixel per pass, {}, seed {}, {} threads",
-        args.scene.display(),
-        settings.photons,
-        settings.spp,
-        match args.time_budget {
-            Some(b) => format!("{b} s per mode"),
-            None => format!("{} passes", settings.passes),
-        },
-        settings.seed,
-        pool.current_num_threads()
-    );
-    let command: Vec<String> = std::env::args().collect();
-    let header = format!(
-        "{header}\n\nCommand: `{}`\n\nLoad average (1, 5, 15 min) {load_before} before the modes ran, {} after: \
-         wall times depend on what else the machine runs.",
-        command.join(" "),
-        load_average()
-    );
-    let md = markdown(&header, &refs, &runs, &baseline, &args.clock, &all_files);
-    let md_path = dir.join("study.md");
-    crate::publish(&md_path, &md)
+
+    /// Renders the passes. Every renderer is prepared first, then the passes are taken
+    /// round-robin, one pass of each mode in turn, so that a change in what else the machine
+    /// runs (which moves every timing here by ±10 %) falls on all modes alike and their time
+    /// ratios stay fair.
+    fn run(&self, states: &mut [ModeState<'_>]) {
+        let len = self.args.time_budget.is_none().then(|| {
+            states
+                .iter()
+                .map(|m| m.passes as u64 * m.renderer.work_per_pass())
+                .sum()
+        });
+        let template = if len.is_some() {
+            "{prefix:>16} [{elapsed_precise}] {bar:32} {percent:>3}% {msg}"
+        } else {
+            "{prefix:>16} [{elapsed_precise}] {spinner} {msg}"
+        };
+        let bar = progress_bar(self.args.quiet, len, template);
+        bar.set_prefix("study");
+        while states.iter().any(|m| !self.done(m)) {
+            for m in states.iter_mut().filter(|m| !self.done(m)) {
+                self.pass(m, &bar);
+            }
+        }
+        bar.finish_and_clear();
+    }
+
+    /// Renders the next pass of one mode and records its point.
+    fn pass(&self, m: &mut ModeState<'_>, bar: &ProgressBar) {
+        let (ref_lum, floor) = (&self.ref_lum, self.floor);
+        let pass = m.points.len() as u32;
+        bar.set_message(format!("{} pass {}", m.name, pass + 1));
+        let (t, c) = (Instant::now(), self.cpu_now());
+        let out = self
+            .pool
+            .install(|| m.renderer.render_pass(pass, &|n| bar.inc(n)));
+        m.wall += t.elapsed().as_secs_f64();
+        m.cpu += self.cpu_now() - c;
+        m.film.add_pass(&out.estimates, out.dropped);
+        m.lum.add_pass(&out.estimates);
+        let image = m.lum.mean();
+        let e = without_floor(rmse(&image, ref_lum).powi(2), floor.mse).sqrt();
+        let var = m.lum.variance();
+        let sqrt_v = var.as_ref().map_or(f64::NAN, |v| {
+            mean(&v.iter().map(|x| x.sqrt()).collect::<Vec<_>>())
+        });
+        let rel_sqrt_v = var.as_ref().map_or(f64::NAN, |v| {
+            let rel: Vec<f64> = v
+                .iter()
+                .zip(ref_lum)
+                .filter(|(_, r)| **r > 0.0)
+                .map(|(x, r)| x.sqrt() / r)
+                .collect();
+            mean(&rel)
+        });
+        m.points.push(PassPoint {
+            pass: pass + 1,
+            time: if self.use_cpu { m.cpu } else { m.wall },
+            wall_s: m.wall,
+            cpu_s: m.cpu,
+            rmse: e,
+            rel_rmse: e / self.ref_mean,
+            rel_mse: without_floor(rel_mse(&image, ref_lum), floor.rel_mse),
+            mean_sqrt_v: sqrt_v,
+            mean_rel_sqrt_v: rel_sqrt_v,
+        });
+    }
+
+    /// Writes each mode's preview and turns the modes into their runs; returns the runs and
+    /// the previews written.
+    fn finish(&self, states: Vec<ModeState<'_>>) -> CliResult<(Vec<ModeRun>, Vec<String>)> {
+        let mut runs = Vec::new();
+        let mut files = Vec::new();
+        for m in states {
+            let variance = m.lum.variance();
+            let mean_v = variance.as_ref().map_or(f64::NAN, |v| mean(v));
+            let rel_v = variance
+                .as_ref()
+                .map_or(f64::NAN, |v| rel_mean(v, &self.ref_lum));
+            let preview = self.dir.join(preview_name(&m.name));
+            write_png(&preview, &m.film).map_err(|e| format!("{}: {e}", preview.display()))?;
+            files.push(preview.display().to_string());
+            let run = ModeRun {
+                name: m.name,
+                stages: m.stages,
+                points: m.points,
+                mean_v,
+                rel_v,
+                dropped: m.film.dropped(),
+            };
+            if !self.args.quiet {
+                let last = run.final_point().map(|p| p.rel_rmse).unwrap_or(f64::NAN);
+                bdpm_output::say_err!(
+                    "{:>16}: {} passes in {:.1} s, rel. RMSE {:.3}%",
+                    run.name,
+                    run.points.len(),
+                    run.total_seconds(),
+                    100.0 * last
+                );
+            }
+            runs.push(run);
+        }
+        Ok((runs, files))
+    }
+
+    /// Writes the previews, the CSV, the plots and the markdown report.
+    fn write(&self, states: Vec<ModeState<'_>>) -> CliResult<()> {
+        let (runs, files) = self.finish(states)?;
+        let (args, settings, dir) = (self.args, &self.loaded.settings, &self.dir);
+        let (stem, w, h) = (&self.stem, settings.width, settings.height);
+        let csv_path = dir.join("study.csv");
+        write_atomic(&csv_path, csv(&runs).as_bytes())
+            .map_err(|e| format!("{}: {e}", csv_path.display()))?;
+        let plot_err = plot::LogLogPlot {
+            title: format!("{stem} {w}x{h}: error against time"),
+            x_label: format!("{} time, s (preparation included)", args.clock),
+            y_label: "relative RMSE of luminance".into(),
+            series: runs
+                .iter()
+                .map(|r| plot::Series {
+                    name: r.name.clone(),
+                    points: r.points.iter().map(|p| (p.time, p.rel_rmse)).collect(),
+                })
+                .collect(),
+            floor: self
+                .refs
+                .floor
+                .map(|f| ("reference's own error".to_string(), f / self.ref_mean)),
+        };
+        let err_stem = dir.join("error-vs-time");
+        plot::write_loglog(&err_stem, &plot_err)?;
+        let plot_v = plot::BarPlot {
+            title: format!(
+                "{stem} {w}x{h}: mean per-pass noise (N_F = {}, N_B = {})",
+                settings.photons, settings.spp
+            ),
+            y_label: "mean √V of luminance, W·m⁻²·sr⁻¹".into(),
+            bars: runs
+                .iter()
+                .map(|r| {
+                    (
+                        r.name.clone(),
+                        r.final_point().map_or(f64::NAN, |p| p.mean_sqrt_v),
+                    )
+                })
+                .collect(),
+        };
+        let v_stem = dir.join("sqrt-v");
+        plot::write_bars(&v_stem, &plot_v)?;
+        let baseline = if self.variants.iter().any(|v| v.name == "bdd0") {
+            "bdd0".to_string()
+        } else {
+            self.variants[0].name.clone()
+        };
+        let mut all_files = vec![csv_path.display().to_string()];
+        for stem in [&err_stem, &v_stem] {
+            for ext in ["png", "svg"] {
+                all_files.push(stem.with_extension(ext).display().to_string());
+            }
+        }
+        all_files.extend(files);
+        let md = markdown(
+            &self.header(),
+            &self.refs,
+            &runs,
+            &baseline,
+            &args.clock,
+            &all_files,
+        );
+        crate::publish(&dir.join("study.md"), &md)
+    }
+
+    /// The report's heading: scene, settings, command and load average.
+    fn header(&self) -> String {
+        let (args, settings) = (self.args, &self.loaded.settings);
+        let header = format!(
+            "## Study: {} at {}x{}, N_F = {} photons and N_B = {} camera samples per pixel per pass, {}, seed {}, {} threads",
+            args.scene.display(),
+            settings.width,
+            settings.height,
+            settings.photons,
+            settings.spp,
+            match args.time_budget {
+                Some(b) => format!("{b} s per mode"),
+                None => format!("{} passes", settings.passes),
+            },
+            settings.seed,
+            self.pool.current_num_threads()
+        );
+        let command: Vec<String> = std::env::args().collect();
+        format!(
+            "{header}\n\nCommand: `{}`\n\nLoad average (1, 5, 15 min) {} before the modes ran, {} after: \
+             wall times depend on what else the machine runs.",
+            command.join(" "),
+            self.load_before,
+            load_average()
+        )
+    }
 }
 
 #[cfg(test)]

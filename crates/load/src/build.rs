@@ -263,23 +263,7 @@ pub(crate) fn build(
     let (mut settings, output) = render_settings(&ctx, file.render.unwrap_or_default())?;
     let mut materials = materials(&ctx, &file.material)?;
 
-    let mut lights = Vec::with_capacity(file.light.len());
-    for (i, l) in file.light.iter().enumerate() {
-        let field = format!("light[{i}]");
-        let position = ctx.required(
-            &format!("{field}.position"),
-            l.position,
-            "[x, y, z] in metres",
-        )?;
-        let position = ctx.point(&format!("{field}.position"), position)?;
-        let flux = ctx.required(
-            &format!("{field}.flux"),
-            l.flux,
-            "watts per RGB channel, a number or [r, g, b]",
-        )?;
-        let flux = ctx.channels(&format!("{field}.flux"), flux, 0.0, None)?;
-        lights.push(PointLight { position, flux });
-    }
+    let mut lights = point_lights(&ctx, &file.light)?;
 
     let mut parts: Vec<TriangleMesh> = Vec::with_capacity(file.shape.len());
     let mut total_triangles: u64 = 0;
@@ -297,18 +281,7 @@ pub(crate) fn build(
                     &materials,
                     shape.type_name(),
                 )?;
-                let field = format!("{prefix}.vertices");
-                let v = ctx.required(&field, q.vertices.as_ref(), "4 points [x, y, z]")?;
-                let v: [Point; 4] = v.as_slice().try_into().map_err(|_| {
-                    ctx.bad(&field, format!("{} points given; a quad has 4", v.len()))
-                })?;
-                let mut checked = [Vec3::ZERO; 4];
-                for (k, (p, out)) in v.iter().zip(&mut checked).enumerate() {
-                    *out = ctx.point(&format!("{field}[{k}]"), *p)?;
-                }
-                let v = checked;
-                let m = ctx.placement(&prefix, q.scale, q.translate)?;
-                mesh.push_quad(v.map(|p| m.transform_point3(p)), material);
+                quad(&ctx, &prefix, q, material, &mut mesh)?;
             }
             ShapeDef::Box(b) => {
                 let material = shape_material(
@@ -318,37 +291,7 @@ pub(crate) fn build(
                     &materials,
                     shape.type_name(),
                 )?;
-                let lo = ctx.point(
-                    &format!("{prefix}.min"),
-                    ctx.required(&format!("{prefix}.min"), b.min, "[x, y, z] in metres")?,
-                )?;
-                let hi = ctx.point(
-                    &format!("{prefix}.max"),
-                    ctx.required(&format!("{prefix}.max"), b.max, "[x, y, z] in metres")?,
-                )?;
-                if !hi.cmpgt(lo).all() {
-                    return Err(ctx.bad(
-                        format!("{prefix}.max"),
-                        format!("{hi} must exceed min = {lo} on every axis"),
-                    ));
-                }
-                let mut keep = [true; 6];
-                for (k, face) in b.open.iter().enumerate() {
-                    let j = BOX_FACES.iter().position(|f| f.0 == face).ok_or_else(|| {
-                        ctx.bad(
-                            format!("{prefix}.open[{k}]"),
-                            format!(
-                                "unknown face '{face}'; expected one of +x, -x, +y, -y, +z, -z"
-                            ),
-                        )
-                    })?;
-                    keep[j] = false;
-                }
-                let inward = facing(&ctx, &prefix, b.facing.as_deref())?;
-                let m = ctx.placement(&prefix, b.scale, b.translate)?;
-                let (a, c) = (m.transform_point3(lo), m.transform_point3(hi));
-                // A negative scale swaps min and max; the box stays the same set of points.
-                push_box(&mut mesh, a.min(c), a.max(c), keep, inward, material);
+                cuboid(&ctx, &prefix, b, material, &mut mesh)?;
             }
             ShapeDef::Sphere(s) => {
                 let material = shape_material(
@@ -358,31 +301,7 @@ pub(crate) fn build(
                     &materials,
                     shape.type_name(),
                 )?;
-                let center = ctx.point(
-                    &format!("{prefix}.center"),
-                    s.center.unwrap_or(Point([0.0; 3])),
-                )?;
-                let radius = ctx.required(&format!("{prefix}.radius"), s.radius, "metres")?;
-                let radius = ctx.positive(&format!("{prefix}.radius"), radius, "metres")?;
-                let freq = ctx.count(
-                    &format!("{prefix}.subdivisions"),
-                    s.subdivisions
-                        .unwrap_or(limits::SPHERE_SUBDIVISIONS_DEFAULT),
-                    1,
-                    limits::SPHERE_SUBDIVISIONS_MAX,
-                )?;
-                total_triangles += sphere_triangle_count(freq);
-                if total_triangles > limits::MAX_BUILTIN_TRIANGLES {
-                    return Err(ctx.bad(
-                        format!("{prefix}.subdivisions"),
-                        format!(
-                            "the built-in shapes would exceed {} triangles",
-                            limits::MAX_BUILTIN_TRIANGLES
-                        ),
-                    ));
-                }
-                let inward = facing(&ctx, &prefix, s.facing.as_deref())?;
-                push_sphere(&mut mesh, center, radius, freq, inward, material);
+                sphere(&ctx, &prefix, s, material, &mut total_triangles, &mut mesh)?;
             }
             ShapeDef::Mesh(g) => {
                 let override_material = match g.material.as_deref() {
@@ -410,15 +329,8 @@ pub(crate) fn build(
                 };
                 let part = load_gltf(&origin, post, override_material, &mut materials)?;
                 report.gltf_files.push(path.clone());
-                report.skipped_primitives += part.skipped_primitives;
-                report.strips_and_fans += part.strips_and_fans;
-                report.skipped_lights += part.skipped_lights;
-                report.skipped_cameras += part.skipped_cameras;
-                report.textured_materials += part.textured_materials;
-                report.textures += part.textures;
-                report.other_textures += part.other_textures;
+                count_gltf(&mut report, &part);
                 texcoords.extend_from_slice(&part.texcoords);
-                report.flat_primitives += part.flat_primitives;
                 lights.extend(part.lights);
                 mesh = part.mesh;
             }
@@ -427,43 +339,13 @@ pub(crate) fn build(
             texcoords.len().max(total_of(&parts) + mesh.indices.len()),
             [Vec2::ZERO; 3],
         );
-        if let Some(k) = mesh.positions.iter().position(|p| !p.is_finite()) {
-            return Err(ctx.bad(
-                &prefix,
-                format!("vertex {k} is not finite after scale and translate (overflow?)"),
-            ));
-        }
-        // The BVH builder (obvhs 0.4) panics when squared extents overflow f32, which happens
-        // near 1e19 m; a far smaller bound costs no real scene anything.
-        if let Some((k, p)) = mesh
-            .positions
-            .iter()
-            .enumerate()
-            .find(|(_, p)| p.abs().max_element() > limits::MAX_COORDINATE)
-        {
-            return Err(ctx.bad(
-                &prefix,
-                format!(
-                    "vertex {k} at {p} m is beyond ±{:e} m on some axis",
-                    limits::MAX_COORDINATE
-                ),
-            ));
-        }
+        check_placed(&ctx, &prefix, &mesh)?;
         parts.push(mesh);
     }
 
     let mesh = merge(&ctx, parts)?;
-    let geometry = Geometry::new(mesh).map_err(|e| match e {
-        GeometryError::Empty if report.skipped_primitives > 0 => ctx.bad(
-            "shape",
-            format!(
-                "the scene has no triangle with positive area ({} glTF point or line primitive(s) were skipped)",
-                report.skipped_primitives
-            ),
-        ),
-        GeometryError::Empty => ctx.bad("shape", "the scene has no triangle with positive area"),
-        other => ctx.bad("shape", other.to_string()),
-    })?;
+    let geometry =
+        Geometry::new(mesh).map_err(|e| geometry_error(&ctx, e, report.skipped_primitives))?;
 
     let (lo, hi) = geometry.bounds();
     let extent = (hi - lo).max_element();
@@ -499,27 +381,213 @@ pub(crate) fn build(
     };
     let scene = Scene::new(geometry, materials.list, lights, camera)
         .and_then(|s| s.with_textures(textures))
-        .map_err(|e| match e {
-            SceneError::NoLight if light_count == 0 => ctx.bad(
-                "light",
-                "the scene has no light; add a [[light]] with position and flux",
-            ),
-            SceneError::NoLight => ctx.bad(
-                "light",
-                "every light has zero flux; the image would be black",
-            ),
-            SceneError::BadLight { index } => ctx.bad(format!("light[{index}]"), e.to_string()),
-            SceneError::BadCamera(why) => ctx.bad("camera", why.to_string()),
-            SceneError::MissingMaterial { .. } | SceneError::BadTextures { .. } => {
-                ctx.bad("shape", e.to_string())
-            }
-        })?;
+        .map_err(|e| scene_error(&ctx, e, light_count))?;
     Ok(LoadedScene {
         scene,
         settings,
         output,
         report,
     })
+}
+
+/// A `quad` shape: its four corners, placed, as two triangles.
+fn quad(
+    ctx: &Ctx<'_>,
+    prefix: &str,
+    q: &crate::schema::QuadDef,
+    material: u32,
+    mesh: &mut TriangleMesh,
+) -> Result<(), LoadError> {
+    let field = format!("{prefix}.vertices");
+    let v = ctx.required(&field, q.vertices.as_ref(), "4 points [x, y, z]")?;
+    let v: [Point; 4] = v
+        .as_slice()
+        .try_into()
+        .map_err(|_| ctx.bad(&field, format!("{} points given; a quad has 4", v.len())))?;
+    let mut checked = [Vec3::ZERO; 4];
+    for (k, (p, out)) in v.iter().zip(&mut checked).enumerate() {
+        *out = ctx.point(&format!("{field}[{k}]"), *p)?;
+    }
+    let v = checked;
+    let m = ctx.placement(prefix, q.scale, q.translate)?;
+    mesh.push_quad(v.map(|p| m.transform_point3(p)), material);
+    Ok(())
+}
+
+/// A `box` shape: its faces but the open ones, placed, facing out or in.
+fn cuboid(
+    ctx: &Ctx<'_>,
+    prefix: &str,
+    b: &crate::schema::BoxDef,
+    material: u32,
+    mesh: &mut TriangleMesh,
+) -> Result<(), LoadError> {
+    let lo = ctx.point(
+        &format!("{prefix}.min"),
+        ctx.required(&format!("{prefix}.min"), b.min, "[x, y, z] in metres")?,
+    )?;
+    let hi = ctx.point(
+        &format!("{prefix}.max"),
+        ctx.required(&format!("{prefix}.max"), b.max, "[x, y, z] in metres")?,
+    )?;
+    if !hi.cmpgt(lo).all() {
+        return Err(ctx.bad(
+            format!("{prefix}.max"),
+            format!("{hi} must exceed min = {lo} on every axis"),
+        ));
+    }
+    let mut keep = [true; 6];
+    for (k, face) in b.open.iter().enumerate() {
+        let j = BOX_FACES.iter().position(|f| f.0 == face).ok_or_else(|| {
+            ctx.bad(
+                format!("{prefix}.open[{k}]"),
+                format!("unknown face '{face}'; expected one of +x, -x, +y, -y, +z, -z"),
+            )
+        })?;
+        keep[j] = false;
+    }
+    let inward = facing(ctx, prefix, b.facing.as_deref())?;
+    let m = ctx.placement(prefix, b.scale, b.translate)?;
+    let (a, c) = (m.transform_point3(lo), m.transform_point3(hi));
+    // A negative scale swaps min and max; the box stays the same set of points.
+    push_box(mesh, a.min(c), a.max(c), keep, inward, material);
+    Ok(())
+}
+
+/// A `sphere` shape, counted against the built-in shapes' triangle limit in `total_triangles`.
+fn sphere(
+    ctx: &Ctx<'_>,
+    prefix: &str,
+    s: &crate::schema::SphereDef,
+    material: u32,
+    total_triangles: &mut u64,
+    mesh: &mut TriangleMesh,
+) -> Result<(), LoadError> {
+    let center = ctx.point(
+        &format!("{prefix}.center"),
+        s.center.unwrap_or(Point([0.0; 3])),
+    )?;
+    let radius = ctx.required(&format!("{prefix}.radius"), s.radius, "metres")?;
+    let radius = ctx.positive(&format!("{prefix}.radius"), radius, "metres")?;
+    let freq = ctx.count(
+        &format!("{prefix}.subdivisions"),
+        s.subdivisions
+            .unwrap_or(limits::SPHERE_SUBDIVISIONS_DEFAULT),
+        1,
+        limits::SPHERE_SUBDIVISIONS_MAX,
+    )?;
+    *total_triangles += sphere_triangle_count(freq);
+    if *total_triangles > limits::MAX_BUILTIN_TRIANGLES {
+        return Err(ctx.bad(
+            format!("{prefix}.subdivisions"),
+            format!(
+                "the built-in shapes would exceed {} triangles",
+                limits::MAX_BUILTIN_TRIANGLES
+            ),
+        ));
+    }
+    let inward = facing(ctx, prefix, s.facing.as_deref())?;
+    push_sphere(mesh, center, radius, freq, inward, material);
+    Ok(())
+}
+
+/// The `[[light]]` tables as point lights.
+fn point_lights(
+    ctx: &Ctx<'_>,
+    defs: &[crate::schema::LightDef],
+) -> Result<Vec<PointLight>, LoadError> {
+    let mut lights = Vec::with_capacity(defs.len());
+    for (i, l) in defs.iter().enumerate() {
+        let field = format!("light[{i}]");
+        let position = ctx.required(
+            &format!("{field}.position"),
+            l.position,
+            "[x, y, z] in metres",
+        )?;
+        let position = ctx.point(&format!("{field}.position"), position)?;
+        let flux = ctx.required(
+            &format!("{field}.flux"),
+            l.flux,
+            "watts per RGB channel, a number or [r, g, b]",
+        )?;
+        let flux = ctx.channels(&format!("{field}.flux"), flux, 0.0, None)?;
+        lights.push(PointLight { position, flux });
+    }
+    Ok(lights)
+}
+
+/// A shape's vertices after scale and translate: finite, and within the coordinates the BVH
+/// builder takes.
+fn check_placed(ctx: &Ctx<'_>, prefix: &str, mesh: &TriangleMesh) -> Result<(), LoadError> {
+    if let Some(k) = mesh.positions.iter().position(|p| !p.is_finite()) {
+        return Err(ctx.bad(
+            prefix,
+            format!("vertex {k} is not finite after scale and translate (overflow?)"),
+        ));
+    }
+    // The BVH builder (obvhs 0.4) panics when squared extents overflow f32, which happens
+    // near 1e19 m; a far smaller bound costs no real scene anything.
+    if let Some((k, p)) = mesh
+        .positions
+        .iter()
+        .enumerate()
+        .find(|(_, p)| p.abs().max_element() > limits::MAX_COORDINATE)
+    {
+        return Err(ctx.bad(
+            prefix,
+            format!(
+                "vertex {k} at {p} m is beyond ±{:e} m on some axis",
+                limits::MAX_COORDINATE
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Adds a glTF file's counts to the load report.
+fn count_gltf(report: &mut LoadReport, part: &crate::gltf_mesh::GltfPart) {
+    report.skipped_primitives += part.skipped_primitives;
+    report.strips_and_fans += part.strips_and_fans;
+    report.skipped_lights += part.skipped_lights;
+    report.skipped_cameras += part.skipped_cameras;
+    report.textured_materials += part.textured_materials;
+    report.textures += part.textures;
+    report.other_textures += part.other_textures;
+    report.flat_primitives += part.flat_primitives;
+}
+
+/// The loader's message for a geometry that cannot be built (`skipped`: glTF point or line
+/// primitives left out).
+fn geometry_error(ctx: &Ctx<'_>, e: GeometryError, skipped: usize) -> LoadError {
+    match e {
+        GeometryError::Empty if skipped > 0 => ctx.bad(
+            "shape",
+            format!(
+                "the scene has no triangle with positive area ({skipped} glTF point or line primitive(s) were skipped)"
+            ),
+        ),
+        GeometryError::Empty => ctx.bad("shape", "the scene has no triangle with positive area"),
+        other => ctx.bad("shape", other.to_string()),
+    }
+}
+
+/// The loader's message for a scene that cannot be assembled (`light_count`: lights given).
+fn scene_error(ctx: &Ctx<'_>, e: SceneError, light_count: usize) -> LoadError {
+    match e {
+        SceneError::NoLight if light_count == 0 => ctx.bad(
+            "light",
+            "the scene has no light; add a [[light]] with position and flux",
+        ),
+        SceneError::NoLight => ctx.bad(
+            "light",
+            "every light has zero flux; the image would be black",
+        ),
+        SceneError::BadLight { index } => ctx.bad(format!("light[{index}]"), e.to_string()),
+        SceneError::BadCamera(why) => ctx.bad("camera", why.to_string()),
+        SceneError::MissingMaterial { .. } | SceneError::BadTextures { .. } => {
+            ctx.bad("shape", e.to_string())
+        }
+    }
 }
 
 /// `facing = "outside" | "inside"`: true for inside.

@@ -422,88 +422,9 @@ fn add_primitive(
         )));
     }
 
-    let normals: Vec<Vec3> = match prim.get(&Semantic::Normals) {
-        Some(acc) if acc.count() > 0 => {
-            check_accessor(&acc, &[DataType::F32], Dimensions::Vec3, buffers)
-                .map_err(|m| err(format!("NORMAL: {m}")))?;
-            if acc.count() != positions.len() {
-                return Err(err(format!(
-                    "{} normals for {} positions",
-                    acc.count(),
-                    positions.len()
-                )));
-            }
-            // Normals transform by the inverse transpose; a singular matrix flattens the mesh,
-            // whose triangles are then degenerate anyway, so zero (= flat) normals serve.
-            let linear = Mat3::from_mat4(world);
-            let normal_matrix = if linear.determinant() != 0.0 {
-                linear.inverse().transpose()
-            } else {
-                Mat3::ZERO
-            };
-            let read = reader
-                .read_normals()
-                .ok_or_else(|| err("NORMAL cannot be read".into()))?;
-            read.map(|n| {
-                let n = normal_matrix * Vec3::from_array(n);
-                if n.is_finite() {
-                    n.normalize_or_zero()
-                } else {
-                    Vec3::ZERO
-                }
-            })
-            .collect()
-        }
-        _ => Vec::new(),
-    };
-
-    let texcoords: Vec<Vec2> =
-        match tex_set.and_then(|set| prim.get(&Semantic::TexCoords(set)).map(|acc| (set, acc))) {
-            Some((set, acc)) if acc.count() > 0 => {
-                check_accessor(
-                    &acc,
-                    &[DataType::F32, DataType::U8, DataType::U16],
-                    Dimensions::Vec2,
-                    buffers,
-                )
-                .map_err(|m| err(format!("TEXCOORD_{set}: {m}")))?;
-                if acc.count() != positions.len() {
-                    return Err(err(format!(
-                        "{} texture coordinates for {} positions",
-                        acc.count(),
-                        positions.len()
-                    )));
-                }
-                reader
-                    .read_tex_coords(set)
-                    .ok_or_else(|| err(format!("TEXCOORD_{set} cannot be read")))?
-                    .into_f32()
-                    .map(Vec2::from_array)
-                    .collect()
-            }
-            _ => Vec::new(),
-        };
-
-    let indices: Vec<u32> = match prim.indices() {
-        Some(acc) => {
-            check_accessor(
-                &acc,
-                &[DataType::U8, DataType::U16, DataType::U32],
-                Dimensions::Scalar,
-                buffers,
-            )
-            .map_err(|m| err(format!("indices: {m}")))?;
-            if acc.count() == 0 {
-                Vec::new()
-            } else {
-                let read = reader
-                    .read_indices()
-                    .ok_or_else(|| err("indices cannot be read".into()))?;
-                read.into_u32().collect()
-            }
-        }
-        None => (0..positions.len() as u32).collect(),
-    };
+    let normals = read_normals(prim, buffers, world, positions.len(), &err)?;
+    let texcoords = read_texcoords(prim, buffers, tex_set, positions.len(), &err)?;
+    let indices = read_indices(prim, buffers, positions.len(), &err)?;
     // Strips and fans become lists (glTF 2.0 §3.7.2.1): strip triangle i is
     // (v[i], v[i+1+i%2], v[i+2-i%2]), which keeps every triangle's winding; fan triangle i is
     // (v[i+1], v[i+2], v[0]). Degenerate triangles that stitch strips have zero area and are
@@ -566,6 +487,122 @@ fn add_primitive(
     }
     mesh.positions.extend_from_slice(&positions);
     Ok(())
+}
+
+/// The primitive's NORMAL attribute transformed by `world`'s inverse transpose and
+/// normalised (zero where not finite: flat); empty when it has none.
+fn read_normals(
+    prim: &gltf::Primitive<'_>,
+    buffers: &[Vec<u8>],
+    world: Mat4,
+    vertices: usize,
+    err: &dyn Fn(String) -> LoadError,
+) -> Result<Vec<Vec3>, LoadError> {
+    let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+    Ok(match prim.get(&Semantic::Normals) {
+        Some(acc) if acc.count() > 0 => {
+            check_accessor(&acc, &[DataType::F32], Dimensions::Vec3, buffers)
+                .map_err(|m| err(format!("NORMAL: {m}")))?;
+            if acc.count() != vertices {
+                return Err(err(format!(
+                    "{} normals for {} positions",
+                    acc.count(),
+                    vertices
+                )));
+            }
+            // Normals transform by the inverse transpose; a singular matrix flattens the mesh,
+            // whose triangles are then degenerate anyway, so zero (= flat) normals serve.
+            let linear = Mat3::from_mat4(world);
+            let normal_matrix = if linear.determinant() != 0.0 {
+                linear.inverse().transpose()
+            } else {
+                Mat3::ZERO
+            };
+            let read = reader
+                .read_normals()
+                .ok_or_else(|| err("NORMAL cannot be read".into()))?;
+            read.map(|n| {
+                let n = normal_matrix * Vec3::from_array(n);
+                if n.is_finite() {
+                    n.normalize_or_zero()
+                } else {
+                    Vec3::ZERO
+                }
+            })
+            .collect()
+        }
+        _ => Vec::new(),
+    })
+}
+
+/// The primitive's texture coordinates of set `tex_set`; empty without a set or when the
+/// primitive lacks it.
+fn read_texcoords(
+    prim: &gltf::Primitive<'_>,
+    buffers: &[Vec<u8>],
+    tex_set: Option<u32>,
+    vertices: usize,
+    err: &dyn Fn(String) -> LoadError,
+) -> Result<Vec<Vec2>, LoadError> {
+    let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+    Ok(
+        match tex_set.and_then(|set| prim.get(&Semantic::TexCoords(set)).map(|acc| (set, acc))) {
+            Some((set, acc)) if acc.count() > 0 => {
+                check_accessor(
+                    &acc,
+                    &[DataType::F32, DataType::U8, DataType::U16],
+                    Dimensions::Vec2,
+                    buffers,
+                )
+                .map_err(|m| err(format!("TEXCOORD_{set}: {m}")))?;
+                if acc.count() != vertices {
+                    return Err(err(format!(
+                        "{} texture coordinates for {} positions",
+                        acc.count(),
+                        vertices
+                    )));
+                }
+                reader
+                    .read_tex_coords(set)
+                    .ok_or_else(|| err(format!("TEXCOORD_{set} cannot be read")))?
+                    .into_f32()
+                    .map(Vec2::from_array)
+                    .collect()
+            }
+            _ => Vec::new(),
+        },
+    )
+}
+
+/// The primitive's indices as given (`0..vertices` when it has none), before strips and fans
+/// are turned into lists.
+fn read_indices(
+    prim: &gltf::Primitive<'_>,
+    buffers: &[Vec<u8>],
+    vertices: usize,
+    err: &dyn Fn(String) -> LoadError,
+) -> Result<Vec<u32>, LoadError> {
+    let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+    Ok(match prim.indices() {
+        Some(acc) => {
+            check_accessor(
+                &acc,
+                &[DataType::U8, DataType::U16, DataType::U32],
+                Dimensions::Scalar,
+                buffers,
+            )
+            .map_err(|m| err(format!("indices: {m}")))?;
+            if acc.count() == 0 {
+                Vec::new()
+            } else {
+                let read = reader
+                    .read_indices()
+                    .ok_or_else(|| err("indices cannot be read".into()))?;
+                read.into_u32().collect()
+            }
+        }
+        None => (0..vertices as u32).collect(),
+    })
 }
 
 /// Checks that reading `acc` stays inside its buffer and has the expected layout, so the

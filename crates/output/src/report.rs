@@ -39,8 +39,6 @@ pub struct RunFacts<'a> {
     pub pass_stages: &'a [(&'static str, f64)],
     /// The files of the run.
     pub outputs: &'a Outputs,
-    /// Whether an interrupt stopped the render.
-    pub interrupted: bool,
     /// Image mean of every pass held, per channel, W·m⁻²·sr⁻¹.
     pub pass_means: &'a [[f64; 3]],
     /// Weight evaluations of this run's passes.
@@ -75,8 +73,8 @@ pub struct PassPlan {
     pub passes_replayed: u32,
     /// The accumulation files replayed.
     pub replayed_from: Vec<String>,
-    /// `completed`, `interrupted`, `time_budget` or `target_noise`.
-    pub stop_reason: &'static str,
+    /// Why the render stopped.
+    pub stop_reason: StopReason,
     /// `--time-budget`, seconds of rendering.
     pub time_budget_seconds: Option<f64>,
     /// `--target-noise`: the mean relative standard error to stop below.
@@ -86,6 +84,44 @@ pub struct PassPlan {
     pub mean_relative_standard_error: Option<f64>,
     /// The accumulation file written beside the EXR, if any.
     pub accumulation_file: Option<String>,
+}
+
+/// Why a render stopped: the JSON report's `plan.stop_reason` and the EXR header's
+/// `bdpm.stop_reason` (written as [`StopReason::name`]).
+#[derive(Serialize, Clone, Copy, Debug, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum StopReason {
+    /// Every pass asked for was rendered (or, for `bdpm merge`, replayed).
+    Completed,
+    /// An interrupt (SIGINT, SIGTERM, SIGHUP) stopped the render after the pass in flight.
+    Interrupted,
+    /// `--time-budget`: the render time reached the budget during the last pass rendered.
+    TimeBudget,
+    /// `--target-noise`: the image's mean relative standard error fell below the target.
+    TargetNoise,
+}
+
+impl StopReason {
+    /// The name in the report and the header: `completed`, `interrupted`, `time_budget` or
+    /// `target_noise`.
+    pub fn name(self) -> &'static str {
+        match self {
+            StopReason::Completed => "completed",
+            StopReason::Interrupted => "interrupted",
+            StopReason::TimeBudget => "time_budget",
+            StopReason::TargetNoise => "target_noise",
+        }
+    }
+
+    /// The command-line flag whose rule stopped the render (`--time-budget`,
+    /// `--target-noise`); `None` for a complete or interrupted render.
+    pub fn flag(self) -> Option<&'static str> {
+        match self {
+            StopReason::TimeBudget => Some("--time-budget"),
+            StopReason::TargetNoise => Some("--target-noise"),
+            StopReason::Completed | StopReason::Interrupted => None,
+        }
+    }
 }
 
 /// The memory estimate and its limit.
@@ -264,7 +300,7 @@ impl RunReport {
             ),
             threads: f.threads,
             passes_done: f.film.passes(),
-            interrupted: f.interrupted,
+            interrupted: f.plan.stop_reason == StopReason::Interrupted,
             camera_samples: f.samples,
             dropped_samples: f.film.dropped(),
             prepared_stages: f
@@ -376,4 +412,29 @@ pub fn header_attributes(
         ));
     }
     v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::StopReason;
+
+    /// The report's serialised reason and the header's name are one spelling.
+    #[test]
+    fn stop_reason_names_agree() {
+        for r in [
+            StopReason::Completed,
+            StopReason::Interrupted,
+            StopReason::TimeBudget,
+            StopReason::TargetNoise,
+        ] {
+            let json = serde_json::to_value(r).unwrap();
+            assert_eq!(json, r.name(), "{r:?}");
+            assert_eq!(
+                r.flag()
+                    .map(|f| f.trim_start_matches("--").replace('-', "_")),
+                matches!(r, StopReason::TimeBudget | StopReason::TargetNoise)
+                    .then(|| r.name().to_string())
+            );
+        }
+    }
 }

@@ -1,10 +1,11 @@
 //! Photon tracing from point lights and a fixed-radius photon map (method.md §1, §7, §8).
 //!
 //! This crate owns:
-//! - emission ([`emit`]): N_F photons per pass shared between the point lights in proportion
-//!   to flux luminance, isotropic directions, power Φ_l/(p_l·N_F);
-//! - the random walk ([`trace_photons`], [`for_each_arrival`]): BDF sampling with Russian
-//!   roulette of survival q given by the scene (bdpm's: `bdpm_bdf::survival_probability`, which depends only on the vertex and the
+//! - emission (the start of [`trace_photons`]): N_F photons per pass shared between the point
+//!   lights in proportion to flux luminance, isotropic directions, power Φ_l/(p_l·N_F);
+//! - the random walk ([`trace_photons`]): BDF sampling with Russian roulette of survival q
+//!   given by the scene (bdpm's: `bdpm_bdf::survival_probability`, which depends only on the
+//!   vertex and the
 //!   arrival direction, as the balance heuristic of §8 needs), recording every surface
 //!   vertex ([`PathVertex`]) with its depth, arrival direction, q and optionally which
 //!   lights it sees;
@@ -84,7 +85,4 @@ mod trace;
 
 pub use map::{Photon, PhotonMap, PhotonQuery};
 pub use scene::PhotonScene;
-pub use trace::{
-    Emission, PathVertex, PhotonArrival, Scatter, TraceOptions, emit, for_each_arrival,
-    trace_photons,
-};
+pub use trace::{PathVertex, PhotonArrival, Scatter, TraceOptions, trace_photons};

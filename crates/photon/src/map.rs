@@ -374,12 +374,6 @@ impl PhotonMap {
         &self.vertices
     }
 
-    /// Takes the map apart into its positions and photons (grid order) and vertices, e.g. to
-    /// rebuild it with [`Self::from_parts`] after editing photons.
-    pub fn into_parts(self) -> (Vec<Vec3>, Vec<Photon>, Vec<PathVertex>) {
-        (self.positions, self.photons, self.vertices)
-    }
-
     /// The path vertex with index `i` (a [`Photon::prev`]).
     #[inline]
     pub fn vertex(&self, i: u32) -> &PathVertex {

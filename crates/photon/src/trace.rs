@@ -72,24 +72,24 @@ impl TraceOptions {
 
 /// A photon leaving a light: which light, from where, where to, with what power.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Emission {
+pub(crate) struct Emission {
     /// Index of the chosen light.
-    pub light: usize,
+    pub(crate) light: usize,
     /// Probability p_l with which that light was chosen.
-    pub light_probability: f32,
+    pub(crate) light_probability: f32,
     /// Ray origin (the light's position), m.
-    pub origin: Vec3,
+    pub(crate) origin: Vec3,
     /// Unit direction, uniform on the sphere (density 1/(4π) sr⁻¹).
-    pub direction: Vec3,
+    pub(crate) direction: Vec3,
     /// Power Φ_l / (p_l · N_F), W per channel.
-    pub power: Vec3,
+    pub(crate) power: Vec3,
 }
 
 /// Emits one photon of a pass of `photons` (N_F) photons: `u_light` picks a light with
 /// probability [`PhotonScene::pick_light`] (bdpm's scene: proportional to flux luminance),
 /// `u_dir` an isotropic direction. Returns `None` only if the picked light has zero
 /// probability (cannot happen for `u_light` in [0, 1)) or `photons` is 0.
-pub fn emit<S: PhotonScene + ?Sized>(
+pub(crate) fn emit<S: PhotonScene + ?Sized>(
     scene: &S,
     u_light: f32,
     u_dir: [f32; 2],
@@ -123,7 +123,7 @@ pub struct Scatter {
 }
 
 /// Everything known at one arrival of a photon at a surface, as passed to the visitors of
-/// [`trace_photons`] and [`for_each_arrival`].
+/// [`trace_photons`].
 #[derive(Clone, Copy, Debug)]
 pub struct PhotonArrival {
     /// Index of the emitted photon in its pass (0..N_F).
@@ -144,17 +144,6 @@ pub struct PhotonArrival {
     pub scatter: Option<Scatter>,
     /// True iff the photon survived the roulette and the depth cap and left along `scatter`.
     pub continued: bool,
-}
-
-/// Traces the pass described by `options` and calls `visit` for every arrival, in parallel and
-/// in no particular order (`visit` must synchronise itself). For deterministic accumulation use
-/// [`trace_photons`], which keeps the order.
-pub fn for_each_arrival<S: PhotonScene + ?Sized>(
-    scene: &S,
-    options: &TraceOptions,
-    visit: impl Fn(&PhotonArrival) + Sync,
-) {
-    trace_chunks(scene, options, |_| (), |_, a| visit(a));
 }
 
 /// Traces the pass described by `options` in parallel and returns the records that `visit`

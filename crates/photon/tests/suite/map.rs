@@ -317,16 +317,14 @@ fn the_map_keeps_the_vertices_paths_continue_from() {
     options.light_visibility = true;
     let map = PhotonMap::trace(&scene, &options, 0.02);
     assert_eq!(map.vertices().len(), map.photons().len());
-    use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
-    let (ended, ended_lit) = (AtomicUsize::new(0), AtomicUsize::new(0));
-    bdpm_photon::for_each_arrival(&scene, &options, |a| {
+    // Whether each arrival where a path ended got shadow rays.
+    let ended_lit = bdpm_photon::trace_photons(&scene, &options, |a, out| {
         if !a.continued {
-            ended.fetch_add(1, Relaxed);
-            ended_lit.fetch_add(usize::from(a.vertex.at.lights != 0), Relaxed);
+            out.push(a.vertex.at.lights != 0);
         }
     });
-    assert_eq!(ended.into_inner(), 5_000);
-    assert_eq!(ended_lit.into_inner(), 0);
+    assert_eq!(ended_lit.len(), 5_000);
+    assert_eq!(ended_lit.iter().filter(|lit| **lit).count(), 0);
     let prev_lit = map
         .photons()
         .iter()

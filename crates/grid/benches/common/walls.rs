@@ -1,4 +1,4 @@
-// Test points shared by the `grid_build` benchmark and the grid's sort-path measurement
+// Test points shared by the `grid_build` bench and the grid's sort-path measurement
 // (`grid::measure`): photons as a Cornell pass stores them, on walls.
 
 use bdpm_core::{Domain, Rng};
