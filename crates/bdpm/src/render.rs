@@ -6,8 +6,8 @@ use std::process::ExitCode;
 use std::time::{Instant, SystemTime};
 
 use bdpm_integrator::{
-    Film, MemoryItem, Mode, Renderer, StageProbe, WeightStats, estimate_memory, first_hit_layers,
-    human_bytes,
+    Film, MemoryItem, Mode, Renderer, Stage, StageProbe, WeightStats, estimate_memory,
+    first_hit_layers, human_bytes,
 };
 use bdpm_output::accum::{self, Identity, PassRecord};
 use bdpm_output::cli::{
@@ -382,13 +382,13 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
     let t_prepare = Instant::now();
     let peaks = StagePeaks::default();
     let probe = args.stage_memory.then_some(&peaks as &dyn StageProbe);
-    probe.inspect(|p| p.enter("prepare"));
+    probe.inspect(|p| p.enter(Stage::Prepare));
     let mut renderer = pool
         .install(|| Renderer::new(&scene, &settings))
         .map_err(|e| format!("{}: {e}", args.scene.display()))?
         .with_technique_layers(args.techniques);
     if let Some(p) = probe {
-        p.leave("prepare");
+        p.leave(Stage::Prepare);
         renderer.set_stage_probe(p);
     }
     let prepare_seconds = t_prepare.elapsed().as_secs_f64();
@@ -409,7 +409,7 @@ fn run_job(args: Job) -> CliResult<ExitCode> {
     let mut techniques = args.techniques.then(|| TechniqueSums::new(pixels));
     let mut samples = 0u64;
     let mut pass_means = Vec::new();
-    let mut stage_totals: Vec<(&'static str, f64)> = Vec::new();
+    let mut stage_totals: Vec<(Stage, f64)> = Vec::new();
     let mut weights = WeightStats::default();
     let mut photon_map_bytes = 0u64;
     let mut photons_stored = 0u64;

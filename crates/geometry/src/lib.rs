@@ -7,6 +7,9 @@
 //!   f32 boxes by default, obvhs's compressed CWBVH as the [`Kernel`] it replaced), per-triangle
 //!   areas and area-weighted surface sampling;
 //! - [`Frame`] and the [`sampling`] warps (cosine hemisphere, uniform sphere);
+//! - mesh builders for rectangles, boxes and geodesic spheres ([`TriangleMesh::push_rect`],
+//!   [`TriangleMesh::cuboid`], [`TriangleMesh::geodesic_sphere`]), used by the scene loader,
+//!   the tests and the examples;
 //! - [`Rng`]: deterministic random streams keyed by (seed, domain, indices), so that every
 //!   sample is a pure function of its keys whatever the thread count.
 //!
@@ -33,9 +36,11 @@ mod mesh;
 mod prefetch;
 mod rng;
 pub mod sampling;
+mod shapes;
 mod wide;
 
 pub use frame::Frame;
 pub use mesh::{Geometry, GeometryError, Hit, Kernel, MAX_COORDINATE, SurfaceSample, TriangleMesh};
 pub use prefetch::prefetch;
 pub use rng::{Domain, Rng};
+pub use shapes::{BOX_FACES, BoxFace, geodesic_sphere_triangle_count, rect_corners};

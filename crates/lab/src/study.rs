@@ -554,7 +554,7 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
         let stages = renderer
             .stages()
             .iter()
-            .map(|st| (st.name.to_string(), st.seconds))
+            .map(|st| (st.stage.name().to_string(), st.seconds))
             .collect();
         states.push(ModeState {
             name: name.clone(),
