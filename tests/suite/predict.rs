@@ -4,7 +4,7 @@
 //! survival q = k), and a gather's variance is α·(k/π)²·E_ind with α = Φ/(N_F·S), E_ind the
 //! uniform indirect irradiance: T0 has a closed form, and the measured V must agree with it.
 
-use bdpm_integrator::{RenderSettings, Renderer};
+use bdpm_integrator::{RenderSettings, Renderer, Stage};
 use bdpm_suite::{Furnace, load, with_mode};
 use glam::DVec3;
 
@@ -144,7 +144,7 @@ fn model_inputs_keep_the_image_bits() {
             with_cache
                 .stages()
                 .iter()
-                .any(|st| st.name == "radiance cache")
+                .any(|st| st.stage == Stage::RadianceCache)
         );
         let a = plain.render_pass(0, &|_| {}).estimates;
         let b = with_cache.render_pass(0, &|_| {}).estimates;

@@ -10,7 +10,7 @@ fn stage_names(scene: &str, mode: &str) -> Vec<(String, String)> {
     let r = Renderer::new(&scene, &s).unwrap();
     r.stages()
         .iter()
-        .map(|st| (st.name.to_string(), st.detail.clone()))
+        .map(|st| (st.stage.name().to_string(), st.detail.clone()))
         .collect()
 }
 

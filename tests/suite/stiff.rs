@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use bdpm_integrator::{Film, Mode, Renderer};
+use bdpm_integrator::{Film, Mode, Renderer, Stage};
 use bdpm_load::load_scene_str;
 
 /// A closed 1 m room (inward faces) with a block, seen from inside, parameterised by the parts
@@ -187,7 +187,7 @@ fn empty_cache_cells_and_stiff_pixel_tables() {
     let table = r
         .stages()
         .iter()
-        .find(|st| st.name == "pixel table")
+        .find(|st| st.stage == Stage::PixelTable)
         .expect("optimal builds the table");
     assert!(
         !table.detail.contains(" 0 pixels with c*B clamped"),

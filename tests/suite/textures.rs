@@ -9,8 +9,6 @@
 //! exact pixel value is the mean over the pixel (the camera jitters uniformly over it) of the
 //! formula, by a 24 × 24 midpoint rule along the camera's own ray directions.
 
-use std::path::PathBuf;
-
 use bdpm_integrator::Film;
 use bdpm_load::load_scene;
 use bdpm_scene::Scene;
@@ -120,9 +118,11 @@ file = "quad.gltf"
 }
 
 fn load() -> (Scene, bdpm_integrator::RenderSettings) {
-    let dir: PathBuf =
-        std::env::temp_dir().join(format!("bdpm-texture-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let tmp = tempfile::Builder::new()
+        .prefix("bdpm-texture-test-")
+        .tempdir()
+        .expect("temp dir");
+    let dir = tmp.path();
     std::fs::write(dir.join("quad.bin"), quad_bin()).expect("write bin");
     std::fs::write(dir.join("blocks.png"), texture_png()).expect("write png");
     std::fs::write(dir.join("quad.gltf"), GLTF).expect("write gltf");
@@ -135,7 +135,6 @@ fn load() -> (Scene, bdpm_integrator::RenderSettings) {
         "{:?}",
         loaded.report.warnings()
     );
-    let _ = std::fs::remove_dir_all(&dir);
     (loaded.scene, loaded.settings)
 }
 

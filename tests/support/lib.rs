@@ -256,15 +256,7 @@ pub fn sphere_on_floor() -> TriangleMesh {
     }
     sphere.materials = vec![0; sphere.indices.len()];
     let mut mesh = TriangleMesh::default();
-    mesh.push_quad(
-        [
-            Vec3::new(-2.0, 0.0, -2.0),
-            Vec3::new(-2.0, 0.0, 2.0),
-            Vec3::new(2.0, 0.0, 2.0),
-            Vec3::new(2.0, 0.0, -2.0),
-        ],
-        1,
-    );
+    mesh.push_rect(Vec3::ZERO, 2.0 * Vec3::Z, 2.0 * Vec3::X, 1);
     mesh.append(&sphere);
     mesh
 }

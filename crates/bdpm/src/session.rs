@@ -12,8 +12,8 @@ use std::path::{Path, PathBuf};
 use std::time::{Instant, SystemTime};
 
 use bdpm_integrator::{
-    Film, MemoryEstimate, MemoryItem, Mode, Renderer, StageProbe, WeightStats, estimate_memory,
-    first_hit_layers, human_bytes,
+    Film, MemoryEstimate, MemoryItem, Mode, Renderer, Stage, StageProbe, WeightStats,
+    estimate_memory, first_hit_layers, human_bytes,
 };
 use bdpm_output::accum::{self, Identity, PassRecord};
 use bdpm_output::cli::{
@@ -288,7 +288,7 @@ pub(crate) struct RenderSession<'a> {
     samples: u64,
     replayed_samples: u64,
     pass_means: Vec<[f64; 3]>,
-    stage_totals: Vec<(&'static str, f64)>,
+    stage_totals: Vec<(Stage, f64)>,
     weights: WeightStats,
     photon_map_bytes: u64,
     photons_stored: u64,
@@ -309,14 +309,14 @@ impl<'a> RenderSession<'a> {
         let (job, settings) = (&prep.job, &prep.loaded.settings);
         let t_prepare = Instant::now();
         let probe = job.stage_memory.then_some(&prep.peaks as &dyn StageProbe);
-        probe.inspect(|p| p.enter("prepare"));
+        probe.inspect(|p| p.enter(Stage::Prepare));
         let mut renderer = prep
             .pool
             .install(|| Renderer::new(&prep.loaded.scene, settings))
             .map_err(|e| format!("{}: {e}", job.scene.display()))?
             .with_technique_layers(job.techniques);
         if let Some(p) = probe {
-            p.leave("prepare");
+            p.leave(Stage::Prepare);
             renderer.set_stage_probe(p);
         }
         let prepare_seconds = t_prepare.elapsed().as_secs_f64();

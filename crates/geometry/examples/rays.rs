@@ -9,24 +9,8 @@ use glam::Vec3;
 fn main() {
     // A floor (y = 0, material 0) and, above part of it, a 1 m² shelf (y = 1, material 1).
     let mut mesh = TriangleMesh::default();
-    mesh.push_quad(
-        [
-            Vec3::new(-2.0, 0.0, -2.0),
-            Vec3::new(-2.0, 0.0, 2.0),
-            Vec3::new(2.0, 0.0, 2.0),
-            Vec3::new(2.0, 0.0, -2.0),
-        ],
-        0,
-    );
-    mesh.push_quad(
-        [
-            Vec3::new(0.0, 1.0, 0.0),
-            Vec3::new(0.0, 1.0, 1.0),
-            Vec3::new(1.0, 1.0, 1.0),
-            Vec3::new(1.0, 1.0, 0.0),
-        ],
-        1,
-    );
+    mesh.push_rect(Vec3::ZERO, 2.0 * Vec3::Z, 2.0 * Vec3::X, 0);
+    mesh.push_rect(Vec3::new(0.5, 1.0, 0.5), 0.5 * Vec3::Z, 0.5 * Vec3::X, 1);
     let geometry = Geometry::new(mesh).expect("a valid mesh");
     println!(
         "{} triangles, {:.1} m² of surface, kernel {:?}",

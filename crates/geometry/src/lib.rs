@@ -7,6 +7,9 @@
 //!   f32 boxes by default, obvhs's compressed CWBVH as the [`Kernel`] it replaced), per-triangle
 //!   areas and area-weighted surface sampling;
 //! - [`Frame`] and the [`sampling`] warps (concentric disk, uniform sphere, uniform triangle);
+//! - mesh builders for rectangles, boxes and geodesic spheres ([`TriangleMesh::push_rect`],
+//!   [`TriangleMesh::cuboid`], [`TriangleMesh::geodesic_sphere`]), used by the scene loader,
+//!   the tests and the examples;
 //! - [`Rng`]: deterministic random streams keyed by (seed, domain, indices), so that every
 //!   sample is a pure function of its keys whatever the thread count.
 //!
@@ -29,9 +32,11 @@
 
 mod build;
 mod mesh;
+mod shapes;
 mod wide;
 
 // Frames, warps, random streams and prefetch live in bdpm-core (crates below the BVH use
 // them); re-exported so that a user of the geometry needs one dependency.
 pub use bdpm_core::{Domain, Frame, Rng, prefetch, sampling};
 pub use mesh::{Geometry, GeometryError, Hit, Kernel, MAX_COORDINATE, SurfaceSample, TriangleMesh};
+pub use shapes::{BOX_FACES, BoxFace, geodesic_sphere_triangle_count, rect_corners};

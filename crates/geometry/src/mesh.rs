@@ -870,20 +870,12 @@ mod tests {
     use super::*;
     use crate::{Domain, Rng};
 
+    /// The six inward-facing faces of [0,1]³ with material = face index.
     fn unit_box() -> TriangleMesh {
         let mut m = TriangleMesh::default();
-        let c = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
-        // Six inward-facing faces of [0,1]³ with material = face index.
-        let faces = [
-            [c(0., 0., 0.), c(1., 0., 0.), c(1., 0., 1.), c(0., 0., 1.)],
-            [c(0., 1., 0.), c(0., 1., 1.), c(1., 1., 1.), c(1., 1., 0.)],
-            [c(0., 0., 0.), c(0., 0., 1.), c(0., 1., 1.), c(0., 1., 0.)],
-            [c(1., 0., 0.), c(1., 1., 0.), c(1., 1., 1.), c(1., 0., 1.)],
-            [c(0., 0., 0.), c(0., 1., 0.), c(1., 1., 0.), c(1., 0., 0.)],
-            [c(0., 0., 1.), c(1., 0., 1.), c(1., 1., 1.), c(0., 1., 1.)],
-        ];
-        for (i, f) in faces.into_iter().enumerate() {
-            m.push_quad(f, i as u32);
+        for i in 0..6 {
+            let keep = std::array::from_fn(|j| j == i);
+            m.push_box(Vec3::ZERO, Vec3::ONE, keep, true, i as u32);
         }
         m
     }

@@ -7,28 +7,18 @@
 use bdpm_bdf::Bdf;
 use bdpm_geometry::{Geometry, TriangleMesh};
 use bdpm_integrator::{Film, Mode, RenderSettings, Renderer};
-use bdpm_scene::{Camera, Material, PointLight, Scene};
+use bdpm_scene::{Camera, PointLight, Scene};
 use glam::Vec3;
 
 fn main() {
     let mut mesh = TriangleMesh::default();
-    mesh.push_quad(
-        [
-            Vec3::new(-1.0, 0.0, -1.0),
-            Vec3::new(-1.0, 0.0, 1.0),
-            Vec3::new(1.0, 0.0, 1.0),
-            Vec3::new(1.0, 0.0, -1.0),
-        ],
-        0,
-    );
+    // A 2 m × 2 m floor at y = 0, facing +y.
+    mesh.push_rect(Vec3::ZERO, Vec3::Z, Vec3::X, 0);
     let kd = 0.5;
     let flux = 4.0 * std::f32::consts::PI; // W, so that I = Φ/4π = 1 W·sr⁻¹
-    let scene = Scene::new(
+    let scene = Scene::one_material(
         Geometry::new(mesh).expect("a valid mesh"),
-        vec![Material {
-            name: "floor".into(),
-            bdf: Bdf::lambert(Vec3::splat(kd)).expect("albedo below 1"),
-        }],
+        Bdf::lambert(Vec3::splat(kd)).expect("albedo below 1"),
         vec![PointLight {
             position: Vec3::new(0.0, 1.0, 0.0),
             flux: Vec3::splat(flux),

@@ -19,6 +19,7 @@ mod predict;
 mod render;
 mod sampler;
 mod settings;
+mod stage;
 mod table;
 mod weightmap;
 
@@ -39,5 +40,6 @@ pub use bdpm_settings::{
     default_radius,
 };
 pub use sampler::strata;
+pub use stage::Stage;
 pub use table::{PixelTable, PixelWeights};
 pub use weightmap::{WeightMap, WeightTarget};

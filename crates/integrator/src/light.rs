@@ -12,6 +12,7 @@ use rayon::prelude::*;
 
 use crate::render::{PassOutput, accumulate};
 use crate::sampler::PixelSamples;
+use crate::stage::Stage;
 use bdpm_settings::RenderSettings;
 
 /// Renders one pass of the `light` reference.
@@ -112,8 +113,8 @@ pub(crate) fn render_light_pass(
         dropped: dropped.into_inner() + light_dropped,
         samples: (w * h) as u64 * settings.spp as u64,
         stage_seconds: vec![
-            ("camera", camera_seconds),
-            ("light tracing", t_light.elapsed().as_secs_f64()),
+            (Stage::Camera, camera_seconds),
+            (Stage::LightTracing, t_light.elapsed().as_secs_f64()),
         ],
         techniques: None,
         photons_stored: 0,

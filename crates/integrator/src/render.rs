@@ -12,6 +12,7 @@ use bdpm_photon::{PhotonMap, TraceOptions};
 
 use crate::bdpm::{BATCH, Job, Mix, Slots, Techniques, WeightStats, scene_default_radius};
 use crate::sampler::PixelSamples;
+use crate::stage::Stage;
 use crate::table::{self, PixelTable, TableSpec};
 use bdpm_settings::{Mode, RadiusError, RenderSettings, SettingsError, check_radius};
 
@@ -25,19 +26,19 @@ const CACHE_CELLS_PER_EXTENT: f32 = 32.0;
 pub const LARGE_RADIUS_FRACTION: f32 = 0.1;
 
 /// Told by [`Renderer::render_pass`] when each stage of a pass starts and ends, e.g. to sample
-/// the process's memory per stage. A probe sees stage names only and cannot change the render.
+/// the process's memory per stage. A probe sees stages only and cannot change the render.
 pub trait StageProbe: Sync {
-    /// Stage `name` of a pass (the names of [`PassOutput::stage_seconds`]) is about to start.
-    fn enter(&self, name: &'static str);
-    /// Stage `name` has ended.
-    fn leave(&self, name: &'static str);
+    /// `stage` of a pass (one of [`PassOutput::stage_seconds`]) is about to start.
+    fn enter(&self, stage: Stage);
+    /// `stage` has ended.
+    fn leave(&self, stage: Stage);
 }
 
 /// Time and memory of one preparatory stage (photon map, radiance cache, A/B table, …).
 #[derive(Clone, Debug, PartialEq)]
 pub struct StageReport {
-    /// Stage name, e.g. `"radiance cache"`.
-    pub name: &'static str,
+    /// The stage, e.g. [`Stage::RadianceCache`].
+    pub stage: Stage,
     /// Wall time, seconds.
     pub seconds: f64,
     /// Memory held by the stage's result, bytes.
@@ -247,10 +248,10 @@ impl<'a> Renderer<'a> {
                 format!("rho, N_eff for {}x{} pixels; {overlap}", s.width, s.height)
             };
             self.stages.push(StageReport {
-                name: if needs.pixel_table {
-                    "pixel table"
+                stage: if needs.pixel_table {
+                    Stage::PixelTable
                 } else {
-                    "pixel footprints"
+                    Stage::PixelFootprints
                 },
                 seconds: start.elapsed().as_secs_f64(),
                 bytes: table.bytes(),
@@ -274,7 +275,7 @@ impl<'a> Renderer<'a> {
         let cache = RadianceCache::build(self.scene, &settings);
         let st = cache.stats();
         self.stages.push(StageReport {
-            name: "radiance cache",
+            stage: Stage::RadianceCache,
             seconds: start.elapsed().as_secs_f64(),
             bytes: st.bytes,
             detail: format!(
@@ -391,13 +392,13 @@ impl<'a> Renderer<'a> {
         match self.settings.mode {
             // The references' stages interleave; the probe sees the pass as one stage.
             Mode::Path | Mode::Light => {
-                self.enter("pass");
+                self.enter(Stage::Pass);
                 let out = if self.settings.mode == Mode::Path {
                     render_path_pass(self.scene, &self.settings, pass, progress)
                 } else {
                     crate::light::render_light_pass(self.scene, &self.settings, pass, progress)
                 };
-                self.leave("pass");
+                self.leave(Stage::Pass);
                 out
             }
             Mode::Bdpm(_) => {
@@ -412,15 +413,15 @@ impl<'a> Renderer<'a> {
         self.probe = Some(probe);
     }
 
-    fn enter(&self, name: &'static str) {
+    fn enter(&self, stage: Stage) {
         if let Some(p) = self.probe {
-            p.enter(name);
+            p.enter(stage);
         }
     }
 
-    fn leave(&self, name: &'static str) {
+    fn leave(&self, stage: Stage) {
         if let Some(p) = self.probe {
-            p.leave(name);
+            p.leave(stage);
         }
     }
 
@@ -497,7 +498,7 @@ impl Renderer<'_> {
     ) -> PassOutput {
         let s = &self.settings;
         let needs = heuristic.needs();
-        self.enter("photons");
+        self.enter(Stage::Photons);
         let t_photons = std::time::Instant::now();
         let options = TraceOptions {
             photons: s.photons,
@@ -511,8 +512,8 @@ impl Renderer<'_> {
         let mix = self.mix(heuristic);
         let prev_inputs = mix.prev_inputs(&map);
         let photon_seconds = t_photons.elapsed().as_secs_f64();
-        self.leave("photons");
-        self.enter("camera");
+        self.leave(Stage::Photons);
+        self.enter(Stage::Camera);
         let table = self.table.as_ref();
         let t_camera = std::time::Instant::now();
         let (w, h) = (s.width as usize, s.height as usize);
@@ -597,14 +598,14 @@ impl Renderer<'_> {
                 .enumerate()
                 .for_each(|(y, row)| render_row(y, row, None));
         }
-        self.leave("camera");
+        self.leave(Stage::Camera);
         PassOutput {
             estimates,
             dropped: dropped.into_inner(),
             samples: (w * h) as u64 * s.spp as u64,
             stage_seconds: vec![
-                ("photons", photon_seconds),
-                ("camera", t_camera.elapsed().as_secs_f64()),
+                (Stage::Photons, photon_seconds),
+                (Stage::Camera, t_camera.elapsed().as_secs_f64()),
             ],
             techniques: if record { Some(techniques) } else { None },
             photons_stored: map.photons().len() as u64,
@@ -624,7 +625,7 @@ pub struct PassOutput {
     /// Camera samples taken.
     pub samples: u64,
     /// Wall time of the pass's stages (e.g. photon tracing, camera samples), seconds.
-    pub stage_seconds: Vec<(&'static str, f64)>,
+    pub stage_seconds: Vec<(Stage, f64)>,
     /// Per-pixel pass estimates split by technique, when asked for
     /// ([`Renderer::with_technique_layers`]; BDPM modes only).
     pub techniques: Option<Vec<Techniques>>,
@@ -691,7 +692,7 @@ pub fn render_path_pass(
         estimates,
         dropped: dropped.into_inner(),
         samples: w as u64 * h as u64 * settings.spp as u64,
-        stage_seconds: vec![("camera", start.elapsed().as_secs_f64())],
+        stage_seconds: vec![(Stage::Camera, start.elapsed().as_secs_f64())],
         techniques: None,
         photons_stored: 0,
         photon_map_bytes: 0,

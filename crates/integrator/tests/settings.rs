@@ -5,7 +5,7 @@ use bdpm_bdf::Bdf;
 use bdpm_geometry::{Geometry, TriangleMesh};
 use bdpm_integrator::{Mode, RenderError, RenderSettings, Renderer, Setting, SettingsError};
 use bdpm_mis::Heuristic;
-use bdpm_scene::{Camera, Material, PointLight, Scene};
+use bdpm_scene::{Camera, PointLight, Scene};
 use glam::Vec3;
 
 /// A floor lit from above, seen by an 8×8 camera.
@@ -16,21 +16,11 @@ fn scene() -> Scene {
 /// The floor with the 8×8 camera at (0, 1, −2) m looking at `target`.
 fn scene_seen_from(target: Vec3) -> Scene {
     let mut mesh = TriangleMesh::default();
-    mesh.push_quad(
-        [
-            Vec3::new(-1.0, 0.0, -1.0),
-            Vec3::new(-1.0, 0.0, 1.0),
-            Vec3::new(1.0, 0.0, 1.0),
-            Vec3::new(1.0, 0.0, -1.0),
-        ],
-        0,
-    );
-    Scene::new(
+    // 2 m × 2 m at y = 0, facing +y.
+    mesh.push_rect(Vec3::ZERO, Vec3::Z, Vec3::X, 0);
+    Scene::one_material(
         Geometry::new(mesh).unwrap(),
-        vec![Material {
-            name: "floor".into(),
-            bdf: Bdf::lambert(Vec3::splat(0.5)).unwrap(),
-        }],
+        Bdf::lambert(Vec3::splat(0.5)).unwrap(),
         vec![PointLight {
             position: Vec3::new(0.0, 1.0, 0.0),
             flux: Vec3::ONE,

@@ -10,7 +10,7 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use bdpm_integrator::{Mode, Renderer};
+use bdpm_integrator::{Mode, Renderer, Stage};
 use clap::Args;
 
 use bdpm_output::cli::{
@@ -121,18 +121,18 @@ fn time_cell(
         let _ = pool.install(|| r.render_pass(passes + repeats * passes, &|_| {}));
     }
     let photon_stage = if settings.mode == Mode::Light {
-        "light tracing"
+        Stage::LightTracing
     } else {
-        "photons"
+        Stage::Photons
     };
     let (mut photon_rates, mut sample_rates, mut pass_times) = (vec![], vec![], vec![]);
     let mut prep: Vec<(String, Vec<f64>)> = Vec::new();
     for rep in 0..repeats {
         let r = build()?;
         for st in r.stages() {
-            match prep.iter_mut().find(|(n, _)| n == st.name) {
+            match prep.iter_mut().find(|(n, _)| n == st.stage.name()) {
                 Some((_, v)) => v.push(st.seconds),
-                None => prep.push((st.name.to_string(), vec![st.seconds])),
+                None => prep.push((st.stage.name().to_string(), vec![st.seconds])),
             }
         }
         let (mut photon_s, mut camera_s, mut samples) = (0.0, 0.0, 0u64);
@@ -143,7 +143,7 @@ fn time_cell(
             for (stage, secs) in &out.stage_seconds {
                 if *stage == photon_stage {
                     photon_s += secs;
-                } else if *stage == "camera" {
+                } else if *stage == Stage::Camera {
                     camera_s += secs;
                 }
             }

@@ -619,7 +619,7 @@ impl Study<'_> {
             let stages = renderer
                 .stages()
                 .iter()
-                .map(|st| (st.name.to_string(), st.seconds))
+                .map(|st| (st.stage.name().to_string(), st.seconds))
                 .collect();
             states.push(ModeState {
                 name: name.clone(),

@@ -5,7 +5,9 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use bdpm_bdf::Bdf;
-use bdpm_geometry::{Geometry, GeometryError, TriangleMesh};
+use bdpm_geometry::{
+    BOX_FACES, Geometry, GeometryError, TriangleMesh, geodesic_sphere_triangle_count,
+};
 use std::sync::Arc;
 
 use bdpm_scene::{
@@ -20,7 +22,6 @@ use crate::gltf_mesh::{Origin, load_gltf};
 use crate::schema::{
     CameraDef, MaterialDef, Point, RadiusDef, RenderDef, SceneFile, ShapeDef, Triple,
 };
-use crate::shapes::{BOX_FACES, push_box, push_sphere, sphere_triangle_count};
 use crate::{LoadError, LoadReport, LoadedScene, limits};
 
 /// The file being loaded: the source of every message's prefix.
@@ -438,19 +439,22 @@ fn cuboid(
     }
     let mut keep = [true; 6];
     for (k, face) in b.open.iter().enumerate() {
-        let j = BOX_FACES.iter().position(|f| f.0 == face).ok_or_else(|| {
-            ctx.bad(
-                format!("{prefix}.open[{k}]"),
-                format!("unknown face '{face}'; expected one of +x, -x, +y, -y, +z, -z"),
-            )
-        })?;
+        let j = BOX_FACES
+            .iter()
+            .position(|f| f.name == face)
+            .ok_or_else(|| {
+                ctx.bad(
+                    format!("{prefix}.open[{k}]"),
+                    format!("unknown face '{face}'; expected one of +x, -x, +y, -y, +z, -z"),
+                )
+            })?;
         keep[j] = false;
     }
     let inward = facing(ctx, prefix, b.facing.as_deref())?;
     let m = ctx.placement(prefix, b.scale, b.translate)?;
     let (a, c) = (m.transform_point3(lo), m.transform_point3(hi));
     // A negative scale swaps min and max; the box stays the same set of points.
-    push_box(mesh, a.min(c), a.max(c), keep, inward, material);
+    mesh.push_box(a.min(c), a.max(c), keep, inward, material);
     Ok(())
 }
 
@@ -476,7 +480,7 @@ fn sphere(
         1,
         limits::SPHERE_SUBDIVISIONS_MAX,
     )?;
-    *total_triangles += sphere_triangle_count(freq);
+    *total_triangles += geodesic_sphere_triangle_count(freq);
     if *total_triangles > limits::MAX_BUILTIN_TRIANGLES {
         return Err(ctx.bad(
             format!("{prefix}.subdivisions"),
@@ -487,7 +491,7 @@ fn sphere(
         ));
     }
     let inward = facing(ctx, prefix, s.facing.as_deref())?;
-    push_sphere(mesh, center, radius, freq, inward, material);
+    mesh.push_geodesic_sphere(center, radius, freq, inward, material);
     Ok(())
 }
 

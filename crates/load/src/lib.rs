@@ -50,7 +50,6 @@ mod files;
 mod gltf_mesh;
 mod image;
 mod schema;
-mod shapes;
 
 use std::path::{Path, PathBuf};
 

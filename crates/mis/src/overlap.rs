@@ -12,7 +12,11 @@ use std::fmt;
 
 /// Which noise model the model-based weights (`algebraic-direct`, `algebraic`, `optimal`) use
 /// for the sharing of photons among the camera samples of one pixel (method.md §12).
+///
+/// Non-exhaustive: other noise models are expected, so a match outside this crate needs a
+/// `_ =>` arm.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum NoiseModel {
     /// The preprint's: every sample of a pixel shares x₀, N_eff = N_B.
     Pinhole,

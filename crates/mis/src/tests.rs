@@ -496,9 +496,19 @@ fn names_round_trip() {
     assert_eq!(names, Heuristic::ALL_NAMES);
     for (name, heuristic) in Heuristic::ALL_NAMES.iter().zip(all) {
         assert_eq!(Heuristic::parse(name), Some(heuristic));
+        assert_eq!(name.parse::<Heuristic>(), Ok(heuristic));
         assert_eq!(heuristic.to_string(), *name);
     }
     assert_eq!(Heuristic::parse("Optimal"), None);
+    let err = "Optimal".parse::<Heuristic>().unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        format!(
+            "unknown mode 'Optimal'; expected one of {}",
+            Heuristic::ALL_NAMES.join(", ")
+        )
+    );
+    assert!(err.to_string().contains("optimal-split"), "{err}");
     assert_eq!(Heuristic::parse(""), None);
     assert_eq!(
         Heuristic::Threshold { radius: 0.5 }.to_string(),

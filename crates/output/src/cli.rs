@@ -4,7 +4,9 @@
 //! progress bar and the facts about the machine that reports record.
 use std::path::{Path, PathBuf};
 
-use bdpm_integrator::{Mode, NoiseModel, RadiusSpec, RenderSettings, Sampler, Setting, StageProbe};
+use bdpm_integrator::{
+    Mode, NoiseModel, RadiusSpec, RenderSettings, Sampler, Setting, Stage, StageProbe,
+};
 use bdpm_load::{LoadReport, load_scene};
 use bdpm_scene::Scene;
 use clap::Args;
@@ -377,12 +379,12 @@ pub struct StagePeaks {
 struct PeakState {
     overall: u64,
     reset_works: Option<bool>,
-    stages: Vec<(&'static str, u64)>,
+    stages: Vec<(Stage, u64)>,
 }
 
 impl StagePeaks {
     /// The largest peak of each stage, bytes, in the order the stages first ended.
-    pub fn stages(&self) -> Vec<(&'static str, u64)> {
+    pub fn stages(&self) -> Vec<(Stage, u64)> {
         self.state
             .lock()
             .map(|s| s.stages.clone())
@@ -398,7 +400,7 @@ impl StagePeaks {
 }
 
 impl StageProbe for StagePeaks {
-    fn enter(&self, _name: &'static str) {
+    fn enter(&self, _stage: Stage) {
         let Ok(mut s) = self.state.lock() else { return };
         if let Some(peak) = peak_resident_memory() {
             s.overall = s.overall.max(peak);
@@ -407,7 +409,7 @@ impl StageProbe for StagePeaks {
         s.reset_works = Some(s.reset_works.unwrap_or(true) && ok);
     }
 
-    fn leave(&self, name: &'static str) {
+    fn leave(&self, stage: Stage) {
         let Ok(mut s) = self.state.lock() else { return };
         let Some(peak) = peak_resident_memory() else {
             return;
@@ -416,9 +418,9 @@ impl StageProbe for StagePeaks {
         if s.reset_works != Some(true) {
             return;
         }
-        match s.stages.iter_mut().find(|(n, _)| *n == name) {
+        match s.stages.iter_mut().find(|(n, _)| *n == stage) {
             Some((_, p)) => *p = (*p).max(peak),
-            None => s.stages.push((name, peak)),
+            None => s.stages.push((stage, peak)),
         }
     }
 }

@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use bdpm_integrator::{
-    Film, MemoryEstimate, RenderSettings, Renderer, SettingsRecord, WeightStats,
+    Film, MemoryEstimate, RenderSettings, Renderer, SettingsRecord, Stage, WeightStats,
 };
 use bdpm_load::LoadReport;
 use serde::Serialize;
@@ -36,7 +36,7 @@ pub struct RunFacts<'a> {
     /// Rendering the passes of this run, s.
     pub render_seconds: f64,
     /// Per-pass stages summed over this run's passes: (name, s).
-    pub pass_stages: &'a [(&'static str, f64)],
+    pub pass_stages: &'a [(Stage, f64)],
     /// The files of the run.
     pub outputs: &'a Outputs,
     /// Image mean of every pass held, per channel, W·m⁻²·sr⁻¹.
@@ -135,7 +135,7 @@ pub struct MemoryFacts<'a> {
     /// Peak resident memory of the process when the report was made, bytes.
     pub peak_resident: Option<u64>,
     /// Peak resident memory of each stage (`prepare`, then the pass stages), bytes.
-    pub stage_peaks: Vec<(&'static str, u64)>,
+    pub stage_peaks: Vec<(Stage, u64)>,
 }
 
 /// The memory estimate in the report: estimated and measured peak, bytes.
@@ -183,7 +183,7 @@ struct PhotonsOut {
 }
 
 #[derive(Serialize)]
-struct Stage {
+struct StageOut {
     name: String,
     seconds: f64,
     bytes: u64,
@@ -226,7 +226,7 @@ struct Timing {
     prepare_s: f64,
     render_s: f64,
     samples_per_second: f64,
-    pass_stages: Vec<Stage>,
+    pass_stages: Vec<StageOut>,
 }
 
 /// The run report written as OUT.json.
@@ -242,7 +242,7 @@ pub struct RunReport {
     interrupted: bool,
     camera_samples: u64,
     dropped_samples: u64,
-    prepared_stages: Vec<Stage>,
+    prepared_stages: Vec<StageOut>,
     timing: Timing,
     weights: WeightsOut,
     photons: PhotonsOut,
@@ -307,8 +307,8 @@ impl RunReport {
                 .renderer
                 .stages()
                 .iter()
-                .map(|s| Stage {
-                    name: s.name.into(),
+                .map(|s| StageOut {
+                    name: s.stage.name().into(),
                     seconds: s.seconds,
                     bytes: s.bytes,
                     detail: s.detail.clone(),
@@ -322,8 +322,8 @@ impl RunReport {
                 pass_stages: f
                     .pass_stages
                     .iter()
-                    .map(|(n, s)| Stage {
-                        name: (*n).into(),
+                    .map(|(n, s)| StageOut {
+                        name: n.name().into(),
                         seconds: *s,
                         bytes: 0,
                         detail: String::new(),
@@ -368,7 +368,10 @@ impl RunReport {
                     .memory
                     .stage_peaks
                     .iter()
-                    .map(|&(stage, peak_bytes)| StagePeakOut { stage, peak_bytes })
+                    .map(|&(stage, peak_bytes)| StagePeakOut {
+                        stage: stage.name(),
+                        peak_bytes,
+                    })
                     .collect(),
             },
         }
@@ -407,7 +410,7 @@ pub fn header_attributes(
     );
     for st in r.stages() {
         v.push((
-            format!("stage.{}", st.name.replace(' ', "_")),
+            format!("stage.{}", st.stage.name().replace(' ', "_")),
             format!("{:.3} s", st.seconds),
         ));
     }

@@ -42,23 +42,12 @@
 //! use glam::Vec3;
 //!
 //! // A closed unit cube, Lambert albedo 0.5, with a 1 W light in the middle.
-//! let v = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
-//! let mut mesh = TriangleMesh::default();
-//! for q in [
-//!     [v(0., 0., 0.), v(1., 0., 0.), v(1., 0., 1.), v(0., 0., 1.)],
-//!     [v(0., 1., 0.), v(0., 1., 1.), v(1., 1., 1.), v(1., 1., 0.)],
-//!     [v(0., 0., 0.), v(0., 0., 1.), v(0., 1., 1.), v(0., 1., 0.)],
-//!     [v(1., 0., 0.), v(1., 1., 0.), v(1., 1., 1.), v(1., 0., 1.)],
-//!     [v(0., 0., 0.), v(0., 1., 0.), v(1., 1., 0.), v(1., 0., 0.)],
-//!     [v(0., 0., 1.), v(1., 0., 1.), v(1., 1., 1.), v(0., 1., 1.)],
-//! ] {
-//!     mesh.push_quad(q, 0);
-//! }
+//! let mesh = TriangleMesh::cuboid(Vec3::ZERO, Vec3::ONE, true, 0);
 //! let scene = Scene::new(
 //!     Geometry::new(mesh).unwrap(),
 //!     vec![Material { name: "white".into(), bdf: Bdf::lambert(Vec3::splat(0.5)).unwrap() }],
 //!     vec![PointLight { position: Vec3::splat(0.5), flux: Vec3::ONE }],
-//!     Camera::look_at(v(0.5, 0.5, 0.1), v(0.5, 0.5, 1.0), Vec3::Y, 60.0, 8, 8).unwrap(),
+//!     Camera::look_at(Vec3::new(0.5, 0.5, 0.1), Vec3::new(0.5, 0.5, 1.0), Vec3::Y, 60.0, 8, 8).unwrap(),
 //! ).unwrap();
 //!
 //! let map = PhotonMap::trace(&scene, &TraceOptions::new(10_000, 1, 0), 0.05);
@@ -72,7 +61,7 @@
 //! }
 //! // Density estimate of the indirect irradiance at the floor's centre, W/m².
 //! let mut sum = Vec3::ZERO;
-//! map.for_each_near(v(0.5, 0.0, 0.5), |p| sum += p.power);
+//! map.for_each_near(Vec3::new(0.5, 0.0, 0.5), |p| sum += p.power);
 //! let irradiance = sum / (std::f32::consts::PI * map.radius() * map.radius());
 //! assert!(irradiance.is_finite());
 //! ```

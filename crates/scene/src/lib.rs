@@ -9,16 +9,16 @@
 //! `bdpm-load`); no photons, weights or films.
 //!
 //! ```
-//! use bdpm_scene::{Camera, Material, PointLight, Scene};
+//! use bdpm_scene::{Camera, PointLight, Scene};
 //! use bdpm_geometry::{Geometry, TriangleMesh};
 //! use bdpm_bdf::Bdf;
 //! use glam::{Vec2, Vec3};
+//! // A 2 m × 2 m floor at y = 0 facing +y, lit from 1 m above.
 //! let mut mesh = TriangleMesh::default();
-//! mesh.push_quad([Vec3::new(-1.0, 0.0, -1.0), Vec3::new(-1.0, 0.0, 1.0),
-//!                 Vec3::new(1.0, 0.0, 1.0), Vec3::new(1.0, 0.0, -1.0)], 0);
-//! let scene = Scene::new(
+//! mesh.push_rect(Vec3::ZERO, Vec3::Z, Vec3::X, 0);
+//! let scene = Scene::one_material(
 //!     Geometry::new(mesh).unwrap(),
-//!     vec![Material { name: "floor".into(), bdf: Bdf::lambert(Vec3::splat(0.5)).unwrap() }],
+//!     Bdf::lambert(Vec3::splat(0.5)).unwrap(),
 //!     vec![PointLight { position: Vec3::new(0.0, 1.0, 0.0), flux: Vec3::ONE }],
 //!     Camera::look_at(Vec3::new(0.0, 1.0, -2.0), Vec3::ZERO, Vec3::Y, 40.0, 64, 64).unwrap(),
 //! ).unwrap();
@@ -154,6 +154,21 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// A scene of one material (named `"material"`, index 0, which every triangle of
+    /// `geometry` must carry) lit by `lights`: the small scenes of the examples and tests.
+    pub fn one_material(
+        geometry: Geometry,
+        bdf: Bdf,
+        lights: Vec<PointLight>,
+        camera: Camera,
+    ) -> Result<Scene, SceneError> {
+        let material = Material {
+            name: "material".into(),
+            bdf,
+        };
+        Scene::new(geometry, vec![material], lights, camera)
+    }
+
     /// Assembles and checks a scene. The lights and the camera are given in world coordinates
     /// and moved into the geometry's frame (see [`Geometry::origin`]; a no-op for scenes
     /// around the origin), in which all of a `Scene`'s positions are then expressed.
@@ -473,21 +488,10 @@ mod tests {
     fn wall_scene(d: f32, look: Vec3) -> Scene {
         let mut mesh = TriangleMesh::default();
         let s = 100.0;
-        mesh.push_quad(
-            [
-                Vec3::new(-s, -s, d),
-                Vec3::new(s, -s, d),
-                Vec3::new(s, s, d),
-                Vec3::new(-s, s, d),
-            ],
-            0,
-        );
-        Scene::new(
+        mesh.push_rect(Vec3::new(0.0, 0.0, d), Vec3::X * s, Vec3::Y * s, 0);
+        Scene::one_material(
             Geometry::new(mesh).unwrap(),
-            vec![Material {
-                name: "wall".into(),
-                bdf: Bdf::lambert(Vec3::splat(0.5)).unwrap(),
-            }],
+            Bdf::lambert(Vec3::splat(0.5)).unwrap(),
             vec![PointLight {
                 position: Vec3::new(0.0, 0.0, 1.0),
                 flux: Vec3::ONE,

@@ -6,3 +6,11 @@
 mod cli;
 mod scripts;
 mod study;
+
+/// A fresh directory under the system temp dir, named after `tag`, removed when dropped.
+fn temp_dir(tag: &str) -> tempfile::TempDir {
+    tempfile::Builder::new()
+        .prefix(&format!("bdpm-{tag}-"))
+        .tempdir()
+        .expect("create temp dir")
+}

@@ -12,13 +12,6 @@ fn repo() -> PathBuf {
         .expect("repository root")
 }
 
-fn temp_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("bdpm-scripts-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("create temp dir");
-    dir
-}
-
 fn text(out: &Output) -> String {
     format!(
         "status {:?}\nstdout: {}\nstderr: {}",
@@ -93,8 +86,9 @@ const FLAGS: [&str; 8] = [
 
 #[test]
 fn slurm_render_quotes_and_validates_its_arguments() {
-    let dir = temp_dir("slurm");
-    let fakebin = fake_sbatch(&dir);
+    let tmp = crate::temp_dir("slurm");
+    let dir = tmp.path();
+    let fakebin = fake_sbatch(dir);
     // A scene and an output folder whose names hold a quote and a space.
     let odd = dir.join("it's here");
     std::fs::create_dir_all(&odd).expect("mkdir");
@@ -104,7 +98,7 @@ fn slurm_render_quotes_and_validates_its_arguments() {
     let mut args = vec![scene.to_str().unwrap(), "2", "2", out.to_str().unwrap()];
     args.extend(FLAGS);
     args.push("--threads=1");
-    let run = slurm_render(&dir, &fakebin, &args);
+    let run = slurm_render(dir, &fakebin, &args);
     assert!(run.status.success(), "{}", text(&run));
     let merged = out.join("merged.exr");
     assert!(merged.is_file(), "{}", text(&run));
@@ -141,7 +135,7 @@ fn slurm_render_quotes_and_validates_its_arguments() {
     for (tasks, per, needle) in cases {
         let fresh = dir.join(format!("fresh-{tasks}"));
         let run = slurm_render(
-            &dir,
+            dir,
             &fakebin,
             &[scene.to_str().unwrap(), tasks, per, fresh.to_str().unwrap()],
         );
@@ -157,17 +151,17 @@ fn slurm_render_quotes_and_validates_its_arguments() {
     let before = std::fs::read(&merged).expect("read merged");
     let mut args = vec![scene.to_str().unwrap(), "1", "2", out.to_str().unwrap()];
     args.extend(FLAGS);
-    let run = slurm_render(&dir, &fakebin, &args);
+    let run = slurm_render(dir, &fakebin, &args);
     assert!(!run.status.success(), "{}", text(&run));
     let err = String::from_utf8_lossy(&run.stderr);
     assert!(err.contains("earlier run"), "{err}");
     assert_eq!(std::fs::read(&merged).expect("read merged"), before);
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn bit_check_writes_relative_folders_under_the_callers_directory() {
-    let dir = temp_dir("bitcheck");
+    let tmp = crate::temp_dir("bitcheck");
+    let dir = tmp.path();
     let fake = dir.join("fake-bdpm");
     // Creates the file after -o, as a render would.
     executable(
@@ -177,7 +171,7 @@ fn bit_check_writes_relative_folders_under_the_callers_directory() {
     let name = format!("bit-check-rel-{}", std::process::id());
     let run = Command::new(repo().join("scripts/bit-check.sh"))
         .args(["render", &name])
-        .current_dir(&dir)
+        .current_dir(dir)
         .env("BDPM", "./fake-bdpm")
         .output()
         .expect("run bit-check.sh");
@@ -190,5 +184,4 @@ fn bit_check_writes_relative_folders_under_the_callers_directory() {
         .expect("the folder under the caller's directory")
         .count();
     assert!(written > 0, "{}", text(&run));
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -3,15 +3,6 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn temp_dir(tag: &str) -> PathBuf {
-    let nanos = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_nanos());
-    let dir = std::env::temp_dir().join(format!("bdpm-{tag}-{}-{nanos}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
-}
-
 fn scene() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/sphere-furnace.toml")
 }
@@ -62,8 +53,9 @@ fn without_times(csv: &str) -> Vec<String> {
 
 #[test]
 fn study_writes_csv_plots_and_table_deterministically() {
-    let dir = temp_dir("study");
-    let csv = study(&dir, "a");
+    let tmp = crate::temp_dir("study");
+    let dir = tmp.path();
+    let csv = study(dir, "a");
     let lines: Vec<&str> = csv.lines().collect();
     assert!(lines[0].starts_with("mode,pass,wall_time_s,rmse,rel_rmse,mean_sqrt_v,cpu_time_s"));
     assert_eq!(lines.len(), 1 + 2 * 2, "{csv}");
@@ -112,7 +104,6 @@ fn study_writes_csv_plots_and_table_deterministically() {
     assert_eq!(cached.len(), 1, "one cached reference");
 
     // Again, now with the cached reference: the same errors.
-    let again = study(&dir, "b");
+    let again = study(dir, "b");
     assert_eq!(without_times(&csv), without_times(&again));
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -141,8 +141,8 @@ proptest! {
 
     #[test]
     fn mutated_gltf_files_never_panic(e in edits()) {
-        let dir = std::env::temp_dir().join(format!("bdpm-fuzz-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let tmp = tempfile::Builder::new().prefix("bdpm-fuzz-").tempdir().unwrap();
+        let dir = tmp.path();
         let gltf = dir.join("m.gltf");
         std::fs::write(&gltf, apply(gltf_seed(), &e)).unwrap();
         let scene = dir.join("s.toml");
@@ -154,13 +154,15 @@ proptest! {
 #[test]
 fn the_unmutated_gltf_seed_loads() {
     // The harness is worthless if its seed is already rejected.
-    let dir = std::env::temp_dir().join(format!("bdpm-fuzz-seed-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::Builder::new()
+        .prefix("bdpm-fuzz-seed-")
+        .tempdir()
+        .unwrap();
+    let dir = tmp.path();
     std::fs::write(dir.join("m.gltf"), gltf_seed()).unwrap();
     let scene = dir.join("s.toml");
     std::fs::write(&scene, "[camera]\nposition = [0.5, 2, -2]\nlook_at = [0.5, 0, 0.5]\nvfov = 40\n[[shape]]\ntype = \"mesh\"\nfile = \"m.gltf\"\n").unwrap();
     let loaded = load_scene(&scene).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(loaded.scene.lights().len(), 1);
     assert_eq!(loaded.report.triangles, 2);
-    let _ = std::fs::remove_dir_all(&dir);
 }

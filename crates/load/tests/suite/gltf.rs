@@ -8,12 +8,12 @@ use base64::Engine;
 use bdpm_load::{LoadError, LoadedScene, load_scene};
 use glam::Vec3;
 
-/// A fresh directory for one test.
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("bdpm-load-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
+/// A fresh directory for one test, removed when dropped.
+fn temp_dir(name: &str) -> tempfile::TempDir {
+    tempfile::Builder::new()
+        .prefix(&format!("bdpm-load-test-{name}-"))
+        .tempdir()
+        .expect("temp dir")
 }
 
 /// The binary buffer: a unit quad's positions (48 bytes), tilted normals (48 bytes) and
@@ -231,19 +231,21 @@ fn check(s: &LoadedScene, gltf_path: &Path) {
 
 #[test]
 fn gltf_with_data_uri_buffer() {
-    let dir = temp_dir("data-uri");
-    let toml = write_scene(&dir, "t.gltf", data_uri_json().as_bytes());
+    let tmp = temp_dir("data-uri");
+    let dir = tmp.path();
+    let toml = write_scene(dir, "t.gltf", data_uri_json().as_bytes());
     let s = load_scene(&toml).unwrap_or_else(|e| panic!("{e}"));
     check(&s, &dir.join("t.gltf"));
 }
 
 #[test]
 fn gltf_with_external_buffer() {
-    let dir = temp_dir("external");
+    let tmp = temp_dir("external");
+    let dir = tmp.path();
     std::fs::create_dir_all(dir.join("meshes")).expect("dir");
     std::fs::write(dir.join("meshes/t.bin"), buffer_bytes()).expect("write bin");
     let toml = write_scene(
-        &dir,
+        dir,
         "meshes/t.gltf",
         gltf_json(r#""uri": "t.bin""#, 4).as_bytes(),
     );
@@ -253,8 +255,9 @@ fn gltf_with_external_buffer() {
 
 #[test]
 fn gltf_binary_glb() {
-    let dir = temp_dir("glb");
-    let toml = write_scene(&dir, "t.glb", &glb(&gltf_json("", 4), &buffer_bytes()));
+    let tmp = temp_dir("glb");
+    let dir = tmp.path();
+    let toml = write_scene(dir, "t.glb", &glb(&gltf_json("", 4), &buffer_bytes()));
     let s = load_scene(&toml).unwrap_or_else(|e| panic!("{e}"));
     check(&s, &dir.join("t.glb"));
 }
@@ -272,10 +275,11 @@ fn error_of(dir: &Path, toml: &Path) -> (LoadError, String) {
 
 #[test]
 fn missing_gltf_file() {
-    let dir = temp_dir("missing");
+    let tmp = temp_dir("missing");
+    let dir = tmp.path();
     let toml = dir.join("scene.toml");
     std::fs::write(&toml, scene_toml("meshes/a.gltf")).expect("write");
-    let (_, msg) = error_of(&dir, &toml);
+    let (_, msg) = error_of(dir, &toml);
     assert!(
         msg.contains("meshes/a.gltf (from shape[0].file): cannot read: "),
         "{msg}"
@@ -284,13 +288,14 @@ fn missing_gltf_file() {
 
 #[test]
 fn missing_external_buffer() {
-    let dir = temp_dir("missing-bin");
+    let tmp = temp_dir("missing-bin");
+    let dir = tmp.path();
     let toml = write_scene(
-        &dir,
+        dir,
         "t.gltf",
         gltf_json(r#""uri": "gone.bin""#, 4).as_bytes(),
     );
-    let (_, msg) = error_of(&dir, &toml);
+    let (_, msg) = error_of(dir, &toml);
     assert!(
         msg.contains("gone.bin (from shape[0].file, buffer 0 of "),
         "{msg}"
@@ -300,12 +305,13 @@ fn missing_external_buffer() {
 
 #[test]
 fn garbage_gltf_file() {
-    let dir = temp_dir("garbage");
+    let tmp = temp_dir("garbage");
+    let dir = tmp.path();
     let bytes: Vec<u8> = (0..4096u32)
         .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8)
         .collect();
-    let toml = write_scene(&dir, "t.gltf", &bytes);
-    let (e, msg) = error_of(&dir, &toml);
+    let toml = write_scene(dir, "t.gltf", &bytes);
+    let (e, msg) = error_of(dir, &toml);
     assert!(matches!(e, LoadError::Gltf { .. }), "{msg}");
     assert!(
         msg.contains("t.gltf (from shape[0].file): not a valid glTF 2.0 file"),
@@ -315,13 +321,14 @@ fn garbage_gltf_file() {
 
 #[test]
 fn bad_json() {
-    let dir = temp_dir("bad-json");
+    let tmp = temp_dir("bad-json");
+    let dir = tmp.path();
     let toml = write_scene(
-        &dir,
+        dir,
         "t.gltf",
         br#"{ "asset": { "version": "2.0" }, "nodes": [ "#,
     );
-    let (_, msg) = error_of(&dir, &toml);
+    let (_, msg) = error_of(dir, &toml);
     assert!(
         msg.contains("t.gltf (from shape[0].file): not a valid glTF 2.0 file"),
         "{msg}"
@@ -330,14 +337,15 @@ fn bad_json() {
 
 #[test]
 fn accessor_out_of_range() {
-    let dir = temp_dir("accessor");
+    let tmp = temp_dir("accessor");
+    let dir = tmp.path();
     let b64 = base64::engine::general_purpose::STANDARD.encode(buffer_bytes());
     let json = gltf_json(
         &format!(r#""uri": "data:application/octet-stream;base64,{b64}""#),
         100,
     );
-    let toml = write_scene(&dir, "t.gltf", json.as_bytes());
-    let (_, msg) = error_of(&dir, &toml);
+    let toml = write_scene(dir, "t.gltf", json.as_bytes());
+    let (_, msg) = error_of(dir, &toml);
     assert!(
         msg.contains(
             "t.gltf (from shape[0].file): mesh 0 primitive 0: POSITION: accessor 0 reaches past"
@@ -348,19 +356,20 @@ fn accessor_out_of_range() {
 
 #[test]
 fn truncated_and_corrupted_files_never_panic() {
-    let dir = temp_dir("fuzz");
+    let tmp = temp_dir("fuzz");
+    let dir = tmp.path();
     let json = data_uri_json();
     let binary = glb(&gltf_json("", 4), &buffer_bytes());
     for source in [json.as_bytes(), binary.as_slice()] {
         for cut in (0..source.len()).step_by(97) {
-            let toml = write_scene(&dir, "t.gltf", &source[..cut]);
+            let toml = write_scene(dir, "t.gltf", &source[..cut]);
             let _ = load_scene(&toml);
         }
         for i in (0..source.len()).step_by(3) {
             for b in [b'0', b'9', b'-', b'"', b'}', 0xff, 0] {
                 let mut v = source.to_vec();
                 v[i] = b;
-                let toml = write_scene(&dir, "t.gltf", &v);
+                let toml = write_scene(dir, "t.gltf", &v);
                 let _ = load_scene(&toml);
             }
         }
@@ -431,12 +440,13 @@ fn load_in(dir: &Path, gltf_name: &str, gltf: &str) -> Result<LoadedScene, LoadE
 
 #[test]
 fn strips_and_fans_become_triangle_lists_and_skips_are_counted() {
-    let dir = temp_dir("modes");
+    let tmp = temp_dir("modes");
+    let dir = tmp.path();
     std::fs::write(dir.join("quad.bin"), buffer_bytes()).expect("write bin");
     // A 1×1 sRGB image of value 188 = linear 0.5 (the strip has no TEXCOORD_0: it reads
     // the texel at (0, 0)).
     std::fs::write(dir.join("wood.png"), png_bytes(1, 1, &[188, 188, 188])).expect("write png");
-    let s = load_in(&dir, "m.gltf", &modes_json("quad.bin")).expect("loads");
+    let s = load_in(dir, "m.gltf", &modes_json("quad.bin")).expect("loads");
     // Strip (0,1,2), (1,3,2) and fan (1,2,0), (2,3,0): four triangles; the points skipped.
     assert_eq!(s.report.triangles, 4);
     assert_eq!(s.report.strips_and_fans, 2);
@@ -483,7 +493,8 @@ fn strips_and_fans_become_triangle_lists_and_skips_are_counted() {
 
 #[test]
 fn buffer_uris_are_confined_to_the_gltf_directory() {
-    let dir = temp_dir("confine");
+    let tmp = temp_dir("confine");
+    let dir = tmp.path();
     let sub = dir.join("models");
     std::fs::create_dir_all(&sub).expect("mkdir");
     std::fs::write(dir.join("outside.bin"), buffer_bytes()).expect("write");
@@ -568,7 +579,8 @@ fn real_gltf_collection_loads_or_fails_cleanly() {
         }
     }
     files.sort();
-    let dir = temp_dir("assimp");
+    let tmp = temp_dir("assimp");
+    let dir = tmp.path();
     let (mut loaded, mut failed) = (0, 0);
     for file in &files {
         let toml = dir.join("scene.toml");

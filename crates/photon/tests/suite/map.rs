@@ -3,7 +3,7 @@
 use crate::common::*;
 use bdpm_bdf::Bdf;
 use bdpm_bdf::survival_probability;
-use bdpm_geometry::{Domain, Rng};
+use bdpm_geometry::{Domain, Rng, TriangleMesh};
 use bdpm_photon::{PathVertex, Photon, PhotonMap, TraceOptions};
 use bdpm_scene::WeightVertex;
 use glam::Vec3;
@@ -144,7 +144,7 @@ fn traced_map_queries_match_brute_force() {
 /// A box with an opaque shelf at y = 0.5 over x ∈ [0, 0.7] (full depth), a light above and a
 /// light below it.
 fn shelf_scene(kd: f32) -> bdpm_scene::Scene {
-    let mut mesh = cube_mesh(1.0, 0);
+    let mut mesh = TriangleMesh::cuboid(Vec3::ZERO, Vec3::ONE, true, 0);
     mesh.push_quad(
         [
             Vec3::new(0.0, 0.5, 0.0),

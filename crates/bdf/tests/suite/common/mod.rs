@@ -121,26 +121,11 @@ pub fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// Upper tail of the standard normal distribution (Numerical Recipes' erfc, |error| < 1.2e-7).
-pub fn normal_upper_tail(z: f64) -> f64 {
-    let x = z / std::f64::consts::SQRT_2;
-    let t = 1.0 / (1.0 + 0.5 * x.abs());
-    let poly = -x * x - 1.265_512_23
-        + t * (1.000_023_68
-            + t * (0.374_091_96
-                + t * (0.096_784_18
-                    + t * (-0.186_288_06
-                        + t * (0.278_868_07
-                            + t * (-1.135_203_98
-                                + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
-    let erfc = t * poly.exp();
-    0.5 * if x >= 0.0 { erfc } else { 2.0 - erfc }
-}
-
-/// p-value of a chi-square statistic with `dof` degrees of freedom (Wilson–Hilferty).
+/// p-value of a chi-square statistic with `dof` degrees of freedom: the upper tail
+/// P(X ≥ chi2) of the chi-square distribution (statrs).
 pub fn chi2_p_value(chi2: f64, dof: usize) -> f64 {
-    let k = dof as f64;
-    let v = 2.0 / (9.0 * k);
-    let z = ((chi2 / k).cbrt() - (1.0 - v)) / v.sqrt();
-    normal_upper_tail(z)
+    use statrs::distribution::{ChiSquared, ContinuousCDF};
+    ChiSquared::new(dof as f64)
+        .expect("at least one degree of freedom")
+        .sf(chi2)
 }
