@@ -9,6 +9,19 @@
 //! - [`luminance`] (Rec. 709) and [`prefetch`].
 //!
 //! Units: positions and distances in metres, flux in W per RGB channel, solid angles in sr.
+//!
+//! ```
+//! use bdpm_core::{Domain, Frame, Rng, sampling};
+//! use glam::Vec3;
+//!
+//! // The same keys give the same numbers, on any thread.
+//! let u = Rng::new(42, Domain::Other, [3, 7, 0]).uniform2();
+//! assert_eq!(u, Rng::new(42, Domain::Other, [3, 7, 0]).uniform2());
+//! // A direction on the unit sphere, taken to a frame around a normal and back.
+//! let d = sampling::uniform_sphere(u);
+//! let frame = Frame::from_normal(Vec3::Y);
+//! assert!((frame.to_world(frame.to_local(d)) - d).length() < 1e-5);
+//! ```
 
 mod frame;
 mod prefetch;
