@@ -6,7 +6,7 @@ use bdpm_bdf::{Bdf, Outgoing, luminance};
 use bdpm_cache::RadianceCache;
 use bdpm_geometry::Hit;
 use bdpm_geometry::Rng;
-use bdpm_mis::{Budget, Heuristic, Needs, Pair, acceptance_area};
+use bdpm_mis::{Budget, Heuristic, Needs, Pair, Weigher, acceptance_area};
 use bdpm_photon::{PhotonMap, PhotonQuery};
 use bdpm_scene::{Scene, Shading};
 
@@ -196,9 +196,10 @@ impl<'a> Mix<'a> {
         (acceptance_area(d2.sqrt()), density)
     }
 
-    fn w1(&self, pair: &Pair, pixel: Option<&PixelWeights>, stats: &mut WeightStats) -> f64 {
-        // The pixel's N_eff stands in for N_B (method.md §12); it is N_B itself under the
-        // pinhole model and without jitter, so those weights keep their bits.
+    /// The weigher of one pixel: the mode with the pixel's A, B and, where the table gives
+    /// one, its N_eff in place of N_B (method.md §12; N_B itself under the pinhole model and
+    /// without jitter, so those weights keep their bits).
+    pub(crate) fn weigher(&self, pixel: Option<&PixelWeights>) -> Weigher {
         let budget = match pixel {
             Some(p) => Budget {
                 camera_samples: p.camera_samples,
@@ -206,9 +207,11 @@ impl<'a> Mix<'a> {
             },
             None => self.budget,
         };
-        let w = self
-            .heuristic
-            .weight(&budget, pair, pixel.map(|p| &p.terms));
+        Weigher::new(self.heuristic, &budget, pixel.map(|p| &p.terms))
+    }
+
+    fn w1(&self, pair: &Pair, weigher: &Weigher, stats: &mut WeightStats) -> f64 {
+        let w = weigher.weight(pair);
         stats.evaluations += 1;
         stats.outside_unit += w.outside_unit as u64;
         stats.clamped_cb += w.clamped_cb as u64;
@@ -229,7 +232,7 @@ impl<'a> Mix<'a> {
         prev_inputs: &[[f32; 3]],
         jobs: &mut [Job],
         slots: &mut Slots<'s>,
-        pixel: Option<&PixelWeights>,
+        weigher: &Weigher,
         stats: &mut WeightStats,
     ) {
         assert!(jobs.len() <= BATCH, "at most {BATCH} samples per batch");
@@ -238,7 +241,7 @@ impl<'a> Mix<'a> {
             job.out = Techniques::default();
             slot.x0 = None;
             slot.second = None;
-            self.start_sample(map, job, pixel, stats, slot);
+            self.start_sample(map, job, weigher, stats, slot);
         }
         for _ in 0..QUERY_STAGES {
             // Only this batch's slots: the others still hold an earlier batch's samples.
@@ -255,7 +258,7 @@ impl<'a> Mix<'a> {
             let Some(x0) = &slot.x0 else { continue };
             let camera_w1 = slot.second.as_ref().map(|s| s.w_const);
             if let Some(second) = &slot.second {
-                self.merge_at_x1(x0, map, second, &slot.query1, pixel, stats, &mut job.out);
+                self.merge_at_x1(x0, map, second, &slot.query1, weigher, stats, &mut job.out);
             }
             if self.needs.photons_at_x0 {
                 let photons = (map, prev_inputs);
@@ -263,7 +266,7 @@ impl<'a> Mix<'a> {
                     x0,
                     photons,
                     &slot.query0,
-                    pixel,
+                    weigher,
                     camera_w1,
                     stats,
                     &mut job.out,
@@ -279,7 +282,7 @@ impl<'a> Mix<'a> {
         &'s self,
         map: &PhotonMap,
         job: &mut Job,
-        pixel: Option<&PixelWeights>,
+        weigher: &Weigher,
         stats: &mut WeightStats,
         slot: &mut Slot<'s>,
     ) {
@@ -304,7 +307,7 @@ impl<'a> Mix<'a> {
         if self.needs.second_vertex {
             let drawn = job.rng.uniform3();
             let bdf_u = job.bdf.unwrap_or(drawn);
-            slot.second = self.start_second(&x0, map, bdf_u, pixel, stats, &mut slot.query1);
+            slot.second = self.start_second(&x0, map, bdf_u, weigher, stats, &mut slot.query1);
         }
         slot.x0 = Some(x0);
     }
@@ -316,7 +319,7 @@ impl<'a> Mix<'a> {
         x0: &FirstVertex<'_>,
         map: &PhotonMap,
         u: [f32; 3],
-        pixel: Option<&PixelWeights>,
+        weigher: &Weigher,
         stats: &mut WeightStats,
         query: &mut PhotonQuery,
     ) -> Option<Second> {
@@ -353,7 +356,7 @@ impl<'a> Mix<'a> {
         } else if pure {
             1.0
         } else {
-            self.w1(&pair, pixel, stats)
+            self.w1(&pair, weigher, stats)
         };
         // Weights by path kind give the one-bounce paths (through L₀(x₁)) their own weight; the
         // merge paths (through the photons at x₁) keep `w_const`.
@@ -361,7 +364,7 @@ impl<'a> Mix<'a> {
         // evaluation serves them all.
         let w_direct = if self.needs.path_kinds && lights != 0 && !per_light {
             let one = self.path_pair(x0, &x1, (v, dist2), Arrival::Light(0), pair);
-            self.w1(&one, pixel, stats)
+            self.w1(&one, weigher, stats)
         } else {
             w_const
         };
@@ -373,7 +376,7 @@ impl<'a> Mix<'a> {
             direct_raw += c;
             let w = if per_light {
                 let one = self.path_pair(x0, &x1, (v, dist2), Arrival::Light(l), pair);
-                self.w1(&one, pixel, stats)
+                self.w1(&one, weigher, stats)
             } else {
                 w_direct
             };
@@ -401,7 +404,7 @@ impl<'a> Mix<'a> {
         map: &PhotonMap,
         second: &Second,
         query: &PhotonQuery,
-        pixel: Option<&PixelWeights>,
+        weigher: &Weigher,
         stats: &mut WeightStats,
         t: &mut Techniques,
     ) {
@@ -433,7 +436,7 @@ impl<'a> Mix<'a> {
             ph_raw += c;
             let w = if per_path {
                 let path = self.camera_side_pair(map, x0, &x1, (v, dist2), ph, pair);
-                self.w1(&path, pixel, stats)
+                self.w1(&path, weigher, stats)
             } else {
                 w_const
             };
@@ -451,7 +454,7 @@ impl<'a> Mix<'a> {
         x0: &FirstVertex<'_>,
         photons: (&PhotonMap, &[[f32; 3]]),
         query: &PhotonQuery,
-        pixel: Option<&PixelWeights>,
+        weigher: &Weigher,
         camera_w1: Option<f64>,
         stats: &mut WeightStats,
         t: &mut Techniques,
@@ -476,7 +479,7 @@ impl<'a> Mix<'a> {
                 let Some(pair) = self.photon_side_pair(photons, x0, i, ph) else {
                     return;
                 };
-                1.0 - self.w1(&pair, pixel, stats)
+                1.0 - self.w1(&pair, weigher, stats)
             };
             weighted += c * w0 as f32;
         });

@@ -531,7 +531,7 @@ impl Renderer<'_> {
                 let pixel = (y * w + x) as u64;
                 let mut sum = DVec3::ZERO;
                 let mut tsum = Techniques::default();
-                let terms = table.map(|t| t.get(x as u32, y as u32));
+                let weigher = mix.weigher(table.map(|t| t.get(x as u32, y as u32)));
                 layout.start(pass, pixel);
                 for first in (0..s.spp).step_by(BATCH) {
                     let count = (s.spp - first).min(BATCH as u32);
@@ -548,7 +548,14 @@ impl Renderer<'_> {
                         }
                     });
                     let jobs = &mut jobs[..count as usize];
-                    mix.sample_batch(&map, &prev_inputs, jobs, &mut slots, terms, &mut row_stats);
+                    mix.sample_batch(
+                        &map,
+                        &prev_inputs,
+                        jobs,
+                        &mut slots,
+                        &weigher,
+                        &mut row_stats,
+                    );
                     // Summed in sample order, so the pixel does not depend on the batching.
                     for t in jobs.iter().map(|j| &j.out) {
                         let value = t.total();

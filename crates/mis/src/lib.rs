@@ -418,9 +418,50 @@ impl Heuristic {
     ///
     /// `pixel` holds the pixel's A, B (used by `optimal` only; `None` means A = B = 0,
     /// which reduces eq. 8 to W₁ with the b term). The output is finite for all finite
-    /// non-negative inputs; see the crate docs for the guards.
+    /// non-negative inputs; see the crate docs for the guards. To weigh many pairs of one
+    /// pixel, build a [`Weigher`] once: the same bits, without recomputing the factors they
+    /// share.
     pub fn weight(&self, budget: &Budget, pair: &Pair, pixel: Option<&PixelTerms>) -> Weight {
-        match *self {
+        Weigher::new(*self, budget, pixel).weight(pair)
+    }
+}
+
+/// A [`Heuristic`] ready to weigh the pairs of one pixel: the factors every weight of the
+/// pixel shares (S·N_F/Φ of κ, and the correlation term N_B·c·G̃ of eq. 8 from the pixel's A
+/// and B) computed once. [`Weigher::weight`] gives the bits [`Heuristic::weight`] gives.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Weigher {
+    heuristic: Heuristic,
+    scale: Scale,
+    /// N_B·c·G̃ with G̃ = A/(1 − c·B), sr⁻¹: the correlation term of eq. 8's numerator.
+    correlation: f64,
+    /// Whether c·B was clamped to 1 − [`CB_EPSILON`] for this pixel.
+    clamped_cb: bool,
+}
+
+impl Weigher {
+    /// The weigher of `heuristic` for `budget` and one pixel's A, B (`None`: A = B = 0).
+    pub fn new(heuristic: Heuristic, budget: &Budget, pixel: Option<&PixelTerms>) -> Self {
+        let (a, b) = pixel.map_or((0.0, 0.0), |p| (p.a, p.b));
+        let (one_minus_cb, clamped_cb) = budget.one_minus_cb(b);
+        let g_tilde = sat(nonneg(a) / one_minus_cb);
+        Weigher {
+            heuristic,
+            scale: Scale::new(budget),
+            correlation: mul(budget.correlation_factor(), g_tilde),
+            clamped_cb,
+        }
+    }
+
+    /// The heuristic it weighs with.
+    pub fn heuristic(&self) -> Heuristic {
+        self.heuristic
+    }
+
+    /// The weight w₁ of BDD=1 for one pair (x₀, x₁) of the pixel; see [`Heuristic::weight`].
+    pub fn weight(&self, pair: &Pair) -> Weight {
+        let scale = &self.scale;
+        match self.heuristic {
             Heuristic::Bdd0 => Weight::plain(0.0),
             Heuristic::Bdd1 => Weight::plain(1.0),
             // method.md §4, eq. 11.
@@ -431,30 +472,122 @@ impl Heuristic {
             }),
             // method.md §4, eq. 10 with L_d dropped.
             Heuristic::AlgebraicDirect => {
-                Weight::plain(algebraic(budget, pair.x0.f_tilde, pair.x1.direct))
+                Weight::plain(algebraic(scale, pair.x0.f_tilde, pair.x1.direct))
             }
             // method.md §4, eq. 10.
             Heuristic::Algebraic => {
-                Weight::plain(algebraic(budget, pair.x0.f_tilde, total_radiance(pair)))
+                Weight::plain(algebraic(scale, pair.x0.f_tilde, total_radiance(pair)))
             }
             // method.md §4, eq. 8–9.
-            Heuristic::Optimal { clamp_weights } => optimal(budget, pair, pixel, clamp_weights),
+            Heuristic::Optimal { clamp_weights } => self.optimal(pair, clamp_weights),
             Heuristic::OptimalSplit { clamp_weights } => {
                 let f1 = split_scattering(pair);
-                optimal_per_path(budget, pair, pixel, f1, clamp_weights)
+                self.optimal_per_path(pair, f1, clamp_weights)
             }
             Heuristic::OptimalPath { clamp_weights } => {
                 let f1 = match pair.path.kind {
                     PathKind::Merge => nonneg(pair.path.x1_scattering),
                     PathKind::OneBounce => 0.0,
                 };
-                optimal_per_path(budget, pair, pixel, f1, clamp_weights)
+                self.optimal_per_path(pair, f1, clamp_weights)
             }
             // method.md §8.
-            Heuristic::Balance => Weight::plain(density_share(budget, pair, 1)),
-            Heuristic::Power => Weight::plain(density_share(budget, pair, 2)),
-            Heuristic::Camis => Weight::plain(camis(budget, pair)),
+            Heuristic::Balance => Weight::plain(density_share(&scale.budget, pair, 1)),
+            Heuristic::Power => Weight::plain(density_share(&scale.budget, pair, 2)),
+            Heuristic::Camis => Weight::plain(camis(&scale.budget, pair)),
         }
+    }
+
+    /// Eq. 8–9 in the division-safe form of method.md §4:
+    /// G̃ = A/(1 − c·B), w₁ = N_B (f̃ + c·G̃)/D = W₁ + N_B·c·G̃/D.
+    fn optimal(&self, pair: &Pair, clamp: bool) -> Weight {
+        let terms = OptimalTerms::new(
+            &self.scale,
+            pair.x0.f_tilde,
+            total_radiance(pair),
+            pair.x1.b,
+        );
+        let w1 = if terms.denominator == 0.0 {
+            // f̃ = 0 and L = 0: the direction carries no BDD=1 contribution at x₀, and the
+            // ratio is 0/0 or c·G̃/0. This crate chooses w₁ = 0.
+            0.0
+        } else {
+            sat(terms.partial() + sat(self.correlation / terms.denominator))
+        };
+        self.finish(w1, clamp)
+    }
+
+    /// The optimal weight of a path whose x₁ scatters it with BDF value `f1` (sr⁻¹; 0 for a
+    /// one-bounce path, whose L₀(x₁) BDD=1 computes exactly). Stationarity of the §12
+    /// functional over weights that may depend on the light path's incoming direction at x₁
+    /// gives w₁ = (N_B f̃ + g)/[(N_B f̃ + f₁)(1 + κ(Q))] with
+    /// Q = L₀/(N_B f̃) + ∫ ℓ/(N_B f̃ + f₁) dω₂, g = N_B·c·G̃; approximating f₁ by β = b/L_d
+    /// inside Q, in division-safe form:
+    /// w₁ = (N_B f̃ + g)·(N_B f̃ + β)·[N_B f̃/(N_B f̃ + f₁)] / D″ (method-notes.md).
+    /// `optimal-split` passes f₁ = β for merge paths, `optimal-path` the photon's own value.
+    fn optimal_per_path(&self, pair: &Pair, f1: f64, clamp: bool) -> Weight {
+        let t = SplitTerms::new(
+            &self.scale,
+            pair.x0.f_tilde,
+            pair.x1.direct,
+            pair.x1.indirect,
+            pair.x1.b,
+        );
+        let w1 = if t.denominator == 0.0 {
+            0.0
+        } else {
+            // N_B f̃/(N_B f̃ + f₁): 1 for one-bounce paths, 0 where f̃ = 0 and f₁ > 0.
+            let share = if f1 == 0.0 {
+                1.0
+            } else if t.camera == 0.0 {
+                0.0
+            } else {
+                t.camera / sat(t.camera + f1)
+            };
+            let numerator = mul(
+                mul(sat(t.camera + self.correlation), sat(t.camera + t.beta)),
+                share,
+            );
+            sat(numerator / t.denominator)
+        };
+        self.finish(w1, clamp)
+    }
+
+    /// The [`Weight`] of an optimal mode from its unclamped w₁.
+    fn finish(&self, w1: f64, clamp: bool) -> Weight {
+        let outside_unit = !(0.0..=1.0).contains(&w1);
+        Weight {
+            w1: if clamp { w1.clamp(0.0, 1.0) } else { w1 },
+            clamped_cb: self.clamped_cb,
+            outside_unit,
+        }
+    }
+}
+
+/// A budget with the factor S·N_F/Φ of κ(L) computed once.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Scale {
+    budget: Budget,
+    /// S·N_F/Φ, W⁻¹·m².
+    kappa_factor: f64,
+}
+
+impl Scale {
+    fn new(budget: &Budget) -> Self {
+        Scale {
+            budget: *budget,
+            kappa_factor: budget.photon_density_factor(),
+        }
+    }
+
+    /// [`Budget::kappa`], the same bits.
+    fn kappa(&self, radiance: f64) -> f64 {
+        mul(self.kappa_factor, nonneg(radiance))
+    }
+
+    /// N_B f̃ (sr⁻¹) for f̃ in sr⁻¹.
+    fn camera(&self, f_tilde: f64) -> f64 {
+        mul(nonneg(self.budget.camera_samples), nonneg(f_tilde))
     }
 }
 
@@ -486,7 +619,7 @@ impl fmt::Display for Heuristic {
 /// W·m⁻²·sr⁻². Guards: L = 0 takes b/L = 0 (so W₁ = 1 when f̃ > 0); f̃ = 0 gives
 /// W₁ = 0. The result is in [0, 1].
 pub fn w1_partial(budget: &Budget, f_tilde: f64, radiance: f64, b: f64) -> f64 {
-    let terms = OptimalTerms::new(budget, f_tilde, radiance, b);
+    let terms = OptimalTerms::new(&Scale::new(budget), f_tilde, radiance, b);
     terms.partial()
 }
 
@@ -502,7 +635,7 @@ pub fn split_weighted_radiance(
     indirect: f64,
     b: f64,
 ) -> f64 {
-    let t = SplitTerms::new(budget, f_tilde, direct, indirect, b);
+    let t = SplitTerms::new(&Scale::new(budget), f_tilde, direct, indirect, b);
     if t.denominator == 0.0 {
         return 0.0;
     }
@@ -519,9 +652,8 @@ fn total_radiance(pair: &Pair) -> f64 {
 ///
 /// Evaluated as 1/(1 + κ/(N_B f̃)), which is monotone non-increasing in L even after
 /// rounding. f̃ = 0 gives 0 (also when L = 0, where the ratio is 0/0).
-fn algebraic(budget: &Budget, f_tilde: f64, radiance: f64) -> f64 {
-    let camera = mul(nonneg(budget.camera_samples), nonneg(f_tilde));
-    share(camera, budget.kappa(radiance), 1, 0.0)
+fn algebraic(scale: &Scale, f_tilde: f64, radiance: f64) -> f64 {
+    share(scale.camera(f_tilde), scale.kappa(radiance), 1, 0.0)
 }
 
 /// N_B f̃ and the denominator D of W₁ (method.md §4) for one direction.
@@ -533,16 +665,16 @@ struct OptimalTerms {
 }
 
 impl OptimalTerms {
-    fn new(budget: &Budget, f_tilde: f64, radiance: f64, b: f64) -> Self {
+    fn new(scale: &Scale, f_tilde: f64, radiance: f64, b: f64) -> Self {
         let radiance = nonneg(radiance);
-        let camera = mul(nonneg(budget.camera_samples), nonneg(f_tilde));
+        let camera = scale.camera(f_tilde);
         // L = 0 means x₁ is unlit, hence b = 0 too: take b/L = 0 (method.md §4 guards).
         let b_over_l = if radiance == 0.0 {
             0.0
         } else {
             ratio_sat(nonneg(b), radiance)
         };
-        let denominator = sat(camera + b_over_l + budget.kappa(radiance));
+        let denominator = sat(camera + b_over_l + scale.kappa(radiance));
         OptimalTerms {
             camera,
             denominator,
@@ -559,33 +691,6 @@ impl OptimalTerms {
     }
 }
 
-/// Eq. 8–9 in the division-safe form of method.md §4:
-/// G̃ = A/(1 − c·B), w₁ = N_B (f̃ + c·G̃)/D = W₁ + N_B·c·G̃/D.
-fn optimal(budget: &Budget, pair: &Pair, pixel: Option<&PixelTerms>, clamp: bool) -> Weight {
-    let terms = OptimalTerms::new(budget, pair.x0.f_tilde, total_radiance(pair), pair.x1.b);
-    let (a, b) = pixel.map_or((0.0, 0.0), |p| (p.a, p.b));
-    let a = nonneg(a);
-    let (one_minus_cb, clamped_cb) = budget.one_minus_cb(b);
-    let g_tilde = sat(a / one_minus_cb);
-    // N_B·c·G̃, sr⁻¹: the correlation term of the numerator.
-    let correlation = mul(budget.correlation_factor(), g_tilde);
-
-    let w1 = if terms.denominator == 0.0 {
-        // f̃ = 0 and L = 0: the direction carries no BDD=1 contribution at x₀, and the
-        // ratio is 0/0 or c·G̃/0. This crate chooses w₁ = 0.
-        0.0
-    } else {
-        sat(terms.partial() + sat(correlation / terms.denominator))
-    };
-
-    let outside_unit = !(0.0..=1.0).contains(&w1);
-    Weight {
-        w1: if clamp { w1.clamp(0.0, 1.0) } else { w1 },
-        clamped_cb,
-        outside_unit,
-    }
-}
-
 /// The scalars of the split weights for one direction: N_B f̃, β = b/L_d, and
 /// D″ = (N_B f̃ + β)(N_B f̃ + κ(L₀)) + κ(L_d)·N_B f̃.
 struct SplitTerms {
@@ -598,16 +703,16 @@ struct SplitTerms {
 }
 
 impl SplitTerms {
-    fn new(budget: &Budget, f_tilde: f64, direct: f64, indirect: f64, b: f64) -> Self {
-        let camera = mul(nonneg(budget.camera_samples), nonneg(f_tilde));
+    fn new(scale: &Scale, f_tilde: f64, direct: f64, indirect: f64, b: f64) -> Self {
+        let camera = scale.camera(f_tilde);
         let indirect = nonneg(indirect);
         let beta = if indirect == 0.0 {
             0.0
         } else {
             ratio_sat(nonneg(b), indirect)
         };
-        let denominator = sat(mul(sat(camera + beta), sat(camera + budget.kappa(direct)))
-            + mul(budget.kappa(indirect), camera));
+        let denominator = sat(mul(sat(camera + beta), sat(camera + scale.kappa(direct)))
+            + mul(scale.kappa(indirect), camera));
         SplitTerms {
             camera,
             beta,
@@ -629,53 +734,6 @@ fn split_scattering(pair: &Pair) -> f64 {
                 ratio_sat(nonneg(pair.x1.b), indirect)
             }
         }
-    }
-}
-
-/// The optimal weight of a path whose x₁ scatters it with BDF value `f1` (sr⁻¹; 0 for a
-/// one-bounce path, whose L₀(x₁) BDD=1 computes exactly). Stationarity of the §12 functional
-/// over weights that may depend on the light path's incoming direction at x₁ gives
-/// w₁ = (N_B f̃ + g)/[(N_B f̃ + f₁)(1 + κ(Q))] with Q = L₀/(N_B f̃) + ∫ ℓ/(N_B f̃ + f₁) dω₂,
-/// g = N_B·c·G̃; approximating f₁ by β = b/L_d inside Q, in division-safe form:
-/// w₁ = (N_B f̃ + g)·(N_B f̃ + β)·[N_B f̃/(N_B f̃ + f₁)] / D″ (method-notes.md).
-/// `optimal-split` passes f₁ = β for merge paths, `optimal-path` the photon's own value.
-fn optimal_per_path(
-    budget: &Budget,
-    pair: &Pair,
-    pixel: Option<&PixelTerms>,
-    f1: f64,
-    clamp: bool,
-) -> Weight {
-    let t = SplitTerms::new(
-        budget,
-        pair.x0.f_tilde,
-        pair.x1.direct,
-        pair.x1.indirect,
-        pair.x1.b,
-    );
-    let (a, b) = pixel.map_or((0.0, 0.0), |p| (p.a, p.b));
-    let a = nonneg(a);
-    let (one_minus_cb, clamped_cb) = budget.one_minus_cb(b);
-    let g = mul(budget.correlation_factor(), sat(a / one_minus_cb));
-    let w1 = if t.denominator == 0.0 {
-        0.0
-    } else {
-        // N_B f̃/(N_B f̃ + f₁): 1 for one-bounce paths, 0 where f̃ = 0 and f₁ > 0.
-        let share = if f1 == 0.0 {
-            1.0
-        } else if t.camera == 0.0 {
-            0.0
-        } else {
-            t.camera / sat(t.camera + f1)
-        };
-        let numerator = mul(mul(sat(t.camera + g), sat(t.camera + t.beta)), share);
-        sat(numerator / t.denominator)
-    };
-    let outside_unit = !(0.0..=1.0).contains(&w1);
-    Weight {
-        w1: if clamp { w1.clamp(0.0, 1.0) } else { w1 },
-        clamped_cb,
-        outside_unit,
     }
 }
 

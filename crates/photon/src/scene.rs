@@ -45,4 +45,13 @@ pub trait PhotonScene: Sync {
     /// only when [`TraceOptions::light_visibility`](crate::TraceOptions::light_visibility) is
     /// on (the MIS weights read it at photons' previous vertices).
     fn visible_light_mask(&self, sh: &Shading) -> u32;
+
+    /// [`Self::visible_light_mask`] at the first vertex of a path that light `light` emitted:
+    /// the emitted ray found nothing before `sh`, so a scene may take that light's
+    /// visibility from the path instead of a shadow ray (its side test still applies). The
+    /// default casts every ray.
+    fn visible_light_mask_reached(&self, sh: &Shading, light: usize) -> u32 {
+        let _ = light;
+        self.visible_light_mask(sh)
+    }
 }

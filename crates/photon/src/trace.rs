@@ -235,7 +235,11 @@ fn trace_one<S: PhotonScene + ?Sized>(
         // Only a vertex the path leaves is some photon's previous vertex, the one place the
         // weights read light visibility: a path's last vertex would waste its shadow rays.
         if options.light_visibility && continued {
-            vertex.at.lights = scene.visible_light_mask(&sh);
+            vertex.at.lights = if depth == 0 {
+                scene.visible_light_mask_reached(&sh, e.light)
+            } else {
+                scene.visible_light_mask(&sh)
+            };
         }
         visit(&PhotonArrival {
             photon: index,

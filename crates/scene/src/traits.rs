@@ -52,6 +52,11 @@ impl PhotonScene for Scene {
     fn visible_light_mask(&self, sh: &Shading) -> u32 {
         Scene::visible_light_mask(self, sh)
     }
+
+    #[inline]
+    fn visible_light_mask_reached(&self, sh: &Shading, light: usize) -> u32 {
+        Scene::visible_light_mask_reached(self, sh, light)
+    }
 }
 
 /// bdpm's own scene: its triangle mesh and materials.

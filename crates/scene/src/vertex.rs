@@ -29,6 +29,24 @@ impl Scene {
         mask
     }
 
+    /// [`Self::visible_light_mask`] at the first vertex `sh` of a photon path emitted by light
+    /// `light`: that light's bit needs no shadow ray, since the emitted ray reached `sh`
+    /// before anything else (only the side test remains). The others cast theirs.
+    pub fn visible_light_mask_reached(&self, sh: &Shading, light: usize) -> u32 {
+        let mut mask = 0;
+        for (l, point) in self.lights.iter().enumerate().take(MASKED_LIGHTS) {
+            let visible = if l == light {
+                sh.ng.dot(point.position - sh.p) > 0.0
+            } else {
+                self.light_visible(sh, point)
+            };
+            if visible {
+                mask |= 1 << l;
+            }
+        }
+        mask
+    }
+
     /// The weights' vertex at a camera hit: [`WeightVertex::at`] with its visibility bits.
     pub fn weight_vertex(&self, sh: &Shading) -> WeightVertex {
         WeightVertex::at(sh, self.visible_light_mask(sh))
@@ -41,8 +59,11 @@ impl Scene {
         if v.lights == 0 || v.n.dot(wo) <= 0.0 {
             return Vec3::ZERO;
         }
-        let frame = Frame::from_normal(v.n);
         let bdf = self.bdf_at_vertex(v);
+        if bdf.is_lambert() {
+            return self.direct_masked_lambert(v, wo, bdf.kd());
+        }
+        let frame = Frame::from_normal(v.n);
         let wo_l = frame.to_local(wo);
         let mut sum = Vec3::ZERO;
         for (l, light) in self.lights.iter().enumerate().take(MASKED_LIGHTS) {
@@ -55,6 +76,32 @@ impl Scene {
             let cos = v.n.dot(wi);
             if cos > 0.0 {
                 sum += bdf.eval(wo_l, frame.to_local(wi)) * light.intensity() * (cos / d2);
+            }
+        }
+        sum
+    }
+
+    /// [`Self::direct_masked`] at a Lambert vertex of diffuse albedo `kd`, the same bits
+    /// without the frame: f = kd/π wherever both directions lie above the surface, and a
+    /// direction's local z is its dot with the normal, as the BDF's own test reads it.
+    fn direct_masked_lambert(&self, v: &WeightVertex, wo: Vec3, kd: Vec3) -> Vec3 {
+        // The BDF's test also asks for finite local directions: a finite unit vector stays
+        // finite in any orthonormal frame, and a light's direction is finite where cos > 0.
+        if !wo.is_finite() {
+            return Vec3::ZERO;
+        }
+        let f = kd * std::f32::consts::FRAC_1_PI;
+        let mut sum = Vec3::ZERO;
+        for (l, light) in self.lights.iter().enumerate().take(MASKED_LIGHTS) {
+            if v.lights & (1 << l) == 0 {
+                continue;
+            }
+            let to = light.position - v.p;
+            let d2 = to.length_squared();
+            let wi = to / d2.sqrt();
+            let cos = v.n.dot(wi);
+            if cos > 0.0 && wi.is_finite() {
+                sum += f * light.intensity() * (cos / d2);
             }
         }
         sum
@@ -74,5 +121,85 @@ impl Scene {
         } else {
             self.direct_from(sh, wo, light)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use bdpm_bdf::Bdf;
+    use bdpm_geometry::{Frame, Geometry, TriangleMesh};
+    use glam::{Vec2, Vec3};
+
+    use crate::{Camera, PointLight, Scene, WeightVertex};
+
+    /// L₀ as the general path computes it: the BDF evaluated in the normal's frame.
+    fn direct_by_eval(scene: &Scene, v: &WeightVertex, wo: Vec3) -> Vec3 {
+        if v.lights == 0 || v.n.dot(wo) <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let frame = Frame::from_normal(v.n);
+        let bdf = scene.bdf_at_vertex(v);
+        let mut sum = Vec3::ZERO;
+        for (l, light) in scene.lights().iter().enumerate() {
+            if v.lights & (1 << l) == 0 {
+                continue;
+            }
+            let to = light.position - v.p;
+            let d2 = to.length_squared();
+            let wi = to / d2.sqrt();
+            let cos = v.n.dot(wi);
+            if cos > 0.0 {
+                let f = bdf.eval(frame.to_local(wo), frame.to_local(wi));
+                sum += f * light.intensity() * (cos / d2);
+            }
+        }
+        sum
+    }
+
+    #[test]
+    fn lambert_direct_light_without_the_frame_has_the_bits_of_the_bdf_evaluation() {
+        let mut mesh = TriangleMesh::default();
+        mesh.push_rect(Vec3::ZERO, Vec3::X * 4.0, Vec3::Y * 4.0, 0);
+        let lights = vec![
+            PointLight {
+                position: Vec3::new(0.3, -0.2, 1.1),
+                flux: Vec3::new(3.0, 2.0, 1.0),
+            },
+            PointLight {
+                position: Vec3::new(-1.0, 0.5, -0.7),
+                flux: Vec3::ONE,
+            },
+            PointLight {
+                position: Vec3::new(0.9, 0.9, 0.01),
+                flux: Vec3::splat(0.5),
+            },
+        ];
+        let scene = Scene::one_material(
+            Geometry::new(mesh).unwrap(),
+            Bdf::lambert(Vec3::new(0.7, 0.4, 0.2)).unwrap(),
+            lights,
+            Camera::look_at(Vec3::Z * 3.0, Vec3::ZERO, Vec3::Y, 40.0, 8, 8).unwrap(),
+        )
+        .unwrap();
+        let mut checked = 0;
+        for i in 0..2000u32 {
+            // A deterministic spread of points, tilted normals, directions and masks.
+            let t = i as f32 * 0.618_034;
+            let p = Vec3::new(t.sin() * 1.5, (t * 1.3).cos() * 1.5, 0.0);
+            let n = Vec3::new((t * 2.1).sin() * 0.4, (t * 0.7).cos() * 0.4, 1.0).normalize();
+            let wo = Vec3::new((t * 3.7).cos(), (t * 1.9).sin(), (t * 0.3).sin()).normalize();
+            let v = WeightVertex {
+                p,
+                n,
+                material: 0,
+                prim: 0,
+                bary: Vec2::ZERO,
+                lights: i % 8,
+            };
+            let fast = scene.direct_masked(&v, wo);
+            assert_eq!(fast, direct_by_eval(&scene, &v, wo), "vertex {i}");
+            checked += (fast != Vec3::ZERO) as u32;
+        }
+        assert!(checked > 500, "only {checked} lit cases");
     }
 }
