@@ -128,7 +128,7 @@ impl Variant {
     /// The shared settings with this entry's mode and its own settings, validated.
     pub(crate) fn settings(&self, shared: &RenderSettings) -> CliResult<RenderSettings> {
         let mut s = shared.clone();
-        s.select(self.mode);
+        s.mode = self.mode;
         if let Some(x) = self.sampler {
             s.sampler = x;
         }

@@ -770,7 +770,7 @@ fn render_settings(
         radius: None,
         radius_px: None,
         seed: r.seed.unwrap_or(d.seed),
-        mode: d.mode,
+        mode,
         threshold_radius,
         cache_bins: r.cache_bins.unwrap_or(d.cache_bins),
         cache_photons: r.cache_photons,
@@ -784,8 +784,6 @@ fn render_settings(
     if let Some(spec) = radius {
         spec.apply(&mut settings);
     }
-    // The file's `threshold_radius` is the threshold mode's radius.
-    settings.select(mode);
     settings
         .validate()
         .map_err(|e| ctx.bad(format!("render.{}", e.setting().key()), e.to_string()))?;

@@ -138,7 +138,7 @@ pub fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> CliResul
             )
         })?;
         // A scene file's `threshold_radius` stays the threshold mode's radius.
-        settings.select(mode);
+        settings.mode = mode;
     }
     if let Some(p) = o.passes {
         settings.passes = p;
