@@ -1,13 +1,15 @@
 //! The render settings of bdpm: one type ([`RenderSettings`]), one validation
-//! ([`RenderSettings::validate`]) and one record of them for reports and image headers
-//! ([`SettingsRecord`]), shared by the scene loader, the integrator and the driver.
+//! ([`RenderSettings::validate`]), one shape for settings given in part ([`PartialSettings`]:
+//! a scene file's `[render]` table, command-line overrides, a `--modes` entry) applied by one
+//! function, and one record of them for reports and image headers ([`SettingsRecord`]),
+//! shared by the scene loader, the integrator and the driver.
 //!
 //! Units: distances in metres.
 //!
 //! **Architecture invariant:** this crate depends on `bdpm-mis` (for [`Heuristic`] and
 //! [`NoiseModel`]) and on nothing of geometry, scenes or photons, so the loader can build
-//! settings without the integrator. Serde support (for [`RenderSettings`] and for
-//! [`SettingsRecord`]) is behind the cargo feature `serde`.
+//! settings without the integrator. Serde support (for [`RenderSettings`], for
+//! [`PartialSettings`] and for [`SettingsRecord`]) is behind the cargo feature `serde`.
 //!
 //! **One source for each parameter:** the mode is a [`Mode`] without parameters; the
 //! threshold radius R is [`RenderSettings::threshold_radius`] and the weight clamp asked for
@@ -33,10 +35,12 @@ use std::str::FromStr;
 
 pub use bdpm_mis::{Heuristic, HeuristicKind, NoiseModel};
 
+mod partial;
 mod record;
 #[cfg(feature = "serde")]
 mod serde_names;
 
+pub use partial::{PartialSettings, RadiusInput};
 pub use record::SettingsRecord;
 
 /// What a render computes: the unidirectional reference, or the BDPM mix with a weight mode.
@@ -332,6 +336,9 @@ pub enum Setting {
     Photons,
     /// [`RenderSettings::spp`].
     Spp,
+    /// [`RenderSettings::width`] and [`RenderSettings::height`] given together (a
+    /// `resolution` of the wrong length).
+    Resolution,
     /// [`RenderSettings::radius`] (or [`RenderSettings::radius_px`]).
     Radius,
     /// [`RenderSettings::mode`].
@@ -359,6 +366,7 @@ impl Setting {
             Setting::Passes => "passes",
             Setting::Photons => "photons",
             Setting::Spp => "spp",
+            Setting::Resolution => "resolution",
             Setting::Radius => "radius",
             Setting::Mode => "mode",
             Setting::NoiseModel => "noise_model",
@@ -431,6 +439,20 @@ pub enum SettingsError {
     /// A threshold radius R that is not finite, not > 0 or not a normal f32 (metres).
     #[error("{0:e} must be a finite number > 0 (metres)")]
     ThresholdRadius(f32),
+    /// A length as written that single precision cannot hold ([`metres`]).
+    #[error("{error}")]
+    Length {
+        /// Which setting.
+        setting: Setting,
+        /// What is wrong with the number.
+        error: LengthError,
+    },
+    /// A radius written as text that [`RadiusSpec::parse`] does not read; the message says why.
+    #[error("{0}")]
+    RadiusText(String),
+    /// A `resolution` of other than two values.
+    #[error("{0} values given; expected [width, height] in pixels")]
+    ResolutionCount(usize),
     /// A name that is none of the setting's values (a mode, noise model or sampler).
     #[error("unknown {} '{name}'; expected one of {}", setting.noun(), expected.join(", "))]
     UnknownName {
@@ -450,9 +472,13 @@ impl SettingsError {
             SettingsError::OutOfRange { setting, .. } => *setting,
             SettingsError::Radius(_)
             | SettingsError::RadiusPx(_)
-            | SettingsError::TwoRadii { .. } => Setting::Radius,
+            | SettingsError::TwoRadii { .. }
+            | SettingsError::RadiusText(_) => Setting::Radius,
             SettingsError::ThresholdRadius(_) => Setting::ThresholdRadius,
-            SettingsError::UnknownName { setting, .. } => *setting,
+            SettingsError::ResolutionCount(_) => Setting::Resolution,
+            SettingsError::Length { setting, .. } | SettingsError::UnknownName { setting, .. } => {
+                *setting
+            }
         }
     }
 }
@@ -690,6 +716,52 @@ pub fn check_radius(r: f32) -> Result<f32, RadiusError> {
         return Err(RadiusError::BelowMinimum(r));
     }
     Ok(r)
+}
+
+/// Why a length as written (metres, in f64 as the user typed it) cannot be used in single
+/// precision. The number is quoted as written ([`number_text`]): 1e300, not its f32 rounding.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum LengthError {
+    /// Not finite, or not > 0.
+    #[error("{} must be a finite number > 0 (metres)", number_text(*.0))]
+    NotPositive(f64),
+    /// Beyond the f32 range (it would become infinite).
+    #[error("{} is beyond the single-precision range (3.4e38 metres)", number_text(*.0))]
+    BeyondSingle(f64),
+    /// Below the smallest normal f32 (it would be zero or subnormal, and its reciprocal
+    /// infinite).
+    #[error(
+        "{} is below the smallest normal single-precision number (1.2e-38 metres)",
+        number_text(*.0)
+    )]
+    BelowNormal(f64),
+}
+
+/// A length as written, metres, converted to f32: finite and > 0 as written, and finite and
+/// normal in f32 (a subnormal length is zero for every computation that uses it). The one
+/// check of lengths typed by a user: scene-file lengths, radii on the command line.
+pub fn metres(v: f64) -> Result<f32, LengthError> {
+    if !(v.is_finite() && v > 0.0) {
+        return Err(LengthError::NotPositive(v));
+    }
+    let f = v as f32;
+    if !f.is_finite() {
+        return Err(LengthError::BeyondSingle(v));
+    }
+    if !f.is_normal() {
+        return Err(LengthError::BelowNormal(v));
+    }
+    Ok(f)
+}
+
+/// A number for messages: as written when of ordinary size, in scientific notation when huge
+/// or tiny (f64's `Display` would spell 1e300 with 301 digits).
+pub fn number_text(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-4..1e7).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
 }
 
 /// Default merge radius for a scene whose bounding box has largest extent `extent` (metres):

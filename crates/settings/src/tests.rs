@@ -156,6 +156,81 @@ fn names_parse_with_one_message() {
     );
 }
 
+#[test]
+fn partial_settings_apply_check_and_name_their_setting() {
+    let mut s = RenderSettings::default();
+    let p = PartialSettings {
+        resolution: Some(vec![32, 16]),
+        mode: Some("threshold".into()),
+        threshold_radius: Some(0.5),
+        radius: Some(RadiusInput::Text("1.5px".into())),
+        noise_model: Some("pinhole".into()),
+        pixel_jitter: Some(false),
+        cache_photons: Some(7),
+        ..PartialSettings::default()
+    };
+    p.apply(&mut s).unwrap();
+    assert_eq!((s.width, s.height, s.radius_px), (32, 16, Some(1.5)));
+    assert_eq!(s.heuristic(), Some(Heuristic::Threshold { radius: 0.5 }));
+    assert_eq!(
+        (s.noise_model, s.pixel_jitter, s.cache_photons),
+        (NoiseModel::Pinhole, false, Some(7))
+    );
+    // Fields not given keep their values.
+    assert_eq!(s.spp, RenderSettings::default().spp);
+    PartialSettings::default().apply(&mut s).unwrap();
+    assert_eq!(s.radius_px, Some(1.5));
+    let error = |p: PartialSettings| {
+        let e = p.apply(&mut RenderSettings::default()).unwrap_err();
+        (e.setting(), e.to_string())
+    };
+    let (setting, m) = error(PartialSettings {
+        resolution: Some(vec![1, 2, 3]),
+        ..PartialSettings::default()
+    });
+    assert_eq!(setting, Setting::Resolution);
+    assert!(m.contains("3 values given"), "{m}");
+    let (setting, m) = error(PartialSettings {
+        noise_model: Some("wide".into()),
+        ..PartialSettings::default()
+    });
+    assert_eq!(setting, Setting::NoiseModel);
+    assert!(m.contains("unknown noise model 'wide'"), "{m}");
+    let (setting, m) = error(PartialSettings {
+        radius: Some(RadiusInput::Metres(1e300)),
+        ..PartialSettings::default()
+    });
+    assert_eq!(setting, Setting::Radius);
+    assert!(m.starts_with("1e300 is beyond"), "{m}");
+    let (setting, m) = error(PartialSettings {
+        radius: Some(RadiusInput::Text("1 pixel".into())),
+        ..PartialSettings::default()
+    });
+    assert_eq!(setting, Setting::Radius);
+    assert!(m.contains("not a radius"), "{m}");
+    let (setting, m) = error(PartialSettings {
+        threshold_radius: Some(1e-39),
+        ..PartialSettings::default()
+    });
+    assert_eq!(setting, Setting::ThresholdRadius);
+    assert!(m.contains("1e-39") && m.contains("normal"), "{m}");
+    let (setting, _) = error(PartialSettings {
+        spp: Some(0),
+        ..PartialSettings::default()
+    });
+    assert_eq!(setting, Setting::Spp);
+}
+
+#[test]
+fn lengths_are_checked_as_written() {
+    assert_eq!(metres(0.25), Ok(0.25));
+    assert_eq!(metres(-1.0), Err(LengthError::NotPositive(-1.0)));
+    assert_eq!(metres(1e300), Err(LengthError::BeyondSingle(1e300)));
+    assert_eq!(metres(1e-39), Err(LengthError::BelowNormal(1e-39)));
+    assert_eq!(number_text(1e300), "1e300");
+    assert_eq!(number_text(0.25), "0.25");
+}
+
 #[cfg(feature = "serde")]
 #[test]
 fn serde_round_trip() {
