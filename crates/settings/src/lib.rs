@@ -8,8 +8,9 @@
 //!
 //! **Architecture invariant:** this crate depends on `bdpm-mis` (for [`Heuristic`] and
 //! [`NoiseModel`]) and on nothing of geometry, scenes or photons, so the loader can build
-//! settings without the integrator. Serde support (for [`RenderSettings`], for
-//! [`PartialSettings`] and for [`SettingsRecord`]) is behind the cargo feature `serde`.
+//! settings without the integrator. Serde support (for [`RenderSettings`], whose serialised
+//! form the run identity hashes, for [`PartialSettings`] and for [`SettingsRecord`]) is behind
+//! the cargo feature `serde`.
 //!
 //! **One source for each parameter:** the mode is a [`Mode`] without parameters; the
 //! threshold radius R is [`RenderSettings::threshold_radius`] and the weight clamp asked for
@@ -218,7 +219,7 @@ pub(crate) fn parse_name<T: Named>(name: &str) -> Result<T, SettingsError> {
 /// With the `serde` feature it serialises field by field under the field names (the keys of
 /// a scene file's `[render]` table where the two share a setting), the mode, the noise model
 /// and the sampler as their names; unknown keys are refused, and deserialising does not
-/// validate.
+/// validate. The run identity hashes this form (`bdpm_output::accum::settings_hash`).
 #[derive(Clone, Debug, PartialEq)]
 #[cfg_attr(
     feature = "serde",
