@@ -97,7 +97,7 @@ fn every_mode_agrees_with_the_light_reference() {
 fn per_photon_weighting_is_unbiased_and_camera_x1_weighting_is_not() {
     let (scene, _) = scene();
     let mut s = settings_for("threshold");
-    s.set_threshold_radius(1.2);
+    s.threshold_radius = 1.2;
     let renderer = Renderer::new(scene, &s).unwrap();
     let good = render_with(&renderer);
     check("threshold R=1.2", &good).unwrap();

@@ -36,7 +36,7 @@ fn every_bdpm_mode_matches_the_analytic_furnace() {
         let mut s = with_mode(&settings, mode, 24, 8, 40_000);
         s.radius = Some(0.05);
         // A threshold radius that splits the sphere, so both branches of eq. 11 are exercised.
-        s.set_threshold_radius(0.9);
+        s.threshold_radius = 0.9;
         let film = render(&scene, &s);
         let a = agreement(&film, &exact, 4.0);
         eprintln!("{mode:>16}: {a:?}");

@@ -60,15 +60,14 @@ pub fn with_mode(
     spp: u32,
     photons: u64,
 ) -> RenderSettings {
-    let mut s = RenderSettings {
+    // Like `--mode`: a threshold mode uses the settings' threshold radius.
+    RenderSettings {
         passes,
         spp,
         photons,
+        mode: Mode::parse(mode).unwrap_or_else(|| panic!("unknown mode {mode}")),
         ..settings.clone()
-    };
-    // Like `--mode`: a threshold mode gets the settings' threshold radius.
-    s.select(Mode::parse(mode).unwrap_or_else(|| panic!("unknown mode {mode}")));
-    s
+    }
 }
 
 /// The sphere furnace's parameters (method.md §10), read back from the loaded scene.

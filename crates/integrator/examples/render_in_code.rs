@@ -28,15 +28,15 @@ fn main() {
     )
     .expect("a valid scene");
 
-    let mut settings = RenderSettings {
+    let settings = RenderSettings {
         width: 32,
         height: 32,
         passes: 4,
         photons: 20_000,
         spp: 4,
+        mode: Mode::parse("balance").expect("a mode"),
         ..RenderSettings::default()
     };
-    settings.select(Mode::parse("balance").expect("a mode"));
     let renderer = Renderer::new(&scene, &settings).expect("valid settings");
     let mut film = Film::new(settings.width, settings.height);
     for pass in 0..settings.passes {

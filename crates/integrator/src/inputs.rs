@@ -541,16 +541,16 @@ mod tests {
             needs.photons_at_x0 && needs.second_vertex
         });
         for &name in mixing {
-            let mut settings = RenderSettings {
+            let settings = RenderSettings {
                 width: 8,
                 height: 8,
                 photons: 3000,
                 cache_photons: Some(20_000),
                 pixel_table_rays: Some(16),
                 radius: Some(0.05),
+                mode: Mode::parse(name).expect("a mode"),
                 ..RenderSettings::default()
             };
-            settings.select(Mode::parse(name).expect("a mode"));
             let renderer = Renderer::new(scene, &settings).expect("valid settings");
             let h = renderer.heuristic().expect("a mixing mode");
             let mix = renderer.mix(h);

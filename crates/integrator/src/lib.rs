@@ -35,9 +35,9 @@ pub use render::{
 // The settings are `bdpm-settings`'; re-exported so that a user of the integrator needs one
 // dependency.
 pub use bdpm_settings::{
-    FOOTPRINT_TABLE_RAYS, MIN_RADIUS, Mode, PINHOLE_TABLE_RAYS, RadiusError, RadiusSpec,
-    RenderSettings, Sampler, Setting, SettingsError, SettingsRecord, WeightClamp, check_radius,
-    default_radius,
+    FOOTPRINT_TABLE_RAYS, HeuristicKind, MIN_RADIUS, Mode, PINHOLE_TABLE_RAYS, PartialSettings,
+    RadiusError, RadiusInput, RadiusSpec, RenderSettings, Sampler, Setting, SettingsError,
+    SettingsRecord, WeightClamp, check_radius, default_radius,
 };
 pub use sampler::strata;
 pub use stage::Stage;

@@ -143,7 +143,7 @@ pub fn estimate_memory(
                     lower: "--photons",
                 }),
             }
-            if let Mode::Bdpm(h) = s.mode
+            if let Some(h) = s.heuristic()
                 && h.needs().radiance_cache
             {
                 let photons = s.cache_photons.unwrap_or(s.photons) as f64;
@@ -153,10 +153,7 @@ pub fn estimate_memory(
                     lower: "render.cache_photons (or --photons)",
                 });
             }
-            match s.mode {
-                Mode::Bdpm(h) => Some(h),
-                _ => None,
-            }
+            s.heuristic()
         }
     };
     if let Some(h) = heuristic {

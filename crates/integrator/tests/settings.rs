@@ -3,7 +3,7 @@
 
 use bdpm_bdf::Bdf;
 use bdpm_geometry::{Geometry, TriangleMesh};
-use bdpm_integrator::{Mode, RenderError, RenderSettings, Renderer, Setting, SettingsError};
+use bdpm_integrator::{Mode, RenderError, RenderSettings, Renderer, Setting};
 use bdpm_mis::Heuristic;
 use bdpm_scene::{Camera, PointLight, Scene};
 use glam::Vec3;
@@ -31,14 +31,13 @@ fn scene_seen_from(target: Vec3) -> Scene {
 }
 
 fn settings(mode: Mode) -> RenderSettings {
-    let mut s = RenderSettings {
+    RenderSettings {
         width: 8,
         height: 8,
         photons: 1000,
+        mode,
         ..RenderSettings::default()
-    };
-    s.select(mode);
-    s
+    }
 }
 
 #[test]
@@ -57,30 +56,28 @@ fn the_footprint_clamp_is_computed_not_written_into_the_mode() {
     assert!(r.settings().record(r.radius(), false, None).clamp_weights);
 }
 
+/// The threshold radius has one source, the settings' `threshold_radius`: the renderer's
+/// heuristic carries it, in the precision of the field.
 #[test]
-fn the_callers_threshold_radius_is_used_or_refused() {
+fn the_callers_threshold_radius_is_used() {
     let scene = scene();
-    let mut s = RenderSettings {
-        mode: Mode::Bdpm(Heuristic::Threshold { radius: 0.5 }),
-        ..settings(Mode::Path)
-    };
-    assert_eq!(
-        Renderer::new(&scene, &s).err(),
-        Some(RenderError::Settings(SettingsError::ThresholdMismatch {
-            mode: 0.5,
-            setting: 0.2
-        }))
-    );
-    s.set_threshold_radius(0.5);
+    let mut s = settings(Mode::parse("threshold").unwrap());
+    s.threshold_radius = 0.5;
     let r = Renderer::new(&scene, &s).unwrap();
     assert_eq!(r.heuristic(), Some(Heuristic::Threshold { radius: 0.5 }));
-    // A mode parsed by name carries 0.2 m in f64, the default field 0.2 m in f32: the same
-    // radius, so no mismatch.
-    let parsed = RenderSettings {
-        mode: Mode::parse("threshold").unwrap(),
-        ..settings(Mode::Path)
-    };
-    assert!(Renderer::new(&scene, &parsed).is_ok());
+    s.threshold_radius = 0.3;
+    let r = Renderer::new(&scene, &s).unwrap();
+    assert_eq!(
+        r.heuristic(),
+        Some(Heuristic::Threshold {
+            radius: 0.3f32.into()
+        })
+    );
+    s.threshold_radius = -1.0;
+    match Renderer::new(&scene, &s).err() {
+        Some(RenderError::Settings(e)) => assert_eq!(e.setting(), Setting::ThresholdRadius),
+        other => panic!("{other:?}"),
+    }
 }
 
 #[test]

@@ -10,7 +10,7 @@
 use std::path::Path;
 use std::process::ExitCode;
 
-use bdpm_integrator::{Mode, RadiusSpec, RenderSettings, Sampler};
+use bdpm_integrator::{Mode, PartialSettings, RadiusInput, RenderSettings, Sampler};
 use bdpm_output::cli::CliResult;
 use bdpm_output::files::write_atomic;
 use clap::Subcommand;
@@ -62,33 +62,24 @@ pub fn run(command: Command) -> Result<ExitCode, String> {
 pub(crate) struct Variant {
     /// The entry as given (trimmed): its name in tables, plots and files.
     pub(crate) name: String,
-    /// The weight or reference mode.
-    pub(crate) mode: Mode,
-    sampler: Option<Sampler>,
-    radius: Option<RadiusSpec>,
-    spp: Option<u32>,
-    photons: Option<u64>,
+    /// The mode and the entry's own settings, in the shape of a scene file's `[render]`.
+    settings: PartialSettings,
 }
 
 impl Variant {
-    /// Parses one entry; the error names the entry and what is wrong with it.
+    /// Parses one entry; the error names the entry and what is wrong with it. Names and
+    /// radii are checked here, so that a typo stops the command before any work; the ranges
+    /// are checked against the shared settings ([`Variant::settings`]).
     fn parse(entry: &str) -> CliResult<Variant> {
         let name = entry.trim().to_string();
         let mut parts = name.split(':');
         let mode_name = parts.next().unwrap_or_default();
-        let mode = Mode::parse(mode_name).ok_or_else(|| {
-            format!(
-                "--modes: unknown mode '{mode_name}' in '{name}'; expected some of {}",
-                Mode::names().join(", ")
-            )
-        })?;
-        let mut v = Variant {
-            name: name.clone(),
-            mode,
-            sampler: None,
-            radius: None,
-            spp: None,
-            photons: None,
+        mode_name
+            .parse::<Mode>()
+            .map_err(|e| format!("--modes: '{name}': {e}"))?;
+        let mut settings = PartialSettings {
+            mode: Some(mode_name.to_string()),
+            ..PartialSettings::default()
         };
         for part in parts {
             let bad = |why: &str| format!("--modes: '{part}' in '{name}': {why}");
@@ -97,23 +88,23 @@ impl Variant {
                 .ok_or_else(|| bad("expected KEY=VALUE (sampler, radius, spp, photons)"))?;
             match key {
                 "sampler" => {
-                    v.sampler = Some(Sampler::parse(value).ok_or_else(|| {
-                        bad(&format!(
-                            "expected one of {}",
-                            Sampler::ALL_NAMES.join(", ")
-                        ))
-                    })?)
+                    value.parse::<Sampler>().map_err(|e| bad(&e.to_string()))?;
+                    settings.sampler = Some(value.to_string());
                 }
-                "radius" => v.radius = Some(RadiusSpec::parse(value).map_err(|e| bad(&e))?),
+                "radius" => {
+                    let radius = RadiusInput::Text(value.to_string());
+                    radius.spec().map_err(|e| bad(&e.to_string()))?;
+                    settings.radius = Some(radius);
+                }
                 "spp" => {
-                    v.spp = Some(
+                    settings.spp = Some(
                         value
                             .parse()
                             .map_err(|_| bad("a whole number of samples"))?,
                     )
                 }
                 "photons" => {
-                    v.photons = Some(
+                    settings.photons = Some(
                         value
                             .parse()
                             .map_err(|_| bad("a whole number of photons"))?,
@@ -122,26 +113,14 @@ impl Variant {
                 _ => return Err(bad("unknown key; expected sampler, radius, spp or photons")),
             }
         }
-        Ok(v)
+        Ok(Variant { name, settings })
     }
 
     /// The shared settings with this entry's mode and its own settings, validated.
     pub(crate) fn settings(&self, shared: &RenderSettings) -> CliResult<RenderSettings> {
         let mut s = shared.clone();
-        s.select(self.mode);
-        if let Some(x) = self.sampler {
-            s.sampler = x;
-        }
-        if let Some(r) = self.radius {
-            r.apply(&mut s);
-        }
-        if let Some(n) = self.spp {
-            s.spp = n;
-        }
-        if let Some(n) = self.photons {
-            s.photons = n;
-        }
-        s.validate()
+        self.settings
+            .apply(&mut s)
             .map_err(|e| format!("--modes: '{}': {}: {e}", self.name, e.setting()))?;
         Ok(s)
     }

@@ -473,7 +473,7 @@ impl Setup<'_> {
                 clamp_weights: false,
             };
             let mut s = settings.clone();
-            s.mode = Mode::Bdpm(floor);
+            s.mode = Mode::Bdpm(floor.kind());
             let r = pool
                 .install(|| Renderer::new(scene, &s).map(Renderer::with_model_inputs))
                 .map_err(|e| format!("{}: {e}", args.scene.display()))?;

@@ -13,15 +13,13 @@ use std::sync::Arc;
 use bdpm_scene::{
     Camera, CameraError, Material, PointLight, Scene, SceneError, SceneTextures, Texture,
 };
-use bdpm_settings::{
-    Mode, NoiseModel, RadiusSpec, RenderSettings, Sampler, check_radius, default_radius,
-};
+// Numbers in messages as written, the same way the settings' messages write them.
+use bdpm_settings::number_text as num;
+use bdpm_settings::{PartialSettings, RenderSettings, check_radius, default_radius};
 use glam::{Mat4, Vec2, Vec3};
 
 use crate::gltf_mesh::{Origin, load_gltf};
-use crate::schema::{
-    CameraDef, MaterialDef, Point, RadiusDef, RenderDef, SceneFile, ShapeDef, Triple,
-};
+use crate::schema::{CameraDef, MaterialDef, Point, SceneFile, ShapeDef, Triple};
 use crate::{LoadError, LoadReport, LoadedScene, limits};
 
 /// The file being loaded: the source of every message's prefix.
@@ -63,36 +61,10 @@ impl Ctx<'_> {
         Ok(Vec3::new(p.0[0] as f32, p.0[1] as f32, p.0[2] as f32))
     }
 
-    /// A positive number, converted to f32: it must be finite and > 0 as written, and stay
-    /// finite and normal in f32 (a subnormal length is zero for every computation that uses
-    /// it, and its reciprocal overflows).
-    fn positive(&self, field: &str, v: f64, unit: &str) -> Result<f32, LoadError> {
-        if !(v.is_finite() && v > 0.0) {
-            return Err(self.bad(
-                field,
-                format!("{} must be a finite number > 0 ({unit})", num(v)),
-            ));
-        }
-        let f = v as f32;
-        if !f.is_finite() {
-            return Err(self.bad(
-                field,
-                format!(
-                    "{} is beyond the single-precision range (3.4e38 {unit})",
-                    num(v)
-                ),
-            ));
-        }
-        if !f.is_normal() {
-            return Err(self.bad(
-                field,
-                format!(
-                    "{} is below the smallest normal single-precision number (1.2e-38 {unit})",
-                    num(v)
-                ),
-            ));
-        }
-        Ok(f)
+    /// A positive length as written, converted to f32 ([`bdpm_settings::metres`], the check
+    /// the render settings' lengths get too).
+    fn positive(&self, field: &str, v: f64) -> Result<f32, LoadError> {
+        bdpm_settings::metres(v).map_err(|e| self.bad(field, e.to_string()))
     }
 
     /// A number in [lo, hi] (f32 limits), converted to f32.
@@ -190,17 +162,6 @@ impl Ctx<'_> {
     }
 }
 
-/// A number for messages: as written when of ordinary size, in scientific notation when huge
-/// or tiny (f64's `Display` would spell 1e300 with 301 digits).
-pub(crate) fn num(v: f64) -> String {
-    if v != 0.0 && v.is_finite() && !(1e-4..1e7).contains(&v.abs()) {
-        format!("{v:e}")
-    } else {
-        format!("{v}")
-    }
-}
-
-/// Three numbers for messages, `[x, y, z]`.
 fn point_text(p: [f64; 3]) -> String {
     format!("[{}, {}, {}]", num(p[0]), num(p[1]), num(p[2]))
 }
@@ -472,7 +433,7 @@ fn sphere(
         s.center.unwrap_or(Point([0.0; 3])),
     )?;
     let radius = ctx.required(&format!("{prefix}.radius"), s.radius, "metres")?;
-    let radius = ctx.positive(&format!("{prefix}.radius"), radius, "metres")?;
+    let radius = ctx.positive(&format!("{prefix}.radius"), radius)?;
     let freq = ctx.count(
         &format!("{prefix}.subdivisions"),
         s.subdivisions
@@ -692,102 +653,15 @@ fn materials(
     Ok(out)
 }
 
+/// The `[render]` table applied onto the defaults ([`PartialSettings::apply`]: the checks
+/// the command line's overrides get too), each error named `render.<key>`; and the default
+/// output file.
 fn render_settings(
     ctx: &Ctx<'_>,
-    r: RenderDef,
+    r: PartialSettings,
 ) -> Result<(RenderSettings, Option<PathBuf>), LoadError> {
-    let d = RenderSettings::default();
-    let [width, height] = match r.resolution.as_deref() {
-        None => [d.width, d.height],
-        Some(&[w, h]) => [w, h],
-        Some(other) => {
-            return Err(ctx.bad(
-                "render.resolution",
-                format!(
-                    "{} values given; expected [width, height] in pixels",
-                    other.len()
-                ),
-            ));
-        }
-    };
-    let mode = match r.mode {
-        None => d.mode,
-        Some(name) => Mode::parse(&name).ok_or_else(|| {
-            ctx.bad(
-                "render.mode",
-                format!(
-                    "unknown mode '{name}'; expected one of {}",
-                    Mode::names().join(", ")
-                ),
-            )
-        })?,
-    };
-    let noise_model = match r.noise_model {
-        None => d.noise_model,
-        Some(name) => NoiseModel::parse(&name).ok_or_else(|| {
-            ctx.bad(
-                "render.noise_model",
-                format!(
-                    "unknown noise model '{name}'; expected one of {}",
-                    NoiseModel::ALL_NAMES.join(", ")
-                ),
-            )
-        })?,
-    };
-    let sampler = match r.sampler {
-        None => d.sampler,
-        Some(name) => Sampler::parse(&name).ok_or_else(|| {
-            ctx.bad(
-                "render.sampler",
-                format!(
-                    "unknown sampler '{name}'; expected one of {}",
-                    Sampler::ALL_NAMES.join(", ")
-                ),
-            )
-        })?,
-    };
-    // The values as written are checked here (a number beyond f32 is reported as written);
-    // every range is checked once, by `RenderSettings::validate`.
-    let radius = match r.radius {
-        None => None,
-        Some(RadiusDef::Metres(v)) => Some(RadiusSpec::Metres(
-            ctx.positive("render.radius", v, "metres")?.into(),
-        )),
-        Some(RadiusDef::Text(t)) => {
-            Some(RadiusSpec::parse(&t).map_err(|e| ctx.bad("render.radius", e))?)
-        }
-    };
-    let threshold_radius = match r.threshold_radius {
-        None => d.threshold_radius,
-        Some(v) => ctx.positive("render.threshold_radius", v, "metres")?,
-    };
-    let mut settings = RenderSettings {
-        width,
-        height,
-        passes: r.passes.unwrap_or(d.passes),
-        photons: r.photons.unwrap_or(d.photons),
-        spp: r.spp.unwrap_or(d.spp),
-        radius: None,
-        radius_px: None,
-        seed: r.seed.unwrap_or(d.seed),
-        mode: d.mode,
-        threshold_radius,
-        cache_bins: r.cache_bins.unwrap_or(d.cache_bins),
-        cache_photons: r.cache_photons,
-        pixel_table_rays: r.pixel_table_rays.or(d.pixel_table_rays),
-        clamp_weights: r.clamp_weights.unwrap_or(d.clamp_weights),
-        pixel_jitter: r.pixel_jitter.unwrap_or(d.pixel_jitter),
-        noise_model,
-        sampler,
-        roulette_depth: r.roulette_depth.unwrap_or(d.roulette_depth),
-    };
-    if let Some(spec) = radius {
-        spec.apply(&mut settings);
-    }
-    // The file's `threshold_radius` is the threshold mode's radius.
-    settings.select(mode);
-    settings
-        .validate()
+    let mut settings = RenderSettings::default();
+    r.apply(&mut settings)
         .map_err(|e| ctx.bad(format!("render.{}", e.setting().key()), e.to_string()))?;
     if let Some(out) = &r.output
         && out.as_os_str().is_empty()

@@ -1,4 +1,5 @@
-//! The scene file as written: serde types that mirror the TOML one to one.
+//! The scene file as written: serde types that mirror the TOML one to one. The `[render]`
+//! table is bdpm-settings' [`PartialSettings`], the one shape of settings given in part.
 //!
 //! Everything is optional at this level, so that a missing value is reported by the
 //! validation in `build.rs` with its full dotted path (serde would only name the key).
@@ -8,6 +9,7 @@ use std::collections::BTreeMap;
 use std::fmt;
 use std::path::PathBuf;
 
+use bdpm_settings::PartialSettings;
 use serde::Deserialize;
 use serde::de::{self, Deserializer, SeqAccess, Visitor};
 
@@ -15,7 +17,8 @@ use serde::de::{self, Deserializer, SeqAccess, Visitor};
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct SceneFile {
-    pub(crate) render: Option<RenderDef>,
+    /// `[render]`: the settings given, in the shape the command line's overrides share.
+    pub(crate) render: Option<PartialSettings>,
     pub(crate) camera: Option<CameraDef>,
     #[serde(default)]
     pub(crate) light: Vec<LightDef>,
@@ -24,39 +27,6 @@ pub(crate) struct SceneFile {
     pub(crate) material: BTreeMap<String, MaterialDef>,
     #[serde(default)]
     pub(crate) shape: Vec<ShapeDef>,
-}
-
-/// `[render].radius`: a number of metres, or text such as `"1.2px"` (pixel footprints) or
-/// `"0.01m"`.
-#[derive(Debug, Deserialize)]
-#[serde(untagged)]
-pub(crate) enum RadiusDef {
-    Metres(f64),
-    Text(String),
-}
-
-/// `[render]`.
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct RenderDef {
-    /// `[width, height]`; a `Vec` so that a wrong count is reported rather than truncated.
-    pub(crate) resolution: Option<Vec<u32>>,
-    pub(crate) passes: Option<u32>,
-    pub(crate) photons: Option<u64>,
-    pub(crate) spp: Option<u32>,
-    pub(crate) radius: Option<RadiusDef>,
-    pub(crate) seed: Option<u64>,
-    pub(crate) mode: Option<String>,
-    pub(crate) output: Option<PathBuf>,
-    pub(crate) threshold_radius: Option<f64>,
-    pub(crate) cache_bins: Option<u32>,
-    pub(crate) cache_photons: Option<u64>,
-    pub(crate) pixel_table_rays: Option<u32>,
-    pub(crate) clamp_weights: Option<bool>,
-    pub(crate) pixel_jitter: Option<bool>,
-    pub(crate) noise_model: Option<String>,
-    pub(crate) sampler: Option<String>,
-    pub(crate) roulette_depth: Option<u32>,
 }
 
 /// `[camera]`.

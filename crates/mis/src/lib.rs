@@ -51,7 +51,7 @@ use std::fmt;
 
 mod modes;
 mod overlap;
-pub use modes::UnknownMode;
+pub use modes::{HeuristicKind, UnknownMode};
 pub use overlap::{
     NoiseModel, effective_samples, lens_fraction, overlap_factor, overlap_factor_stratified,
 };

@@ -498,7 +498,16 @@ fn names_round_trip() {
         assert_eq!(Heuristic::parse(name), Some(heuristic));
         assert_eq!(name.parse::<Heuristic>(), Ok(heuristic));
         assert_eq!(heuristic.to_string(), *name);
+        let kind = heuristic.kind();
+        assert_eq!((kind.name(), kind.heuristic()), (*name, heuristic));
+        assert_eq!(HeuristicKind::parse(name), Some(kind));
     }
+    // The kind leaves the parameters out.
+    assert_eq!(
+        Heuristic::Threshold { radius: 0.5 }.kind(),
+        HeuristicKind::Threshold
+    );
+    assert_eq!(HeuristicKind::parse("Optimal"), None);
     assert_eq!(Heuristic::parse("Optimal"), None);
     let err = "Optimal".parse::<Heuristic>().unwrap_err();
     assert_eq!(

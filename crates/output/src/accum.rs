@@ -15,6 +15,8 @@ use std::path::{Path, PathBuf};
 use exr::prelude::{AnyChannel, FlatSamples};
 use glam::DVec3;
 
+use bdpm_integrator::RenderSettings;
+
 use crate::cli::Overrides;
 use crate::exr::stage_exr_channels;
 use crate::files::Staged;
@@ -237,7 +239,8 @@ pub struct Identity {
     /// [`assets_hash`] of the files the scene references; `None` when read from a file of an
     /// older bdpm that did not record it.
     pub assets_hash: Option<String>,
-    /// FNV-1a of the settings (pass count excluded), hex; covers seed, resolution, mode, ….
+    /// [`settings_hash`]: FNV-1a of the settings' serialised form (pass count excluded), hex;
+    /// covers seed, resolution, mode, ….
     pub settings_hash: String,
     /// Master seed (also inside the settings hash; kept readable for error messages).
     pub seed: u64,
@@ -251,7 +254,7 @@ impl Identity {
     pub fn of(
         scene: &Path,
         gltf_files: &[PathBuf],
-        settings: &bdpm_integrator::RenderSettings,
+        settings: &RenderSettings,
         overrides: &Overrides,
     ) -> Result<Identity, String> {
         let bytes =
@@ -334,22 +337,35 @@ fn flags(args: &[String]) -> Vec<String> {
     out
 }
 
-/// FNV-1a of the settings' debug form with the pass count zeroed: a part's pass count is not
-/// part of what it renders (each pass depends on (seed, pass index, …) only).
-pub fn settings_hash(settings: &bdpm_integrator::RenderSettings) -> String {
-    let mut s = settings.clone();
-    s.passes = 0;
-    format!("{:016x}", fnv1a(format!("{s:?}").as_bytes()))
+/// FNV-1a, hex, of the settings' serialised form (serde, compact JSON: every field under its
+/// name in declaration order, the mode, noise model and sampler as their names). A stable
+/// basis: it changes when a setting or its name changes, not when `Debug` formatting does.
+fn serialised_hash(settings: &RenderSettings) -> String {
+    // Plain numbers, strings and options: serialising cannot fail.
+    let json = serde_json::to_string(settings).expect("the settings serialise to JSON");
+    format!("{:016x}", fnv1a(json.as_bytes()))
 }
 
-/// FNV-1a of the settings with the pass count and the seed zeroed, hex: the same for two
-/// renders that estimate the same image with the same estimator (header attribute
-/// `bdpm.estimator_hash`, checked by `predict --measured`).
-pub fn estimator_hash(settings: &bdpm_integrator::RenderSettings) -> String {
-    let mut s = settings.clone();
-    s.passes = 0;
-    s.seed = 0;
-    format!("{:016x}", fnv1a(format!("{s:?}").as_bytes()))
+/// The settings hash of the run identity (`accum.settings_hash`): every setting but the pass
+/// count (zeroed before hashing), which is not part of what a part renders (each pass depends
+/// on (seed, pass index, …) only), so parts with other pass counts merge and a render resumes
+/// with more passes.
+pub fn settings_hash(settings: &RenderSettings) -> String {
+    serialised_hash(&RenderSettings {
+        passes: 0,
+        ..settings.clone()
+    })
+}
+
+/// The settings hash with the seed zeroed as well: the same for two renders that estimate the
+/// same image with the same estimator (header attribute `bdpm.estimator_hash`, checked by
+/// `predict --measured`).
+pub fn estimator_hash(settings: &RenderSettings) -> String {
+    serialised_hash(&RenderSettings {
+        passes: 0,
+        seed: 0,
+        ..settings.clone()
+    })
 }
 
 /// Pass indices as ranges, e.g. `0-3,6,8-9`.
@@ -696,6 +712,52 @@ mod tests {
     fn fnv_hash_is_stable() {
         assert_eq!(fnv1a(b""), 0xcbf2_9ce4_8422_2325);
         assert_eq!(fnv1a(b"a"), 0xaf63_dc4c_8601_ec8c);
+    }
+
+    /// The identity hashes the serialised settings: a setting that shapes the image changes
+    /// them, the pass count (and for the estimator hash the seed) does not, and the value for
+    /// the defaults is pinned, so that a change of the serialised form (a renamed or reordered
+    /// field) is seen here first: it makes older accumulation files another run
+    /// (docs/distributed.md).
+    #[test]
+    fn the_settings_hashes_follow_the_serialised_settings() {
+        use bdpm_integrator::{Mode, Sampler};
+        let base = RenderSettings::default();
+        let json = serde_json::to_string(&RenderSettings {
+            passes: 0,
+            ..base.clone()
+        })
+        .unwrap();
+        assert_eq!(
+            settings_hash(&base),
+            format!("{:016x}", fnv1a(json.as_bytes()))
+        );
+        assert_eq!(settings_hash(&base), "0a369a463541c341");
+        let changed = |f: &dyn Fn(&mut RenderSettings)| {
+            let mut s = base.clone();
+            f(&mut s);
+            (settings_hash(&s), estimator_hash(&s))
+        };
+        let (settings, estimator) = (settings_hash(&base), estimator_hash(&base));
+        assert_eq!(
+            changed(&|s| s.passes = 99),
+            (settings.clone(), estimator.clone())
+        );
+        let (s, e) = changed(&|s| s.seed = 2);
+        assert_ne!(s, settings);
+        assert_eq!(e, estimator);
+        let relevant: [&dyn Fn(&mut RenderSettings); 6] = [
+            &|s| s.spp = 5,
+            &|s| s.mode = Mode::Path,
+            &|s| s.threshold_radius = 0.3,
+            &|s| s.clamp_weights = true,
+            &|s| s.radius_px = Some(1.0),
+            &|s| s.sampler = Sampler::Independent,
+        ];
+        for f in relevant {
+            let (s, e) = changed(f);
+            assert!(s != settings && e != estimator);
+        }
     }
 
     #[test]

@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use bdpm_integrator::{
-    Mode, NoiseModel, RadiusSpec, RenderSettings, Sampler, Setting, Stage, StageProbe,
+    PartialSettings, RadiusInput, RadiusSpec, RenderSettings, Setting, Stage, StageProbe,
 };
 use bdpm_load::{LoadReport, load_scene};
 use bdpm_scene::Scene;
@@ -39,7 +39,12 @@ macro_rules! say_err {
 /// An error for the user: one line, no backtrace.
 pub type CliResult<T> = Result<T, String>;
 
-/// Settings that override the scene file's `[render]` table.
+/// Settings that override the scene file's `[render]` table: the flags of the settings that
+/// [`PartialSettings`] holds (`--no-jitter` for `pixel_jitter = false`), plus `--threads`.
+/// Kept apart from [`PartialSettings`] because the flags have their own names, parsers, help
+/// texts and spelling (`WxH`), and are written back as arguments for the accumulation file
+/// ([`Overrides::to_args`]); they are applied through it ([`Overrides::partial`]), so every
+/// check and message of a value is the scene file's.
 #[derive(Args, Debug, Clone, Default)]
 pub struct Overrides {
     /// Integrator and weight mode: path, light, bdd0, bdd1, threshold, algebraic-direct, algebraic,
@@ -60,8 +65,8 @@ pub struct Overrides {
     pub spp: Option<u32>,
     /// Merge radius: metres (0.01) or pixel footprints (1.2px: the median footprint of the
     /// pixels' first hits at this resolution)
-    #[arg(long, allow_negative_numbers = true, value_parser = RadiusSpec::parse)]
-    pub radius: Option<RadiusSpec>,
+    #[arg(long, allow_negative_numbers = true, value_parser = radius_text)]
+    pub radius: Option<String>,
     /// Master seed of all random streams.
     #[arg(long, allow_negative_numbers = true, value_parser = whole::<u64>)]
     pub seed: Option<u64>,
@@ -128,77 +133,26 @@ pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
-/// Applies command-line overrides to the settings loaded from the scene file.
+/// A merge radius for a flag, checked as [`RadiusSpec::parse`] reads it and kept as typed
+/// (as a scene file's text radius is).
+pub fn radius_text(s: &str) -> Result<String, String> {
+    RadiusSpec::parse(s).map(|_| s.trim().to_string())
+}
+
+/// Applies command-line overrides to the settings loaded from the scene file
+/// ([`PartialSettings::apply`]); an error names the flag.
 pub fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> CliResult<()> {
-    if let Some(name) = &o.mode {
-        let mode = Mode::parse(name).ok_or_else(|| {
-            format!(
-                "--mode: unknown mode '{name}'; expected one of {}",
-                Mode::names().join(", ")
-            )
-        })?;
-        // A scene file's `threshold_radius` stays the threshold mode's radius.
-        settings.select(mode);
-    }
-    if let Some(p) = o.passes {
-        settings.passes = p;
-    }
-    if let Some((w, h)) = o.resolution {
-        settings.width = w;
-        settings.height = h;
-    }
-    if let Some(n) = o.photons {
-        settings.photons = n;
-    }
-    if let Some(n) = o.spp {
-        settings.spp = n;
-    }
-    if let Some(spec) = o.radius {
-        // `RadiusSpec::parse` took only finite numbers > 0; metres must also fit in f32.
-        if let RadiusSpec::Metres(r) = spec
-            && r > f32::MAX as f64
-        {
-            let r = if (1e-4..1e7).contains(&r.abs()) {
-                format!("{r}")
-            } else {
-                format!("{r:e}")
-            };
-            return Err(format!(
-                "--radius must be a positive number of metres below 3.4e38, not {r}"
-            ));
-        }
-        spec.apply(settings);
-    }
-    if o.no_jitter {
-        settings.pixel_jitter = false;
-    }
-    if let Some(name) = &o.noise_model {
-        settings.noise_model = NoiseModel::parse(name).ok_or_else(|| {
-            format!(
-                "--noise-model: unknown model '{name}'; expected one of {}",
-                NoiseModel::ALL_NAMES.join(", ")
-            )
-        })?;
-    }
-    if let Some(name) = &o.sampler {
-        settings.sampler = Sampler::parse(name).ok_or_else(|| {
-            format!(
-                "--sampler: unknown sampler '{name}'; expected one of {}",
-                Sampler::ALL_NAMES.join(", ")
-            )
-        })?;
-    }
-    if let Some(s) = o.seed {
-        settings.seed = s;
-    }
-    // The scene file's values were validated by the loader, so an error here is a flag's.
-    settings.validate().map_err(|e| {
+    o.partial().apply(settings).map_err(|e| {
+        // The scene file's values were validated by the loader, so an error is a flag's.
         let flag = match e.setting() {
-            Setting::Width | Setting::Height => "--resolution".to_string(),
+            Setting::Width | Setting::Height | Setting::Resolution => "--resolution".to_string(),
             Setting::Passes => "--passes".into(),
             Setting::Photons => "--photons".into(),
             Setting::Spp => "--spp".into(),
             Setting::Radius => "--radius".into(),
+            Setting::Mode => "--mode".into(),
+            Setting::NoiseModel => "--noise-model".into(),
+            Setting::Sampler => "--sampler".into(),
             other => format!("render.{}", other.key()),
         };
         format!("{flag}: {e}")
@@ -264,6 +218,23 @@ pub fn prepare(path: &Path, overrides: &Overrides) -> CliResult<Prepared> {
 }
 
 impl Overrides {
+    /// The settings these flags give, in the shape of a scene file's `[render]` table.
+    pub fn partial(&self) -> PartialSettings {
+        PartialSettings {
+            mode: self.mode.clone(),
+            passes: self.passes,
+            resolution: self.resolution.map(|(w, h)| vec![w, h]),
+            photons: self.photons,
+            spp: self.spp,
+            radius: self.radius.clone().map(RadiusInput::Text),
+            seed: self.seed,
+            pixel_jitter: self.no_jitter.then_some(false),
+            noise_model: self.noise_model.clone(),
+            sampler: self.sampler.clone(),
+            ..PartialSettings::default()
+        }
+    }
+
     /// The overrides that shape the image as command-line arguments (`--threads` does not).
     pub fn to_args(&self) -> Vec<String> {
         let o = self;
@@ -284,9 +255,8 @@ impl Overrides {
         if let Some(n) = o.spp {
             push("--spp", n.to_string());
         }
-        if let Some(r) = o.radius {
-            // `Display` of an f64 is its shortest exact form.
-            push("--radius", r.to_string());
+        if let Some(r) = &o.radius {
+            push("--radius", r.clone());
         }
         if let Some(s) = o.seed {
             push("--seed", s.to_string());
@@ -485,7 +455,7 @@ mod tests {
             mode: Some("optimal".into()),
             resolution: Some((16, 8)),
             photons: Some(100),
-            radius: Some(RadiusSpec::Metres(0.1)),
+            radius: Some("0.1".into()),
             seed: Some(7),
             no_jitter: true,
             sampler: Some("independent".into()),
@@ -493,13 +463,49 @@ mod tests {
         };
         let back = Overrides::from_args(&o.to_args()).unwrap();
         assert_eq!(back.to_args(), o.to_args());
-        assert_eq!(back.radius, Some(RadiusSpec::Metres(0.1)));
+        assert_eq!(back.radius.as_deref(), Some("0.1"));
         let px = Overrides {
-            radius: Some(RadiusSpec::Pixels(1.25)),
+            radius: Some("1.25px".into()),
             ..Default::default()
         };
         let back = Overrides::from_args(&px.to_args()).unwrap();
-        assert_eq!(back.radius, Some(RadiusSpec::Pixels(1.25)));
+        assert_eq!(back.radius.as_deref(), Some("1.25px"));
+    }
+
+    /// The flags go through the scene file's checks, and an error names the flag.
+    #[test]
+    fn overrides_apply_as_partial_settings() {
+        let o = Overrides {
+            mode: Some("threshold".into()),
+            resolution: Some((16, 8)),
+            radius: Some("2px".into()),
+            no_jitter: true,
+            ..Default::default()
+        };
+        let mut s = RenderSettings::default();
+        apply_overrides(&mut s, &o).unwrap();
+        assert_eq!((s.width, s.height, s.radius_px), (16, 8, Some(2.0)));
+        assert!(!s.pixel_jitter);
+        assert_eq!(s.mode.name(), "threshold");
+        let error = |o: Overrides| apply_overrides(&mut RenderSettings::default(), &o).unwrap_err();
+        let e = error(Overrides {
+            noise_model: Some("wide".into()),
+            ..Default::default()
+        });
+        assert!(
+            e.starts_with("--noise-model: unknown noise model 'wide'; expected one of"),
+            "{e}"
+        );
+        let e = error(Overrides {
+            radius: Some("1e300".into()),
+            ..Default::default()
+        });
+        assert!(e.starts_with("--radius: 1e300 is beyond"), "{e}");
+        let e = error(Overrides {
+            mode: Some("fast".into()),
+            ..Default::default()
+        });
+        assert!(e.starts_with("--mode: unknown mode 'fast'; expected one of path, light"));
     }
 
     #[test]

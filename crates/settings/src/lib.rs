@@ -1,27 +1,30 @@
 //! The render settings of bdpm: one type ([`RenderSettings`]), one validation
-//! ([`RenderSettings::validate`]) and one record of them for reports and image headers
-//! ([`SettingsRecord`]), shared by the scene loader, the integrator and the driver.
+//! ([`RenderSettings::validate`]), one shape for settings given in part ([`PartialSettings`]:
+//! a scene file's `[render]` table, command-line overrides, a `--modes` entry) applied by one
+//! function, and one record of them for reports and image headers ([`SettingsRecord`]),
+//! shared by the scene loader, the integrator and the driver.
 //!
 //! Units: distances in metres.
 //!
 //! **Architecture invariant:** this crate depends on `bdpm-mis` (for [`Heuristic`] and
 //! [`NoiseModel`]) and on nothing of geometry, scenes or photons, so the loader can build
-//! settings without the integrator. Serde support is behind the cargo feature `serde`.
+//! settings without the integrator. Serde support (for [`RenderSettings`], whose serialised
+//! form the run identity hashes, for [`PartialSettings`] and for [`SettingsRecord`]) is behind
+//! the cargo feature `serde`.
 //!
-//! **No silent rewrites:** the parameters a caller puts into [`Mode`] are the ones used.
-//! The threshold radius lives both in the `threshold` heuristic and in
-//! [`RenderSettings::threshold_radius`]; [`RenderSettings::validate`] rejects the two when
-//! they disagree instead of picking one. The weight clamp the renderer uses is computed, not
-//! written back: [`RenderSettings::weight_clamp`] says whether the caller asked for it and
-//! whether the footprint noise model needs it, and [`RenderSettings::heuristic`] gives the
-//! heuristic in force with that clamp.
+//! **One source for each parameter:** the mode is a [`Mode`] without parameters; the
+//! threshold radius R is [`RenderSettings::threshold_radius`] and the weight clamp asked for
+//! is [`RenderSettings::clamp_weights`], nowhere else. [`RenderSettings::heuristic`] builds
+//! the heuristic in force from the mode and those settings, with the clamp the footprint
+//! noise model needs ([`RenderSettings::weight_clamp`]); nothing is written back.
 //!
 //! ```
-//! use bdpm_settings::{Mode, RenderSettings, Setting, SettingsError};
+//! use bdpm_settings::{Heuristic, Mode, RenderSettings, Setting, SettingsError};
 //! let mut s = RenderSettings::default();
-//! s.select(Mode::parse("threshold").unwrap());
-//! s.set_threshold_radius(0.5);
+//! s.mode = "threshold".parse().unwrap();
+//! s.threshold_radius = 0.5;
 //! assert!(s.validate().is_ok());
+//! assert_eq!(s.heuristic(), Some(Heuristic::Threshold { radius: 0.5 }));
 //! s.passes = 0;
 //! let e = s.validate().unwrap_err();
 //! assert_eq!(e.setting(), Setting::Passes);
@@ -29,17 +32,22 @@
 //! ```
 
 use std::fmt;
+use std::str::FromStr;
 
-pub use bdpm_mis::{Heuristic, NoiseModel};
+pub use bdpm_mis::{Heuristic, HeuristicKind, NoiseModel};
 
+mod partial;
 mod record;
 #[cfg(feature = "serde")]
-mod serde_impl;
+mod serde_names;
 
+pub use partial::{PartialSettings, RadiusInput};
 pub use record::SettingsRecord;
 
 /// What a render computes: the unidirectional reference, or the BDPM mix with a weight mode.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A mode carries no parameters: the threshold radius and the weight clamp are settings of
+/// their own ([`RenderSettings::heuristic`] combines them).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Mode {
     /// Unidirectional path tracing with next-event estimation (the reference).
     Path,
@@ -47,11 +55,12 @@ pub enum Mode {
     /// reference that converges fast around small bright secondary sources).
     Light,
     /// The BDD=0/BDD=1 photon-mapping mix weighted by a heuristic (method.md §4, §8).
-    Bdpm(Heuristic),
+    Bdpm(HeuristicKind),
 }
 
 impl Mode {
-    /// Every mode name the parser accepts, the references (`path`, `light`) first.
+    /// Every mode name the parser accepts: the references (`path`, `light`), then the
+    /// weighting modes of bdpm-mis's table ([`Heuristic::ALL_NAMES`]).
     pub fn names() -> Vec<&'static str> {
         ["path", "light"]
             .into_iter()
@@ -59,14 +68,13 @@ impl Mode {
             .collect()
     }
 
-    /// Parses a mode name (`path`, `bdd0`, `bdd1`, `threshold`, …) with the heuristic's
-    /// default parameters ([`Heuristic::parse`]); [`RenderSettings::select`] gives it the
-    /// settings' own.
+    /// Parses a mode name (`path`, `bdd0`, `bdd1`, `threshold`, …); unknown names give `None`
+    /// (`str::parse` gives an error that lists the names instead).
     pub fn parse(name: &str) -> Option<Mode> {
         match name {
             "path" => Some(Mode::Path),
             "light" => Some(Mode::Light),
-            _ => Heuristic::parse(name).map(Mode::Bdpm),
+            _ => HeuristicKind::parse(name).map(Mode::Bdpm),
         }
     }
 
@@ -75,14 +83,14 @@ impl Mode {
         match self {
             Mode::Path => "path",
             Mode::Light => "light",
-            Mode::Bdpm(h) => h.name(),
+            Mode::Bdpm(k) => k.name(),
         }
     }
 
-    /// The heuristic of a BDPM mode; `None` for the references.
-    pub fn heuristic(&self) -> Option<Heuristic> {
+    /// The weighting mode of a BDPM mode; `None` for the references.
+    pub fn kind(&self) -> Option<HeuristicKind> {
         match self {
-            Mode::Bdpm(h) => Some(*h),
+            Mode::Bdpm(k) => Some(*k),
             Mode::Path | Mode::Light => None,
         }
     }
@@ -91,6 +99,15 @@ impl Mode {
 impl fmt::Display for Mode {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())
+    }
+}
+
+impl FromStr for Mode {
+    type Err = SettingsError;
+
+    /// [`Mode::parse`], with an error ([`SettingsError::UnknownName`]) that lists the names.
+    fn from_str(s: &str) -> Result<Mode, SettingsError> {
+        parse_name(s)
     }
 }
 
@@ -137,9 +154,78 @@ impl fmt::Display for Sampler {
     }
 }
 
+impl FromStr for Sampler {
+    type Err = SettingsError;
+
+    /// [`Sampler::parse`], with an error ([`SettingsError::UnknownName`]) that lists the names.
+    fn from_str(s: &str) -> Result<Sampler, SettingsError> {
+        parse_name(s)
+    }
+}
+
+/// A setting whose values are named (the mode, the noise model, the sampler): one way to
+/// parse them, with one message for an unknown name, in every place that reads names.
+pub(crate) trait Named: Sized + fmt::Display {
+    /// The setting the names are values of.
+    const SETTING: Setting;
+    /// Every accepted name.
+    fn names() -> Vec<&'static str>;
+    /// The value of a name, if any (the inverse of its `Display`).
+    fn from_name(name: &str) -> Option<Self>;
+}
+
+impl Named for Mode {
+    const SETTING: Setting = Setting::Mode;
+    fn names() -> Vec<&'static str> {
+        Mode::names()
+    }
+    fn from_name(name: &str) -> Option<Self> {
+        Mode::parse(name)
+    }
+}
+
+impl Named for NoiseModel {
+    const SETTING: Setting = Setting::NoiseModel;
+    fn names() -> Vec<&'static str> {
+        NoiseModel::ALL_NAMES.to_vec()
+    }
+    fn from_name(name: &str) -> Option<Self> {
+        NoiseModel::parse(name)
+    }
+}
+
+impl Named for Sampler {
+    const SETTING: Setting = Setting::Sampler;
+    fn names() -> Vec<&'static str> {
+        Sampler::ALL_NAMES.to_vec()
+    }
+    fn from_name(name: &str) -> Option<Self> {
+        Sampler::parse(name)
+    }
+}
+
+/// The value named `name`, or [`SettingsError::UnknownName`] listing the names.
+pub(crate) fn parse_name<T: Named>(name: &str) -> Result<T, SettingsError> {
+    T::from_name(name).ok_or_else(|| SettingsError::UnknownName {
+        setting: T::SETTING,
+        name: name.to_string(),
+        expected: T::names(),
+    })
+}
+
 /// Everything a render needs besides the scene. Defaults live in [`RenderSettings::default`];
 /// [`RenderSettings::validate`] checks a value before use.
+///
+/// With the `serde` feature it serialises field by field under the field names (the keys of
+/// a scene file's `[render]` table where the two share a setting), the mode, the noise model
+/// and the sampler as their names; unknown keys are refused, and deserialising does not
+/// validate. The run identity hashes this form (`bdpm_output::accum::settings_hash`).
 #[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(deny_unknown_fields)
+)]
 pub struct RenderSettings {
     /// Image width, pixels.
     pub width: u32,
@@ -161,11 +247,11 @@ pub struct RenderSettings {
     pub radius_px: Option<f32>,
     /// Master seed of every random stream.
     pub seed: u64,
-    /// Integrator and weight mode. A `threshold` mode's radius must equal
-    /// [`RenderSettings::threshold_radius`] ([`RenderSettings::set_threshold_radius`] sets
-    /// both, [`RenderSettings::select`] sets a mode with the settings' radius).
+    /// Integrator and weight mode, without parameters (they are the settings below).
+    #[cfg_attr(feature = "serde", serde(with = "serde_names"))]
     pub mode: Mode,
-    /// Radius R of the threshold rule (eq. 11), metres.
+    /// Radius R of the threshold rule (eq. 11), metres: the `threshold` mode's radius, and
+    /// nowhere else.
     pub threshold_radius: f32,
     /// Angular bins K per radiance-cache cell (one bin is used for Lambert-only scenes).
     pub cache_bins: u32,
@@ -175,9 +261,9 @@ pub struct RenderSettings {
     /// Backward rays per pixel of the A/B pre-pass, N (`None`: the default of the noise model,
     /// see [`RenderSettings::table_rays`]).
     pub pixel_table_rays: Option<u32>,
-    /// Ask for the `optimal*` weights clamped to [0, 1] (the mix stays unbiased either way).
-    /// An `optimal*` mode whose own flag is set asks too. The footprint noise model with
-    /// jittered samples clamps whatever is asked: see [`RenderSettings::weight_clamp`].
+    /// Ask for the `optimal*` weights clamped to [0, 1] (the mix stays unbiased either way):
+    /// the one place the request lives. The footprint noise model with jittered samples
+    /// clamps whatever is asked: see [`RenderSettings::weight_clamp`].
     pub clamp_weights: bool,
     /// Path-tracing depth after which Russian roulette starts.
     pub roulette_depth: u32,
@@ -188,8 +274,10 @@ pub struct RenderSettings {
     /// How the model-based weights account for the photons that a pixel's camera samples
     /// share at x₀ (method.md §12): `Footprint` (default) uses N_eff per pixel, `Pinhole` the
     /// preprint's N_B. Without jitter both give N_eff = N_B.
+    #[cfg_attr(feature = "serde", serde(with = "serde_names"))]
     pub noise_model: NoiseModel,
     /// How a pixel's camera samples are placed within a pass ([`Sampler`]).
+    #[cfg_attr(feature = "serde", serde(with = "serde_names"))]
     pub sampler: Sampler,
 }
 
@@ -223,7 +311,7 @@ pub mod limits {
 /// pinhole model and centred samples keep the preprint's unclamped weights unless asked.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct WeightClamp {
-    /// The caller asked for it ([`RenderSettings::clamp_weights`] or the mode's own flag).
+    /// The caller asked for it ([`RenderSettings::clamp_weights`]).
     pub requested: bool,
     /// The footprint noise model with jittered samples needs it.
     pub footprint: bool,
@@ -249,10 +337,17 @@ pub enum Setting {
     Photons,
     /// [`RenderSettings::spp`].
     Spp,
-    /// [`RenderSettings::radius`].
+    /// [`RenderSettings::width`] and [`RenderSettings::height`] given together (a
+    /// `resolution` of the wrong length).
+    Resolution,
+    /// [`RenderSettings::radius`] (or [`RenderSettings::radius_px`]).
     Radius,
     /// [`RenderSettings::mode`].
     Mode,
+    /// [`RenderSettings::noise_model`].
+    NoiseModel,
+    /// [`RenderSettings::sampler`].
+    Sampler,
     /// [`RenderSettings::threshold_radius`].
     ThresholdRadius,
     /// [`RenderSettings::cache_bins`].
@@ -272,12 +367,23 @@ impl Setting {
             Setting::Passes => "passes",
             Setting::Photons => "photons",
             Setting::Spp => "spp",
+            Setting::Resolution => "resolution",
             Setting::Radius => "radius",
             Setting::Mode => "mode",
+            Setting::NoiseModel => "noise_model",
+            Setting::Sampler => "sampler",
             Setting::ThresholdRadius => "threshold_radius",
             Setting::CacheBins => "cache_bins",
             Setting::CachePhotons => "cache_photons",
             Setting::PixelTableRays => "pixel_table_rays",
+        }
+    }
+
+    /// What a value of this setting is called in messages (`unknown noise model 'x'`).
+    fn noun(&self) -> &'static str {
+        match self {
+            Setting::NoiseModel => "noise model",
+            other => other.key(),
         }
     }
 }
@@ -334,15 +440,29 @@ pub enum SettingsError {
     /// A threshold radius R that is not finite, not > 0 or not a normal f32 (metres).
     #[error("{0:e} must be a finite number > 0 (metres)")]
     ThresholdRadius(f32),
-    /// The `threshold` mode carries another radius than [`RenderSettings::threshold_radius`].
-    #[error(
-        "the threshold mode's radius {mode} m differs from threshold_radius = {setting} m; set both (RenderSettings::set_threshold_radius)"
-    )]
-    ThresholdMismatch {
-        /// The radius inside [`Mode`], metres.
-        mode: f64,
-        /// [`RenderSettings::threshold_radius`], metres.
-        setting: f32,
+    /// A length as written that single precision cannot hold ([`metres`]).
+    #[error("{error}")]
+    Length {
+        /// Which setting.
+        setting: Setting,
+        /// What is wrong with the number.
+        error: LengthError,
+    },
+    /// A radius written as text that [`RadiusSpec::parse`] does not read; the message says why.
+    #[error("{0}")]
+    RadiusText(String),
+    /// A `resolution` of other than two values.
+    #[error("{0} values given; expected [width, height] in pixels")]
+    ResolutionCount(usize),
+    /// A name that is none of the setting's values (a mode, noise model or sampler).
+    #[error("unknown {} '{name}'; expected one of {}", setting.noun(), expected.join(", "))]
+    UnknownName {
+        /// Which setting.
+        setting: Setting,
+        /// The name given.
+        name: String,
+        /// Every accepted name.
+        expected: Vec<&'static str>,
     },
 }
 
@@ -353,9 +473,13 @@ impl SettingsError {
             SettingsError::OutOfRange { setting, .. } => *setting,
             SettingsError::Radius(_)
             | SettingsError::RadiusPx(_)
-            | SettingsError::TwoRadii { .. } => Setting::Radius,
+            | SettingsError::TwoRadii { .. }
+            | SettingsError::RadiusText(_) => Setting::Radius,
             SettingsError::ThresholdRadius(_) => Setting::ThresholdRadius,
-            SettingsError::ThresholdMismatch { .. } => Setting::Mode,
+            SettingsError::ResolutionCount(_) => Setting::Resolution,
+            SettingsError::Length { setting, .. } | SettingsError::UnknownName { setting, .. } => {
+                *setting
+            }
         }
     }
 }
@@ -380,58 +504,28 @@ impl RenderSettings {
     /// Whether the `optimal*` weights are clamped, and why (see [`WeightClamp`]). The same for
     /// every mode; only the `optimal*` weights can leave [0, 1].
     pub fn weight_clamp(&self) -> WeightClamp {
-        let mode_asks = matches!(
-            self.mode,
-            Mode::Bdpm(
-                Heuristic::Optimal {
-                    clamp_weights: true
-                } | Heuristic::OptimalSplit {
-                    clamp_weights: true
-                } | Heuristic::OptimalPath {
-                    clamp_weights: true
-                }
-            )
-        );
         WeightClamp {
-            requested: self.clamp_weights || mode_asks,
+            requested: self.clamp_weights,
             footprint: self.footprint_jitter(),
         }
     }
 
-    /// The heuristic a BDPM render uses: the mode's, with the clamp in force
-    /// ([`RenderSettings::weight_clamp`]). `None` for the references. The mode itself is
-    /// left as the caller gave it.
+    /// The heuristic a BDPM render uses, built from the mode and the settings that hold its
+    /// parameters: a `threshold` mode with [`RenderSettings::threshold_radius`], an
+    /// `optimal*` mode with the clamp in force ([`RenderSettings::weight_clamp`]). `None` for
+    /// the references.
     pub fn heuristic(&self) -> Option<Heuristic> {
         let clamp = self.weight_clamp().effective();
-        self.mode.heuristic().map(|h| h.with_weight_clamp(clamp))
-    }
-
-    /// Sets the mode chosen by name: a `threshold` mode gets this settings'
-    /// [`RenderSettings::threshold_radius`] (as a scene file's `threshold_radius` key and a
-    /// `--mode threshold` flag combine). Other modes are set as given.
-    pub fn select(&mut self, mode: Mode) {
-        self.mode = match mode {
-            Mode::Bdpm(Heuristic::Threshold { .. }) => Mode::Bdpm(Heuristic::Threshold {
-                radius: self.threshold_radius as f64,
-            }),
-            other => other,
-        };
-    }
-
-    /// Sets the threshold radius R (metres), in [`RenderSettings::threshold_radius`] and in a
-    /// `threshold` mode alike.
-    pub fn set_threshold_radius(&mut self, radius: f32) {
-        self.threshold_radius = radius;
-        if let Mode::Bdpm(Heuristic::Threshold { .. }) = self.mode {
-            self.mode = Mode::Bdpm(Heuristic::Threshold {
-                radius: radius as f64,
-            });
-        }
+        self.mode.kind().map(|kind| match kind.heuristic() {
+            Heuristic::Threshold { .. } => Heuristic::Threshold {
+                radius: self.threshold_radius.into(),
+            },
+            other => other.with_weight_clamp(clamp),
+        })
     }
 
     /// Checks every setting: counts at least 1 and within [`limits`], a given merge radius
-    /// usable ([`check_radius`]), the threshold radius finite, > 0 and normal, and a
-    /// `threshold` mode's radius equal to [`RenderSettings::threshold_radius`]. The first
+    /// usable ([`check_radius`]) and the threshold radius finite, > 0 and normal. The first
     /// problem found is returned.
     pub fn validate(&self) -> Result<(), SettingsError> {
         use limits::*;
@@ -467,16 +561,6 @@ impl RenderSettings {
         let t = self.threshold_radius;
         if !(t.is_finite() && t > 0.0 && t.is_normal()) {
             return Err(SettingsError::ThresholdRadius(t));
-        }
-        // Compared at the field's f32 precision: `Mode::parse("threshold")` carries 0.2 m in
-        // f64, the default field 0.2 m in f32, and the two are the same radius.
-        if let Mode::Bdpm(Heuristic::Threshold { radius }) = self.mode
-            && radius as f32 != t
-        {
-            return Err(SettingsError::ThresholdMismatch {
-                mode: radius,
-                setting: t,
-            });
         }
         range(
             Setting::CacheBins,
@@ -544,7 +628,7 @@ impl Default for RenderSettings {
             seed: 1,
             // `balance` wins at equal time on both preprint scenes with jittered pixels
             // (docs/results.md); `path` and `light` are references, not defaults.
-            mode: Mode::Bdpm(Heuristic::Balance),
+            mode: Mode::Bdpm(HeuristicKind::Balance),
             threshold_radius: bdpm_mis::DEFAULT_THRESHOLD_RADIUS as f32,
             cache_bins: 100,
             cache_photons: None,
@@ -633,6 +717,52 @@ pub fn check_radius(r: f32) -> Result<f32, RadiusError> {
         return Err(RadiusError::BelowMinimum(r));
     }
     Ok(r)
+}
+
+/// Why a length as written (metres, in f64 as the user typed it) cannot be used in single
+/// precision. The number is quoted as written ([`number_text`]): 1e300, not its f32 rounding.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum LengthError {
+    /// Not finite, or not > 0.
+    #[error("{} must be a finite number > 0 (metres)", number_text(*.0))]
+    NotPositive(f64),
+    /// Beyond the f32 range (it would become infinite).
+    #[error("{} is beyond the single-precision range (3.4e38 metres)", number_text(*.0))]
+    BeyondSingle(f64),
+    /// Below the smallest normal f32 (it would be zero or subnormal, and its reciprocal
+    /// infinite).
+    #[error(
+        "{} is below the smallest normal single-precision number (1.2e-38 metres)",
+        number_text(*.0)
+    )]
+    BelowNormal(f64),
+}
+
+/// A length as written, metres, converted to f32: finite and > 0 as written, and finite and
+/// normal in f32 (a subnormal length is zero for every computation that uses it). The one
+/// check of lengths typed by a user: scene-file lengths, radii on the command line.
+pub fn metres(v: f64) -> Result<f32, LengthError> {
+    if !(v.is_finite() && v > 0.0) {
+        return Err(LengthError::NotPositive(v));
+    }
+    let f = v as f32;
+    if !f.is_finite() {
+        return Err(LengthError::BeyondSingle(v));
+    }
+    if !f.is_normal() {
+        return Err(LengthError::BelowNormal(v));
+    }
+    Ok(f)
+}
+
+/// A number for messages: as written when of ordinary size, in scientific notation when huge
+/// or tiny (f64's `Display` would spell 1e300 with 301 digits).
+pub fn number_text(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-4..1e7).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
 }
 
 /// Default merge radius for a scene whose bounding box has largest extent `extent` (metres):

@@ -33,40 +33,41 @@ fn radius_errors_are_typed() {
     );
 }
 
-/// The radius inside the mode is never replaced by the settings' field: a disagreement is an
-/// error, and the setters keep the two equal.
+/// The threshold radius and the clamp each have one source, the settings' own fields: the
+/// heuristic is built from them, and nothing is written back into the mode.
 #[test]
-fn threshold_radius_is_never_overwritten() {
+fn the_heuristic_is_built_from_one_source_each() {
     let mut s = RenderSettings {
-        mode: Mode::Bdpm(Heuristic::Threshold { radius: 0.5 }),
+        mode: "threshold".parse().unwrap(),
+        threshold_radius: 0.5,
         ..RenderSettings::default()
     };
-    assert_eq!(
-        s.validate(),
-        Err(SettingsError::ThresholdMismatch {
-            mode: 0.5,
-            setting: 0.2
-        })
-    );
-    s.set_threshold_radius(0.5);
     assert_eq!(s.validate(), Ok(()));
     assert_eq!(s.heuristic(), Some(Heuristic::Threshold { radius: 0.5 }));
-    let mut t = RenderSettings::default();
-    t.set_threshold_radius(0.7);
-    t.select(Mode::parse("threshold").unwrap());
+    // f32 precision, as a scene file gives it.
+    s.threshold_radius = 0.7;
     assert_eq!(
-        t.mode,
-        Mode::Bdpm(Heuristic::Threshold {
+        s.heuristic(),
+        Some(Heuristic::Threshold {
             radius: 0.7f32 as f64
         })
     );
+    s.threshold_radius = f32::MIN_POSITIVE / 2.0;
+    assert_eq!(
+        s.validate().unwrap_err().setting(),
+        Setting::ThresholdRadius
+    );
+    s.mode = Mode::Path;
+    assert_eq!(s.heuristic(), None);
 }
 
-/// The footprint model's clamp is computed and reported, and the mode stays as given.
+/// The footprint model's clamp is computed and reported, and the request stays as given.
 #[test]
 fn clamp_is_computed_not_written_back() {
-    let mut s = RenderSettings::default();
-    s.select(Mode::parse("optimal").unwrap());
+    let mut s = RenderSettings {
+        mode: Mode::parse("optimal").unwrap(),
+        ..RenderSettings::default()
+    };
     let clamp = s.weight_clamp();
     assert!(!clamp.requested && clamp.footprint && clamp.effective());
     assert_eq!(
@@ -75,18 +76,23 @@ fn clamp_is_computed_not_written_back() {
             clamp_weights: true
         })
     );
+    assert!(!s.clamp_weights);
+    s.pixel_jitter = false;
+    assert!(!s.weight_clamp().effective());
     assert_eq!(
-        s.mode,
-        Mode::Bdpm(Heuristic::Optimal {
+        s.heuristic(),
+        Some(Heuristic::Optimal {
             clamp_weights: false
         })
     );
-    s.pixel_jitter = false;
-    assert!(!s.weight_clamp().effective());
-    s.mode = Mode::Bdpm(Heuristic::Optimal {
-        clamp_weights: true,
-    });
+    s.clamp_weights = true;
     assert!(s.weight_clamp().requested);
+    assert_eq!(
+        s.heuristic(),
+        Some(Heuristic::Optimal {
+            clamp_weights: true
+        })
+    );
     let r = s.record(0.01, false, None);
     assert!(r.clamp_weights && r.clamp_weights_requested);
 }
@@ -126,15 +132,134 @@ fn radius_in_pixels_parses_applies_and_validates() {
     assert!(matches!(e, SettingsError::TwoRadii { .. }));
 }
 
+#[test]
+fn names_parse_with_one_message() {
+    assert_eq!(
+        "camis".parse::<Mode>(),
+        Ok(Mode::Bdpm(HeuristicKind::Camis))
+    );
+    assert_eq!("light".parse::<Mode>(), Ok(Mode::Light));
+    let e = "fast".parse::<Mode>().unwrap_err();
+    assert_eq!(e.setting(), Setting::Mode);
+    assert_eq!(
+        e.to_string(),
+        format!(
+            "unknown mode 'fast'; expected one of {}",
+            Mode::names().join(", ")
+        )
+    );
+    assert!(e.to_string().contains("path, light, bdd0"), "{e}");
+    let e = "sobol".parse::<Sampler>().unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "unknown sampler 'sobol'; expected one of independent, stratified"
+    );
+}
+
+#[test]
+fn partial_settings_apply_check_and_name_their_setting() {
+    let mut s = RenderSettings::default();
+    let p = PartialSettings {
+        resolution: Some(vec![32, 16]),
+        mode: Some("threshold".into()),
+        threshold_radius: Some(0.5),
+        radius: Some(RadiusInput::Text("1.5px".into())),
+        noise_model: Some("pinhole".into()),
+        pixel_jitter: Some(false),
+        cache_photons: Some(7),
+        ..PartialSettings::default()
+    };
+    p.apply(&mut s).unwrap();
+    assert_eq!((s.width, s.height, s.radius_px), (32, 16, Some(1.5)));
+    assert_eq!(s.heuristic(), Some(Heuristic::Threshold { radius: 0.5 }));
+    assert_eq!(
+        (s.noise_model, s.pixel_jitter, s.cache_photons),
+        (NoiseModel::Pinhole, false, Some(7))
+    );
+    // Fields not given keep their values.
+    assert_eq!(s.spp, RenderSettings::default().spp);
+    PartialSettings::default().apply(&mut s).unwrap();
+    assert_eq!(s.radius_px, Some(1.5));
+    let error = |p: PartialSettings| {
+        let e = p.apply(&mut RenderSettings::default()).unwrap_err();
+        (e.setting(), e.to_string())
+    };
+    let (setting, m) = error(PartialSettings {
+        resolution: Some(vec![1, 2, 3]),
+        ..PartialSettings::default()
+    });
+    assert_eq!(setting, Setting::Resolution);
+    assert!(m.contains("3 values given"), "{m}");
+    let (setting, m) = error(PartialSettings {
+        noise_model: Some("wide".into()),
+        ..PartialSettings::default()
+    });
+    assert_eq!(setting, Setting::NoiseModel);
+    assert!(m.contains("unknown noise model 'wide'"), "{m}");
+    let (setting, m) = error(PartialSettings {
+        radius: Some(RadiusInput::Metres(1e300)),
+        ..PartialSettings::default()
+    });
+    assert_eq!(setting, Setting::Radius);
+    assert!(m.starts_with("1e300 is beyond"), "{m}");
+    let (setting, m) = error(PartialSettings {
+        radius: Some(RadiusInput::Text("1 pixel".into())),
+        ..PartialSettings::default()
+    });
+    assert_eq!(setting, Setting::Radius);
+    assert!(m.contains("not a radius"), "{m}");
+    let (setting, m) = error(PartialSettings {
+        threshold_radius: Some(1e-39),
+        ..PartialSettings::default()
+    });
+    assert_eq!(setting, Setting::ThresholdRadius);
+    assert!(m.contains("1e-39") && m.contains("normal"), "{m}");
+    let (setting, _) = error(PartialSettings {
+        spp: Some(0),
+        ..PartialSettings::default()
+    });
+    assert_eq!(setting, Setting::Spp);
+}
+
+#[test]
+fn lengths_are_checked_as_written() {
+    assert_eq!(metres(0.25), Ok(0.25));
+    assert_eq!(metres(-1.0), Err(LengthError::NotPositive(-1.0)));
+    assert_eq!(metres(1e300), Err(LengthError::BeyondSingle(1e300)));
+    assert_eq!(metres(1e-39), Err(LengthError::BelowNormal(1e-39)));
+    assert_eq!(number_text(1e300), "1e300");
+    assert_eq!(number_text(0.25), "0.25");
+}
+
 #[cfg(feature = "serde")]
 #[test]
 fn serde_round_trip() {
-    let mut s = RenderSettings::default();
-    s.set_threshold_radius(0.4);
-    s.select(Mode::parse("threshold").unwrap());
+    let s = RenderSettings {
+        mode: Mode::parse("threshold").unwrap(),
+        threshold_radius: 0.4,
+        radius_px: Some(1.5),
+        sampler: Sampler::Independent,
+        ..RenderSettings::default()
+    };
     let text = serde_json::to_string(&s).unwrap();
+    assert!(
+        text.contains(r#""mode":"threshold","threshold_radius":0.4,"#),
+        "{text}"
+    );
+    assert!(text.contains(r#""noise_model":"footprint","sampler":"independent""#));
     let back: RenderSettings = serde_json::from_str(&text).unwrap();
     assert_eq!(back, s);
+    // Unknown keys and names are refused, the names listed.
+    let typo = text.replace("\"spp\"", "\"sp\"");
+    let e = serde_json::from_str::<RenderSettings>(&typo).unwrap_err();
+    assert!(e.to_string().contains("unknown field `sp`"), "{e}");
+    let bad = text.replace("\"threshold\"", "\"fast\"");
+    let e = serde_json::from_str::<RenderSettings>(&bad).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("unknown mode 'fast'; expected one of path, light"),
+        "{e}"
+    );
     assert!(
         serde_json::to_string(&s.record(0.1, false, None))
             .unwrap()

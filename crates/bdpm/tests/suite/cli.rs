@@ -835,8 +835,13 @@ fn command_line_numbers_are_checked_with_clear_messages() {
             vec!["--spp", "'2.5' is not a whole number"],
         ),
         (
-            vec!["--radius", "1e-39"],
+            vec!["--radius", "1e-30"],
             vec!["--radius", "smallest usable"],
+        ),
+        // Checked as written, as a scene file's radius is: subnormal in f32.
+        (
+            vec!["--radius", "1e-39"],
+            vec!["--radius", "1e-39", "smallest normal"],
         ),
         (vec!["--radius", "1e300"], vec!["--radius", "1e300"]),
         (

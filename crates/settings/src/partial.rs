@@ -1,0 +1,139 @@
+//! Settings given in part: the one shape of a scene file's `[render]` table, the command
+//! line's overrides and a `--modes` entry's own settings, and the one function that puts any
+//! of them onto [`RenderSettings`].
+
+use std::path::PathBuf;
+
+use crate::{RadiusSpec, RenderSettings, Setting, SettingsError, metres, parse_name};
+
+/// Render settings given in part, as written: every field optional, named as the scene
+/// file's `[render]` keys. Names (mode, noise model, sampler) and radii stay as the user
+/// wrote them, so that [`PartialSettings::apply`] can check them and quote them; each caller
+/// names the field its way (`render.mode` in a scene file, `--mode` on the command line).
+///
+/// With the `serde` feature it deserialises from a `[render]` table, refusing unknown keys.
+#[derive(Clone, Debug, Default, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Deserialize),
+    serde(deny_unknown_fields)
+)]
+pub struct PartialSettings {
+    /// `[width, height]`, pixels; a list so that a wrong count is reported rather than
+    /// truncated.
+    pub resolution: Option<Vec<u32>>,
+    /// [`RenderSettings::passes`].
+    pub passes: Option<u32>,
+    /// [`RenderSettings::photons`].
+    pub photons: Option<u64>,
+    /// [`RenderSettings::spp`].
+    pub spp: Option<u32>,
+    /// The merge radius, metres or pixel footprints ([`RadiusInput`]).
+    pub radius: Option<RadiusInput>,
+    /// [`RenderSettings::seed`].
+    pub seed: Option<u64>,
+    /// A mode name ([`crate::Mode::parse`]).
+    pub mode: Option<String>,
+    /// [`RenderSettings::threshold_radius`], metres as written.
+    pub threshold_radius: Option<f64>,
+    /// [`RenderSettings::cache_bins`].
+    pub cache_bins: Option<u32>,
+    /// [`RenderSettings::cache_photons`].
+    pub cache_photons: Option<u64>,
+    /// [`RenderSettings::pixel_table_rays`].
+    pub pixel_table_rays: Option<u32>,
+    /// [`RenderSettings::clamp_weights`].
+    pub clamp_weights: Option<bool>,
+    /// [`RenderSettings::pixel_jitter`].
+    pub pixel_jitter: Option<bool>,
+    /// A noise model name ([`crate::NoiseModel::parse`]).
+    pub noise_model: Option<String>,
+    /// A sampler name ([`crate::Sampler::parse`]).
+    pub sampler: Option<String>,
+    /// [`RenderSettings::roulette_depth`].
+    pub roulette_depth: Option<u32>,
+    /// The render's default output file (a scene file's `output`). Not a render setting:
+    /// [`PartialSettings::apply`] leaves it to the caller.
+    pub output: Option<PathBuf>,
+}
+
+/// A merge radius as written: a number of metres (a scene file's `radius = 0.01`) or text
+/// as [`RadiusSpec::parse`] reads it (`"0.01"`, `"0.01m"`, `"1.2px"`; scene files, flags,
+/// `--modes` entries).
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Deserialize), serde(untagged))]
+pub enum RadiusInput {
+    /// Metres.
+    Metres(f64),
+    /// Metres or pixel footprints, as text.
+    Text(String),
+}
+
+impl RadiusInput {
+    /// The radius given: text parsed, and metres checked as written ([`metres`]: 1e300 is
+    /// refused as 1e300, not as its f32 rounding).
+    pub fn spec(&self) -> Result<RadiusSpec, SettingsError> {
+        let spec = match self {
+            RadiusInput::Metres(v) => RadiusSpec::Metres(*v),
+            RadiusInput::Text(t) => RadiusSpec::parse(t).map_err(SettingsError::RadiusText)?,
+        };
+        Ok(match spec {
+            RadiusSpec::Metres(v) => RadiusSpec::Metres(
+                metres(v)
+                    .map_err(|error| SettingsError::Length {
+                        setting: Setting::Radius,
+                        error,
+                    })?
+                    .into(),
+            ),
+            pixels => pixels,
+        })
+    }
+}
+
+impl PartialSettings {
+    /// Puts the settings given onto `settings` and validates the result
+    /// ([`RenderSettings::validate`]). Names are parsed, a resolution must have two values,
+    /// lengths are checked as written; the error's [`SettingsError::setting`] says which
+    /// setting, for the caller to name as its user wrote it. On error `settings` may be
+    /// partly changed.
+    pub fn apply(&self, settings: &mut RenderSettings) -> Result<(), SettingsError> {
+        let s = settings;
+        if let Some(r) = &self.resolution {
+            let &[w, h] = r.as_slice() else {
+                return Err(SettingsError::ResolutionCount(r.len()));
+            };
+            (s.width, s.height) = (w, h);
+        }
+        if let Some(name) = &self.mode {
+            s.mode = parse_name(name)?;
+        }
+        if let Some(name) = &self.noise_model {
+            s.noise_model = parse_name(name)?;
+        }
+        if let Some(name) = &self.sampler {
+            s.sampler = parse_name(name)?;
+        }
+        if let Some(r) = &self.radius {
+            r.spec()?.apply(s);
+        }
+        if let Some(v) = self.threshold_radius {
+            s.threshold_radius = metres(v).map_err(|error| SettingsError::Length {
+                setting: Setting::ThresholdRadius,
+                error,
+            })?;
+        }
+        let set = |field: &mut u32, v: Option<u32>| *field = v.unwrap_or(*field);
+        set(&mut s.passes, self.passes);
+        set(&mut s.spp, self.spp);
+        set(&mut s.cache_bins, self.cache_bins);
+        set(&mut s.roulette_depth, self.roulette_depth);
+        s.photons = self.photons.unwrap_or(s.photons);
+        s.seed = self.seed.unwrap_or(s.seed);
+        s.cache_photons = self.cache_photons.or(s.cache_photons);
+        s.pixel_table_rays = self.pixel_table_rays.or(s.pixel_table_rays);
+        s.clamp_weights = self.clamp_weights.unwrap_or(s.clamp_weights);
+        s.pixel_jitter = self.pixel_jitter.unwrap_or(s.pixel_jitter);
+        s.validate()
+    }
+}
