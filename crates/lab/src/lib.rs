@@ -54,10 +54,21 @@ pub fn run(command: Command) -> Result<ExitCode, String> {
     }
 }
 
+/// The keys a `--modes` entry may set ([`Variant`]).
+const KEYS: [&str; 6] = [
+    "sampler",
+    "radius",
+    "spp",
+    "photons",
+    "cache_photons",
+    "pixel_table_rays",
+];
+
 /// One entry of `--modes`: a mode, and settings of its own on top of the shared ones
 /// (`MODE[:KEY=VALUE]…` with KEY one of `sampler`, `radius` (metres, or pixel footprints as
-/// `1.2px`), `spp`, `photons`), so that configurations are compared side by side in one run,
-/// e.g. `balance:sampler=independent,balance,optimal-path:radius=0.2px`.
+/// `1.2px`), `spp`, `photons`, and the weights' preparation `cache_photons`,
+/// `pixel_table_rays`), so that configurations are compared side by side in one run, e.g.
+/// `balance:sampler=independent,balance,optimal-path:radius=0.2px:cache_photons=500000`.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Variant {
     /// The entry as given (trimmed): its name in tables, plots and files.
@@ -85,7 +96,7 @@ impl Variant {
             let bad = |why: &str| format!("--modes: '{part}' in '{name}': {why}");
             let (key, value) = part
                 .split_once('=')
-                .ok_or_else(|| bad("expected KEY=VALUE (sampler, radius, spp, photons)"))?;
+                .ok_or_else(|| bad(&format!("expected KEY=VALUE ({})", KEYS.join(", "))))?;
             match key {
                 "sampler" => {
                     value.parse::<Sampler>().map_err(|e| bad(&e.to_string()))?;
@@ -110,7 +121,23 @@ impl Variant {
                             .map_err(|_| bad("a whole number of photons"))?,
                     )
                 }
-                _ => return Err(bad("unknown key; expected sampler, radius, spp or photons")),
+                "cache_photons" => {
+                    settings.cache_photons = Some(
+                        value
+                            .parse()
+                            .map_err(|_| bad("a whole number of photons"))?,
+                    )
+                }
+                "pixel_table_rays" => {
+                    settings.pixel_table_rays =
+                        Some(value.parse().map_err(|_| bad("a whole number of rays"))?)
+                }
+                _ => {
+                    return Err(bad(&format!(
+                        "unknown key; expected one of {}",
+                        KEYS.join(", ")
+                    )));
+                }
             }
         }
         Ok(Variant { name, settings })
@@ -170,6 +197,13 @@ mod tests {
         let px = parse_modes(&["balance:radius=1.5px".into()]).unwrap();
         let s = px[0].settings(&RenderSettings::default()).unwrap();
         assert_eq!((s.radius, s.radius_px), (None, Some(1.5)));
+        let prep =
+            parse_modes(&["optimal-path:cache_photons=500000:pixel_table_rays=8".into()]).unwrap();
+        let s = prep[0].settings(&RenderSettings::default()).unwrap();
+        assert_eq!(
+            (s.cache_photons, s.pixel_table_rays),
+            (Some(500_000), Some(8))
+        );
         let plain = parse_modes(&["optimal-path".into()]).unwrap();
         assert_eq!(
             plain[0].settings(&RenderSettings::default()).unwrap().spp,
@@ -181,6 +215,8 @@ mod tests {
             "balance:radius",
             "balance:colour=red",
             "balance:spp=-1",
+            "optimal-path:cache_photons=many",
+            "optimal-path:pixel_table_rays=-2",
         ] {
             assert!(parse_modes(&[bad.into()]).is_err(), "{bad}");
         }
