@@ -61,10 +61,23 @@ impl Scene {
         }
         let bdf = self.bdf_at_vertex(v);
         if bdf.is_lambert() {
-            return self.direct_masked_lambert(v, wo, bdf.kd());
+            // The same bits without the frame: f = kd/π wherever both directions lie above the
+            // surface, a direction's local z is its dot with the normal (the BDF's own test),
+            // and a finite unit vector stays finite in any orthonormal frame.
+            if !wo.is_finite() {
+                return Vec3::ZERO;
+            }
+            let f = bdf.kd() * std::f32::consts::FRAC_1_PI;
+            return self.masked_lights_sum(v, |wi| if wi.is_finite() { f } else { Vec3::ZERO });
         }
         let frame = Frame::from_normal(v.n);
         let wo_l = frame.to_local(wo);
+        self.masked_lights_sum(v, |wi| bdf.eval(wo_l, frame.to_local(wi)))
+    }
+
+    /// Σ f(ωᵢ)·I·cos/d² over the lights whose bit `v` holds and that lie above its normal, with
+    /// f (sr⁻¹ per channel) given the unit direction ωᵢ from `v` to the light.
+    fn masked_lights_sum(&self, v: &WeightVertex, f: impl Fn(Vec3) -> Vec3) -> Vec3 {
         let mut sum = Vec3::ZERO;
         for (l, light) in self.lights.iter().enumerate().take(MASKED_LIGHTS) {
             if v.lights & (1 << l) == 0 {
@@ -75,33 +88,7 @@ impl Scene {
             let wi = to / d2.sqrt();
             let cos = v.n.dot(wi);
             if cos > 0.0 {
-                sum += bdf.eval(wo_l, frame.to_local(wi)) * light.intensity() * (cos / d2);
-            }
-        }
-        sum
-    }
-
-    /// [`Self::direct_masked`] at a Lambert vertex of diffuse albedo `kd`, the same bits
-    /// without the frame: f = kd/π wherever both directions lie above the surface, and a
-    /// direction's local z is its dot with the normal, as the BDF's own test reads it.
-    fn direct_masked_lambert(&self, v: &WeightVertex, wo: Vec3, kd: Vec3) -> Vec3 {
-        // The BDF's test also asks for finite local directions: a finite unit vector stays
-        // finite in any orthonormal frame, and a light's direction is finite where cos > 0.
-        if !wo.is_finite() {
-            return Vec3::ZERO;
-        }
-        let f = kd * std::f32::consts::FRAC_1_PI;
-        let mut sum = Vec3::ZERO;
-        for (l, light) in self.lights.iter().enumerate().take(MASKED_LIGHTS) {
-            if v.lights & (1 << l) == 0 {
-                continue;
-            }
-            let to = light.position - v.p;
-            let d2 = to.length_squared();
-            let wi = to / d2.sqrt();
-            let cos = v.n.dot(wi);
-            if cos > 0.0 && wi.is_finite() {
-                sum += f * light.intensity() * (cos / d2);
+                sum += f(wi) * light.intensity() * (cos / d2);
             }
         }
         sum
