@@ -2,7 +2,7 @@
 # The sweeps of docs/results.md, "Defaults that win at equal time": `bdpm study` runs radius,
 # N_F, N_B and mode variants side by side (passes in turn) on the preprint's Cornell files with
 # stratified samples, each for the same time, against the long references below. Usage:
-#   scripts/equal-time-sweep.sh OUT_DIR [lambert-cpu|lambert-wall|glossy-wall]...
+#   scripts/equal-time-sweep.sh OUT_DIR [lambert-cpu|lambert-wall|glossy-wall|nothing-lambert|nothing-glossy]...
 # The references (make them once; about 8 and 10 minutes on 2 cores):
 #   bdpm render scenes/preprint/cornell-lambert.toml --mode light --passes 400 --seed 4242 -o out/ref/lambert-light-400.exr
 #   bdpm render scenes/preprint/cornell-glossy.toml --mode path --passes 600 --seed 4243 -o out/ref/glossy-path-600.exr
@@ -30,6 +30,15 @@ for what in "$@"; do
       "$bin" study scenes/preprint/cornell-glossy.toml --sampler stratified --time-budget 20 --clock wall \
         --modes "$base,balance,balance:radius=0.25px,balance:radius=0.5px,balance:radius=1px,balance:radius=0.5px:photons=1000000,optimal-path:radius=0.5px,optimal-path:radius=1px,camis:radius=0.5px" \
         --reference "$G" --quiet -o "$out/glossy-wall" ;;
+    nothing-lambert|nothing-glossy)
+      # A scene that sets nothing: the Cornell file without its [render] table, the first
+      # variant the library's defaults, the others candidates for them; 30 s of CPU time each.
+      box=${what#nothing-}
+      sed '/^\[render\]/,/^\[camera\]/{/^\[camera\]/!d}' "scenes/cornell-$box.toml" > "$out/$what.toml"
+      ref=$L; [ "$box" = glossy ] && ref=$G
+      "$bin" study "$out/$what.toml" --time-budget 30 --clock cpu \
+        --modes "balance:radius=0.0017475:photons=100000:spp=4,optimal-path:radius=0.25px:photons=1000000:spp=16,optimal-path:radius=0.3px:photons=1000000:spp=30,optimal-path,optimal-path:radius=0.2px:photons=2000000:spp=30,optimal-path:radius=0.35px:photons=500000:spp=16" \
+        --reference "$ref" --quiet -o "$out/$what" ;;
     *) echo "equal-time-sweep.sh: unknown sweep $what" >&2; exit 2 ;;
   esac
   echo "$out/$what/study.md"

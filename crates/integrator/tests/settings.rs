@@ -121,6 +121,13 @@ fn a_radius_in_pixels_is_resolved_against_the_camera() {
     assert!(r.settings().validate().is_ok());
     let rec = r.settings().record(r.radius(), true, r.pixel_footprint());
     assert!((rec.radius_px.unwrap() - 2.5).abs() < 1e-6);
+    // Metres, when set, are in force over pixels (as `radius: Some(..), ..Default::default()`
+    // gives over the default's half pixel).
+    let metres = RenderSettings {
+        radius: Some(0.03),
+        ..s.clone()
+    };
+    assert_eq!(Renderer::new(&scene, &metres).unwrap().radius(), 0.03);
 
     // A camera that sees nothing has no footprint: a radius in pixels is refused by name.
     let blind = scene_seen_from(Vec3::new(0.0, 2.0, -4.0));

@@ -207,7 +207,7 @@ mod tests {
         let plain = parse_modes(&["optimal-path".into()]).unwrap();
         assert_eq!(
             plain[0].settings(&RenderSettings::default()).unwrap().spp,
-            4
+            RenderSettings::default().spp
         );
         for bad in [
             "nope",

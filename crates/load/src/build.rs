@@ -15,7 +15,7 @@ use bdpm_scene::{
 };
 // Numbers in messages as written, the same way the settings' messages write them.
 use bdpm_settings::number_text as num;
-use bdpm_settings::{PartialSettings, RenderSettings, check_radius, default_radius};
+use bdpm_settings::{PartialSettings, RenderSettings};
 use glam::{Mat4, Vec2, Vec3};
 
 use crate::gltf_mesh::{Origin, load_gltf};
@@ -222,7 +222,9 @@ pub(crate) fn build(
     let ctx = Ctx { file: display_path };
     let mut report = LoadReport::default();
 
-    let (mut settings, output) = render_settings(&ctx, file.render.unwrap_or_default())?;
+    let render = file.render.unwrap_or_default();
+    report.radius_given = render.radius.is_some();
+    let (settings, output) = render_settings(&ctx, render)?;
     let mut materials = materials(&ctx, &file.material)?;
 
     let mut lights = point_lights(&ctx, &file.light)?;
@@ -308,26 +310,6 @@ pub(crate) fn build(
     let mesh = merge(&ctx, parts)?;
     let geometry =
         Geometry::new(mesh).map_err(|e| geometry_error(&ctx, e, report.skipped_primitives))?;
-
-    let (lo, hi) = geometry.bounds();
-    let extent = (hi - lo).max_element();
-    // A radius in pixels is resolved against the camera by the renderer (the resolution
-    // may still change); otherwise the settings carry metres.
-    report.radius_given = settings.radius.is_some() || settings.radius_px.is_some();
-    if settings.radius_px.is_none() {
-        let radius = match settings.radius {
-            Some(r) => r,
-            None => check_radius(default_radius(extent)).map_err(|e| {
-                ctx.bad(
-                    "render.radius",
-                    format!(
-                        "cannot derive a default from the scene extent {extent:e} m ({e}); give one"
-                    ),
-                )
-            })?,
-        };
-        settings.radius = Some(radius);
-    }
 
     let camera = camera(&ctx, file.camera, settings.width, settings.height)?;
 

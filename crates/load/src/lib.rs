@@ -40,7 +40,8 @@
 //! "#;
 //! let loaded = bdpm_load::load_scene_str(toml, Path::new("."), Path::new("inline.toml"))?;
 //! assert_eq!(loaded.report.triangles, 12);
-//! assert_eq!(loaded.settings.radius, Some(2.0 / 1600.0));
+//! // No radius given: half a pixel's footprint, resolved when a renderer is made.
+//! assert_eq!((loaded.settings.radius, loaded.settings.radius_px), (None, Some(0.5)));
 //! # Ok::<(), bdpm_load::LoadError>(())
 //! ```
 
@@ -91,8 +92,8 @@ pub struct LoadedScene {
     /// Geometry, materials, lights and camera (the camera has the `[render]` resolution).
     pub scene: bdpm_scene::Scene,
     /// `[render]` with defaults filled in. Exactly one of `radius` and `radius_px` is `Some`:
-    /// the file's radius in pixel footprints (resolved by the renderer), else `radius` in
-    /// metres, the file's or `default_radius` of the scene bounding box's largest extent.
+    /// a radius in pixel footprints (the file's, or the default's half pixel; resolved by the
+    /// renderer), else the file's `radius` in metres.
     pub settings: bdpm_settings::RenderSettings,
     /// `[render].output` exactly as written. A relative path is meant relative to the current
     /// directory (as a path typed on the command line would be), not to the scene file.
@@ -136,7 +137,7 @@ pub struct LoadReport {
     /// glTF materials with normal, occlusion, emissive or metallic-roughness textures, which
     /// are ignored.
     pub other_textures: usize,
-    /// Whether `[render].radius` was given; otherwise the settings hold the scene default.
+    /// Whether `[render].radius` was given; otherwise the settings hold the default (`"0.5px"`).
     pub radius_given: bool,
 }
 

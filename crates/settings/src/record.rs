@@ -19,12 +19,12 @@ pub struct SettingsRecord {
     pub photons_per_pass: u64,
     /// Camera samples per pixel per pass, N_B.
     pub spp: u32,
-    /// The merge radius in use (the scene's default when none was given), metres.
+    /// The merge radius in use (the default, `DEFAULT_RADIUS_PX`, when none was given), metres.
     pub radius_m: f32,
     /// The same radius in pixel footprints (`Scene::pixel_footprint`), when the camera sees
     /// the scene.
     pub radius_px: Option<f32>,
-    /// Whether the radius was given (scene file or `--radius`) or is the scene default.
+    /// Whether the radius was given (scene file or `--radius`) or is the default.
     pub radius_given: bool,
     /// Master seed.
     pub seed: u64,
