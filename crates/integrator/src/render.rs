@@ -76,7 +76,7 @@ pub enum RenderError {
     NoWeights(Mode),
     /// The mode weighs each light path by its incoming direction at x₁, so no map over x₁.
     #[error(
-        "mode '{0}' weighs each light path by its incoming direction at x1, so it has no map over x1 alone"
+        "mode '{0}' weighs each light path by its incoming direction at x1, so it has no map over x1 alone; a mode whose weights depend on x1 alone has one (e.g. --mode optimal)"
     )]
     PerLightPathWeights(&'static str),
     /// The mode (`path`, `light`) has no noise model.
