@@ -872,6 +872,36 @@ fn command_line_numbers_are_checked_with_clear_messages() {
     assert_one_line_error(&out, &["--modes"]);
 }
 
+/// A scene file without `[render]` renders with the library's defaults, the configuration
+/// docs/results.md ("A scene that sets nothing") chose: `optimal-path`, half a pixel's
+/// footprint, N_F = 2.5·10⁵, N_B = 10, stratified samples.
+#[test]
+fn a_scene_that_sets_nothing_renders_with_the_chosen_defaults() {
+    let dir = TempDir::new("nothing");
+    let path = dir.path("nothing.toml");
+    let scene = BASE_SCENE
+        .split_once("[camera]")
+        .map(|(_, rest)| format!("[camera]{rest}"))
+        .expect("the base scene has a camera");
+    assert!(!scene.contains("[render]"));
+    std::fs::write(&path, scene).expect("write scene");
+    let out = run(bdpm()
+        .arg("render")
+        .arg(&path)
+        .args(["--resolution", "16x16", "--passes", "1", "--quiet", "-o"])
+        .arg(dir.path("nothing.exr")));
+    assert_success(&out);
+    let json = read_json(&dir.path("nothing.json"));
+    let s = &json["settings"];
+    assert_eq!(s["mode"], "optimal-path", "{s}");
+    assert_eq!(s["photons_per_pass"], 250_000, "{s}");
+    assert_eq!(s["spp"], 10, "{s}");
+    assert_eq!(s["sampler"], "stratified", "{s}");
+    assert_eq!(s["radius_given"], false, "{s}");
+    let px = s["radius_px"].as_f64().expect("radius_px");
+    assert!((px - 0.5).abs() < 1e-5, "{s}");
+}
+
 #[test]
 fn warnings_reach_stdout_and_the_report() {
     let dir = TempDir::new("warnings");
