@@ -85,6 +85,13 @@ pub struct Overrides {
     /// (every sample uniform, the preprint's layout).
     #[arg(long)]
     pub sampler: Option<String>,
+    /// Photons traced for the radiance cache of the model-based weights (default: N_F).
+    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u64>)]
+    pub cache_photons: Option<u64>,
+    /// Backward rays per pixel of the weights' A/B table (default: 16 under the footprint
+    /// noise model with jitter, else 64).
+    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u32>)]
+    pub pixel_table_rays: Option<u32>,
     /// Worker threads (default: all cores; at most 8 per core, and at least 64 allowed).
     #[arg(long, allow_negative_numbers = true, value_parser = whole::<usize>)]
     pub threads: Option<usize>,
@@ -231,6 +238,8 @@ impl Overrides {
             pixel_jitter: self.no_jitter.then_some(false),
             noise_model: self.noise_model.clone(),
             sampler: self.sampler.clone(),
+            cache_photons: self.cache_photons,
+            pixel_table_rays: self.pixel_table_rays,
             ..PartialSettings::default()
         }
     }
@@ -266,6 +275,12 @@ impl Overrides {
         }
         if let Some(m) = &o.sampler {
             push("--sampler", m.clone());
+        }
+        if let Some(n) = o.cache_photons {
+            push("--cache-photons", n.to_string());
+        }
+        if let Some(n) = o.pixel_table_rays {
+            push("--pixel-table-rays", n.to_string());
         }
         if o.no_jitter {
             v.push("--no-jitter".into());
@@ -459,10 +474,22 @@ mod tests {
             seed: Some(7),
             no_jitter: true,
             sampler: Some("independent".into()),
+            cache_photons: Some(500_000),
+            pixel_table_rays: Some(8),
             ..Default::default()
         };
         let back = Overrides::from_args(&o.to_args()).unwrap();
         assert_eq!(back.to_args(), o.to_args());
+        assert_eq!(
+            (back.cache_photons, back.pixel_table_rays),
+            (Some(500_000), Some(8))
+        );
+        let mut s = RenderSettings::default();
+        apply_overrides(&mut s, &o).unwrap();
+        assert_eq!(
+            (s.cache_photons, s.pixel_table_rays),
+            (Some(500_000), Some(8))
+        );
         assert_eq!(back.radius.as_deref(), Some("0.1"));
         let px = Overrides {
             radius: Some("1.25px".into()),
