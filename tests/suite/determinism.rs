@@ -42,15 +42,20 @@ fn images_do_not_depend_on_the_thread_count() {
 
 /// The weight inputs of a photon's previous vertex, computed once per photon for Lambert
 /// vertices (`Mix::prev_inputs`), give the same image bits as computing them at every visit,
-/// in every mode that reads them, on a Lambert-only scene (isotropic cache) and on the glossy
-/// one (where only `algebraic-direct` has no directional cache and so uses them).
+/// in every mode that reads them, on a Lambert-only scene (isotropic cache), on the glossy
+/// one (where only `algebraic-direct` has no directional cache and so uses them), and on the
+/// glossy one with a one-bin cache (isotropic, storing b).
 #[test]
 fn precomputed_photon_inputs_keep_the_bits() {
-    for scene_file in [
-        "preprint/cornell-lambert.toml",
-        "preprint/cornell-glossy.toml",
+    for (scene_file, bins) in [
+        ("preprint/cornell-lambert.toml", None),
+        ("preprint/cornell-glossy.toml", None),
+        ("preprint/cornell-glossy.toml", Some(1)),
     ] {
-        let (scene, settings) = load(scene_file, 24, 24);
+        let (scene, mut settings) = load(scene_file, 24, 24);
+        if let Some(bins) = bins {
+            settings.cache_bins = bins;
+        }
         for mode in [
             "algebraic-direct",
             "algebraic",
@@ -65,10 +70,13 @@ fn precomputed_photon_inputs_keep_the_bits() {
                 .with_per_visit_inputs(true);
             let a = once.render_pass(0, &|_| {}).estimates;
             let b = per_visit.render_pass(0, &|_| {}).estimates;
-            assert!(a.iter().any(|v| v.x > 0.0), "{scene_file} {mode}: black");
+            assert!(
+                a.iter().any(|v| v.x > 0.0),
+                "{scene_file} {bins:?} {mode}: black"
+            );
             assert!(
                 a == b,
-                "{scene_file} {mode}: precomputed inputs changed the image"
+                "{scene_file} {bins:?} {mode}: precomputed inputs changed the image"
             );
         }
     }

@@ -405,7 +405,9 @@ impl<'a> Mix<'a> {
     /// the photon landed, one [L₀, L_d, b] (luminances: W·m⁻²·sr⁻¹, b in W·m⁻²·sr⁻²) per photon of `map`, in its
     /// order: for a Lambert y_p, L₀(y_p) and the cache's L_d and b on the side of y_p's normal
     /// (isotropic there; `merge_at_x0` checks the side), NaN for the others. Empty when the
-    /// mode's weights at x₀ read neither, or the cache has directional bins or stores b.
+    /// mode's weights at x₀ read neither, or the cache has directional bins. A one-bin cache
+    /// reads the same (L_d, b) for any direction on a side, whether it stores b (a scene with
+    /// glossy surfaces and `cache_bins = 1`) or derives it from kd.
     ///
     /// A merge at x₀ visits a photon once per camera sample whose disk holds it, several
     /// times per pass at high resolution; computing these once per photon gives the same
@@ -415,9 +417,7 @@ impl<'a> Mix<'a> {
         let per_visit = matches!(self.heuristic, Heuristic::Bdd0)
             || self.camera_x1_weighting()
             || self.per_visit_inputs();
-        let isotropic = self
-            .cache_needed()
-            .is_none_or(|c| c.is_isotropic() && !c.stats().stores_b);
+        let isotropic = self.cache_needed().is_none_or(|c| c.is_isotropic());
         if !(self.needs.photons_at_x0 && reads_inputs && isotropic) || per_visit {
             return Vec::new();
         }

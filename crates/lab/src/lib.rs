@@ -55,18 +55,19 @@ pub fn run(command: Command) -> Result<ExitCode, String> {
 }
 
 /// The keys a `--modes` entry may set ([`Variant`]).
-const KEYS: [&str; 6] = [
+const KEYS: [&str; 7] = [
     "sampler",
     "radius",
     "spp",
     "photons",
     "cache_photons",
+    "cache_bins",
     "pixel_table_rays",
 ];
 
 /// One entry of `--modes`: a mode, and settings of its own on top of the shared ones
 /// (`MODE[:KEY=VALUE]…` with KEY one of `sampler`, `radius` (metres, or pixel footprints as
-/// `1.2px`), `spp`, `photons`, and the weights' preparation `cache_photons`,
+/// `1.2px`), `spp`, `photons`, and the weights' preparation `cache_photons`, `cache_bins`,
 /// `pixel_table_rays`), so that configurations are compared side by side in one run, e.g.
 /// `balance:sampler=independent,balance,optimal-path:radius=0.2px:cache_photons=500000`.
 #[derive(Clone, Debug, PartialEq)]
@@ -127,6 +128,10 @@ impl Variant {
                             .parse()
                             .map_err(|_| bad("a whole number of photons"))?,
                     )
+                }
+                "cache_bins" => {
+                    settings.cache_bins =
+                        Some(value.parse().map_err(|_| bad("a whole number of bins"))?)
                 }
                 "pixel_table_rays" => {
                     settings.pixel_table_rays =
@@ -197,12 +202,14 @@ mod tests {
         let px = parse_modes(&["balance:radius=1.5px".into()]).unwrap();
         let s = px[0].settings(&RenderSettings::default()).unwrap();
         assert_eq!((s.radius, s.radius_px), (None, Some(1.5)));
-        let prep =
-            parse_modes(&["optimal-path:cache_photons=500000:pixel_table_rays=8".into()]).unwrap();
+        let prep = parse_modes(&[
+            "optimal-path:cache_photons=500000:cache_bins=36:pixel_table_rays=8".into(),
+        ])
+        .unwrap();
         let s = prep[0].settings(&RenderSettings::default()).unwrap();
         assert_eq!(
-            (s.cache_photons, s.pixel_table_rays),
-            (Some(500_000), Some(8))
+            (s.cache_photons, s.cache_bins, s.pixel_table_rays),
+            (Some(500_000), 36, Some(8))
         );
         let plain = parse_modes(&["optimal-path".into()]).unwrap();
         assert_eq!(
@@ -217,6 +224,7 @@ mod tests {
             "balance:spp=-1",
             "optimal-path:cache_photons=many",
             "optimal-path:pixel_table_rays=-2",
+            "optimal-path:cache_bins=1.5",
         ] {
             assert!(parse_modes(&[bad.into()]).is_err(), "{bad}");
         }

@@ -40,7 +40,8 @@ pub struct StudyArgs {
     overrides: Overrides,
     /// Modes to compare, comma-separated (default: every BDPM mode); each may carry settings
     /// of its own, MODE[:KEY=VALUE]… with KEY one of sampler, radius, spp, photons,
-    /// cache_photons, pixel_table_rays (e.g. `optimal-path:radius=0.2px:cache_photons=500000`).
+    /// cache_photons, cache_bins, pixel_table_rays (e.g.
+    /// `optimal-path:radius=0.2px:cache_photons=500000`).
     #[arg(long, value_delimiter = ',')]
     modes: Vec<String>,
     /// Give each mode this many seconds of wall time (preparation included) instead of a fixed
