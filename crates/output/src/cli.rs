@@ -88,6 +88,10 @@ pub struct Overrides {
     /// Photons traced for the radiance cache of the model-based weights (default: N_F).
     #[arg(long, allow_negative_numbers = true, value_parser = whole::<u64>)]
     pub cache_photons: Option<u64>,
+    /// Angular bins per radiance-cache cell side of the model-based weights (default 100; one
+    /// bin is used in a Lambert-only scene).
+    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u32>)]
+    pub cache_bins: Option<u32>,
     /// Backward rays per pixel of the weights' A/B table (default: 16 under the footprint
     /// noise model with jitter, else 64).
     #[arg(long, allow_negative_numbers = true, value_parser = whole::<u32>)]
@@ -160,6 +164,9 @@ pub fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> CliResul
             Setting::Mode => "--mode".into(),
             Setting::NoiseModel => "--noise-model".into(),
             Setting::Sampler => "--sampler".into(),
+            Setting::CachePhotons => "--cache-photons".into(),
+            Setting::CacheBins => "--cache-bins".into(),
+            Setting::PixelTableRays => "--pixel-table-rays".into(),
             other => format!("render.{}", other.key()),
         };
         format!("{flag}: {e}")
@@ -239,6 +246,7 @@ impl Overrides {
             noise_model: self.noise_model.clone(),
             sampler: self.sampler.clone(),
             cache_photons: self.cache_photons,
+            cache_bins: self.cache_bins,
             pixel_table_rays: self.pixel_table_rays,
             ..PartialSettings::default()
         }
@@ -278,6 +286,9 @@ impl Overrides {
         }
         if let Some(n) = o.cache_photons {
             push("--cache-photons", n.to_string());
+        }
+        if let Some(n) = o.cache_bins {
+            push("--cache-bins", n.to_string());
         }
         if let Some(n) = o.pixel_table_rays {
             push("--pixel-table-rays", n.to_string());
@@ -475,20 +486,21 @@ mod tests {
             no_jitter: true,
             sampler: Some("independent".into()),
             cache_photons: Some(500_000),
+            cache_bins: Some(9),
             pixel_table_rays: Some(8),
             ..Default::default()
         };
         let back = Overrides::from_args(&o.to_args()).unwrap();
         assert_eq!(back.to_args(), o.to_args());
         assert_eq!(
-            (back.cache_photons, back.pixel_table_rays),
-            (Some(500_000), Some(8))
+            (back.cache_photons, back.cache_bins, back.pixel_table_rays),
+            (Some(500_000), Some(9), Some(8))
         );
         let mut s = RenderSettings::default();
         apply_overrides(&mut s, &o).unwrap();
         assert_eq!(
-            (s.cache_photons, s.pixel_table_rays),
-            (Some(500_000), Some(8))
+            (s.cache_photons, s.cache_bins, s.pixel_table_rays),
+            (Some(500_000), 9, Some(8))
         );
         assert_eq!(back.radius.as_deref(), Some("0.1"));
         let px = Overrides {

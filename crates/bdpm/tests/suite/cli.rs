@@ -849,6 +849,9 @@ fn command_line_numbers_are_checked_with_clear_messages() {
             vec!["--threads 10000", "at most"],
         ),
         (vec!["--no-such-flag"], vec!["--no-such-flag"]),
+        // Out of range for the setting: named by the flag, not the scene file's key.
+        (vec!["--cache-bins", "0"], vec!["--cache-bins"]),
+        (vec!["--cache-bins", "5000"], vec!["--cache-bins", "5000"]),
     ];
     for (args, needles) in cases {
         let out = run(bdpm()
