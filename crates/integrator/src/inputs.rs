@@ -538,9 +538,9 @@ mod tests {
         .expect("a valid scene")
     }
 
-    /// Paths compared, (one-bounce, merge), over every mixing mode of `scene`; panics at the
-    /// first disagreement.
-    fn check_agreement(scene: &Scene) -> (usize, usize) {
+    /// Paths compared, (one-bounce, merge), over every mixing mode of `scene` with a cache of
+    /// `cache_bins` bins per cell side; panics at the first disagreement.
+    fn check_agreement(scene: &Scene, cache_bins: u32) -> (usize, usize) {
         let (mut one_bounce, mut merge) = (0, 0);
         // Every mode that mixes the two techniques (the pure ones weigh nothing).
         let mixing = Heuristic::ALL_NAMES.iter().filter(|name| {
@@ -556,6 +556,7 @@ mod tests {
                 pixel_table_rays: Some(16),
                 radius: Some(0.05),
                 mode: Mode::parse(name).expect("a mode"),
+                cache_bins,
                 ..RenderSettings::default()
             };
             let renderer = Renderer::new(scene, &settings).expect("valid settings");
@@ -627,13 +628,20 @@ mod tests {
 
     #[test]
     fn camera_and_photon_side_inputs_agree_lambert() {
-        let (one_bounce, merge) = check_agreement(&open_box(false));
+        let (one_bounce, merge) = check_agreement(&open_box(false), 1);
         assert!(one_bounce > 1000 && merge > 1000, "{one_bounce} {merge}");
     }
 
     #[test]
     fn camera_and_photon_side_inputs_agree_glossy() {
-        let (one_bounce, merge) = check_agreement(&open_box(true));
-        assert!(one_bounce > 1000 && merge > 1000, "{one_bounce} {merge}");
+        // Directional bins (the method's M ≈ 100) and the default's one bin, which stores b
+        // and lets the photon side precompute a Lambert y_p's inputs.
+        for bins in [100, 1] {
+            let (one_bounce, merge) = check_agreement(&open_box(true), bins);
+            assert!(
+                one_bounce > 1000 && merge > 1000,
+                "{bins}: {one_bounce} {merge}"
+            );
+        }
     }
 }

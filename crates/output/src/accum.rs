@@ -732,7 +732,7 @@ mod tests {
             settings_hash(&base),
             format!("{:016x}", fnv1a(json.as_bytes()))
         );
-        assert_eq!(settings_hash(&base), "e65492101dba9e06");
+        assert_eq!(settings_hash(&base), "b09ca13b8d4528f6");
         let changed = |f: &dyn Fn(&mut RenderSettings)| {
             let mut s = base.clone();
             f(&mut s);

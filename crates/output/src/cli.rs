@@ -88,7 +88,7 @@ pub struct Overrides {
     /// Photons traced for the radiance cache of the model-based weights (default: N_F).
     #[arg(long, allow_negative_numbers = true, value_parser = whole::<u64>)]
     pub cache_photons: Option<u64>,
-    /// Angular bins per radiance-cache cell side of the model-based weights (default 100; one
+    /// Angular bins per radiance-cache cell side of the model-based weights (default 1; one
     /// bin is used in a Lambert-only scene).
     #[arg(long, allow_negative_numbers = true, value_parser = whole::<u32>)]
     pub cache_bins: Option<u32>,

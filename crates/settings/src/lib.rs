@@ -255,7 +255,8 @@ pub struct RenderSettings {
     /// Radius R of the threshold rule (eq. 11), metres: the `threshold` mode's radius, and
     /// nowhere else.
     pub threshold_radius: f32,
-    /// Angular bins K per radiance-cache cell (one bin is used for Lambert-only scenes).
+    /// Angular bins K per radiance-cache cell side (one bin is used for Lambert-only scenes;
+    /// [`DEFAULT_CACHE_BINS`] by default).
     pub cache_bins: u32,
     /// Photons traced for the radiance cache (`None` = N_F, one pass's worth). More photons
     /// with more bins make an "oracle" cache, to tell cache error from model error.
@@ -622,7 +623,10 @@ impl Default for RenderSettings {
             seed: 1,
             mode: Mode::Bdpm(HeuristicKind::OptimalPath),
             threshold_radius: bdpm_mis::DEFAULT_THRESHOLD_RADIUS as f32,
-            cache_bins: 100,
+            // One bin per cell side, not method.md's M ≈ 100: from N_F cache photons the
+            // 100-bin estimates gave the weights nothing more on the glossy Cornell box and
+            // cost 11 % a pass (docs/results.md, "One radiance-cache bin on the glossy box").
+            cache_bins: DEFAULT_CACHE_BINS,
             cache_photons: None,
             pixel_table_rays: None,
             clamp_weights: false,
@@ -639,6 +643,10 @@ pub const DEFAULT_PHOTONS: u64 = 250_000;
 
 /// Camera samples per pixel per pass N_B of [`RenderSettings::default`].
 pub const DEFAULT_SPP: u32 = 10;
+
+/// Radiance-cache bins per cell side of [`RenderSettings::default`] (a Lambert-only scene
+/// uses one whatever this says).
+pub const DEFAULT_CACHE_BINS: u32 = 1;
 
 /// Merge radius of [`RenderSettings::default`], pixel footprints.
 pub const DEFAULT_RADIUS_PX: f32 = 0.5;

@@ -877,7 +877,7 @@ fn command_line_numbers_are_checked_with_clear_messages() {
 
 /// A scene file without `[render]` renders with the library's defaults, the configuration
 /// docs/results.md ("A scene that sets nothing") chose: `optimal-path`, half a pixel's
-/// footprint, N_F = 2.5·10⁵, N_B = 10, stratified samples.
+/// footprint, N_F = 2.5·10⁵, N_B = 10, stratified samples, one radiance-cache bin per cell side.
 #[test]
 fn a_scene_that_sets_nothing_renders_with_the_chosen_defaults() {
     let dir = TempDir::new("nothing");
@@ -900,6 +900,7 @@ fn a_scene_that_sets_nothing_renders_with_the_chosen_defaults() {
     assert_eq!(s["photons_per_pass"], 250_000, "{s}");
     assert_eq!(s["spp"], 10, "{s}");
     assert_eq!(s["sampler"], "stratified", "{s}");
+    assert_eq!(s["cache_bins"], 1, "{s}");
     assert_eq!(s["radius_given"], false, "{s}");
     let px = s["radius_px"].as_f64().expect("radius_px");
     assert!((px - 0.5).abs() < 1e-5, "{s}");
