@@ -16,7 +16,7 @@ cd "$(dirname "$0")/.."
 bin=${BDPM:-target/release/bdpm}
 # `compare` needs a binary that has the compare command, i.e. this checkout's.
 compare_bin=target/release/bdpm
-modes="path light bdd0 bdd1 threshold algebraic-direct algebraic optimal optimal-split optimal-path balance power camis"
+modes="path light bdd0 bdd1 threshold algebraic-direct algebraic optimal optimal-split optimal-path balance power camis corrected-balance"
 case "${1:-}" in
   render)
     dir=${2:?usage: $0 render DIR}; mkdir -p "$dir"

@@ -14,7 +14,7 @@ fn bits(film: &bdpm_integrator::Film) -> Vec<u64> {
 #[test]
 fn images_do_not_depend_on_the_thread_count() {
     let (scene, settings) = load("preprint/cornell-glossy.toml", 24, 24);
-    for mode in ["path", "light", "optimal", "balance"] {
+    for mode in ["path", "light", "optimal", "balance", "corrected-balance"] {
         let s = with_mode(&settings, mode, 2, 2, 20_000);
         let render_on = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new()

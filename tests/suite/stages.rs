@@ -51,6 +51,41 @@ fn modes_prepare_only_what_they_need() {
         );
         assert!(stages[1].1.contains("footprint noise model"), "{stages:?}");
     }
+    // The data-driven correction of `balance` learns its factors from a pilot, and needs
+    // nothing else.
+    let corrected = stage_names("preprint/cornell-lambert.toml", "corrected-balance");
+    assert_eq!(
+        corrected.iter().map(|s| s.0.as_str()).collect::<Vec<_>>(),
+        ["balance correction"]
+    );
+}
+
+/// `corrected-balance`'s factors are candidates or blends of them, and the pilot finds pixels
+/// where `balance` is not the best candidate (else the mode would be `balance` under a name).
+#[test]
+fn the_balance_correction_learns_factors_in_the_candidates_range() {
+    let (scene, settings) = load("cornell-lambert.toml", 32, 32);
+    let s = with_mode(&settings, "corrected-balance", 1, 8, 100_000);
+    let r = Renderer::new(&scene, &s).unwrap();
+    let factors = r.correction().expect("the mode learns factors").factors();
+    assert_eq!(factors.len(), 32 * 32);
+    let candidates = bdpm_integrator::CANDIDATES;
+    let (lo, hi) = (candidates[0], candidates[candidates.len() - 1]);
+    assert!(
+        factors
+            .iter()
+            .all(|&c| (lo as f32..=hi as f32).contains(&c)),
+        "{factors:?}"
+    );
+    assert!(
+        factors.iter().any(|&c| (c - 1.0).abs() > 0.01),
+        "{factors:?}"
+    );
+    // The pilot has its own streams: another seed learns other factors.
+    let mut s2 = s.clone();
+    s2.seed += 1;
+    let other = Renderer::new(&scene, &s2).unwrap();
+    assert_ne!(other.correction().unwrap().factors(), factors);
 }
 
 /// Without jitter every sample of a pixel shares x₀ (ρ = 1), and under the pinhole model the

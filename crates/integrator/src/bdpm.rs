@@ -10,6 +10,7 @@ use bdpm_mis::{Budget, Heuristic, Needs, Pair, Weigher, acceptance_area};
 use bdpm_photon::{PhotonMap, PhotonQuery};
 use bdpm_scene::{Scene, Shading};
 
+use crate::correction::CandidateSums;
 use crate::inputs::Arrival;
 use crate::table::PixelWeights;
 use bdpm_scene::WeightVertex;
@@ -78,6 +79,9 @@ pub(crate) struct Job {
     /// The numbers of the BDF sample at x₀ when the sampler fixes them (`None`: from `rng`).
     pub(crate) bdf: Option<[f32; 3]>,
     pub(crate) out: Techniques,
+    /// The weighted parts of the value under each candidate factor of `corrected-balance`'s
+    /// pilot (only when [`Mix::pilot`]; direct light at x₀ is not in it).
+    pub(crate) pilot: CandidateSums,
 }
 
 /// Room for the state of a batch of samples between their rays and their gathers, reused from
@@ -124,6 +128,9 @@ pub(crate) struct Mix<'a> {
     pub(crate) inv_area: f32,
     /// The frozen radiance cache, when the mode needs L_d (and b).
     pub(crate) cache: Option<&'a RadianceCache>,
+    /// `corrected-balance`'s pilot: every weighted contribution also goes into the sample's
+    /// [`Job::pilot`] under each candidate factor (crate::correction).
+    pub(crate) pilot: bool,
     /// Test-only variant: weight the x₀ photon sum with w₁(x₀, x₁ᶜ) of the camera's x₁, as
     /// the preprint's eq. 2–3 read literally. It is biased; a test shows it.
     #[cfg(feature = "test-hooks")]
@@ -198,8 +205,9 @@ impl<'a> Mix<'a> {
 
     /// The weigher of one pixel: the mode with the pixel's A, B and, where the table gives
     /// one, its N_eff in place of N_B (method.md §12; N_B itself under the pinhole model and
-    /// without jitter, so those weights keep their bits).
-    pub(crate) fn weigher(&self, pixel: Option<&PixelWeights>) -> Weigher {
+    /// without jitter, so those weights keep their bits), and `corrected-balance`'s factor
+    /// `correction` for the pixel (1 for `balance`'s weights; the other modes ignore it).
+    pub(crate) fn weigher(&self, pixel: Option<&PixelWeights>, correction: f64) -> Weigher {
         let budget = match pixel {
             Some(p) => Budget {
                 camera_samples: p.camera_samples,
@@ -207,7 +215,7 @@ impl<'a> Mix<'a> {
             },
             None => self.budget,
         };
-        Weigher::new(self.heuristic, &budget, pixel.map(|p| &p.terms))
+        Weigher::new(self.heuristic, &budget, pixel.map(|p| &p.terms)).with_correction(correction)
     }
 
     fn w1(&self, pair: &Pair, weigher: &Weigher, stats: &mut WeightStats) -> f64 {
@@ -239,6 +247,7 @@ impl<'a> Mix<'a> {
         let slots = &mut slots.0;
         for (job, slot) in jobs.iter_mut().zip(slots.iter_mut()) {
             job.out = Techniques::default();
+            job.pilot = CandidateSums::default();
             slot.x0 = None;
             slot.second = None;
             self.start_sample(map, job, weigher, stats, slot);
@@ -258,7 +267,8 @@ impl<'a> Mix<'a> {
             let Some(x0) = &slot.x0 else { continue };
             let camera_w1 = slot.second.as_ref().map(|s| s.w_const);
             if let Some(second) = &slot.second {
-                self.merge_at_x1(x0, map, second, &slot.query1, weigher, stats, &mut job.out);
+                let out = (&mut job.out, &mut job.pilot);
+                self.merge_at_x1(x0, map, second, &slot.query1, weigher, stats, out);
             }
             if self.needs.photons_at_x0 {
                 let photons = (map, prev_inputs);
@@ -269,7 +279,7 @@ impl<'a> Mix<'a> {
                     weigher,
                     camera_w1,
                     stats,
-                    &mut job.out,
+                    (&mut job.out, &mut job.pilot),
                 );
             }
         }
@@ -307,7 +317,14 @@ impl<'a> Mix<'a> {
         if self.needs.second_vertex {
             let drawn = job.rng.uniform3();
             let bdf_u = job.bdf.unwrap_or(drawn);
-            slot.second = self.start_second(&x0, map, bdf_u, weigher, stats, &mut slot.query1);
+            slot.second = self.start_second(
+                &x0,
+                map,
+                bdf_u,
+                (weigher, stats),
+                &mut slot.query1,
+                &mut job.pilot,
+            );
         }
         slot.x0 = Some(x0);
     }
@@ -319,9 +336,9 @@ impl<'a> Mix<'a> {
         x0: &FirstVertex<'_>,
         map: &PhotonMap,
         u: [f32; 3],
-        weigher: &Weigher,
-        stats: &mut WeightStats,
+        (weigher, stats): (&Weigher, &mut WeightStats),
         query: &mut PhotonQuery,
+        pilot: &mut CandidateSums,
     ) -> Option<Second> {
         let scene = self.scene;
         let s = x0.bdf.sample_at(&x0.out, u)?;
@@ -381,6 +398,9 @@ impl<'a> Mix<'a> {
                 w_direct
             };
             direct_weighted += c * w as f32;
+            if self.pilot {
+                pilot.add(f64::from(luminance(s.weight * c)), w, true);
+            }
         }
         Some(Second {
             sh1,
@@ -406,7 +426,7 @@ impl<'a> Mix<'a> {
         query: &PhotonQuery,
         weigher: &Weigher,
         stats: &mut WeightStats,
-        t: &mut Techniques,
+        (t, pilot): (&mut Techniques, &mut CandidateSums),
     ) {
         let scene = self.scene;
         let &Second {
@@ -426,6 +446,7 @@ impl<'a> Mix<'a> {
         let mut ph_raw = Vec3::ZERO;
         let mut ph_weighted = Vec3::ZERO;
         let bdf1 = scene.bdf_at(&sh1);
+        let k = self.inv_area;
         map.finish_query(query, |ph| {
             let wp = ph.incoming;
             let f = scene.eval_with(&bdf1, &sh1, wo1, wp);
@@ -441,8 +462,10 @@ impl<'a> Mix<'a> {
                 w_const
             };
             ph_weighted += c * w as f32;
+            if self.pilot {
+                pilot.add(f64::from(luminance(e * c) * k), w, true);
+            }
         });
-        let k = self.inv_area;
         t.x1_raw = (e * (direct_raw + ph_raw * k)).as_dvec3();
         t.x1_weighted = (e * (direct_weighted + ph_weighted * k)).as_dvec3();
     }
@@ -457,9 +480,10 @@ impl<'a> Mix<'a> {
         weigher: &Weigher,
         camera_w1: Option<f64>,
         stats: &mut WeightStats,
-        t: &mut Techniques,
+        (t, pilot): (&mut Techniques, &mut CandidateSums),
     ) {
         let scene = self.scene;
+        let k = self.inv_area;
         let mut raw = Vec3::ZERO;
         let mut weighted = Vec3::ZERO;
         let pure = matches!(self.heuristic, Heuristic::Bdd0);
@@ -479,11 +503,14 @@ impl<'a> Mix<'a> {
                 let Some(pair) = self.photon_side_pair(photons, x0, i, ph) else {
                     return;
                 };
-                1.0 - self.w1(&pair, weigher, stats)
+                let w1 = self.w1(&pair, weigher, stats);
+                if self.pilot {
+                    pilot.add(f64::from(luminance(c) * k), w1, false);
+                }
+                1.0 - w1
             };
             weighted += c * w0 as f32;
         });
-        let k = self.inv_area;
         t.x0_raw = (raw * k).as_dvec3();
         t.x0_weighted = (weighted * k).as_dvec3();
     }

@@ -10,6 +10,7 @@
 //! Architecture invariant: no file IO; the driver writes images and reports.
 
 pub mod bdpm;
+mod correction;
 mod film;
 mod inputs;
 mod light;
@@ -25,6 +26,7 @@ mod weightmap;
 
 pub use bdpm::{Techniques, WeightStats, scene_default_radius};
 pub use bdpm_mis::NoiseModel;
+pub use correction::{CANDIDATES, Correction, PILOT_PASSES, pilot_seed};
 pub use film::{Film, PassSums, PassValue};
 pub use memory::{MemoryEstimate, MemoryItem, PILOT_PHOTONS, estimate_memory, human_bytes};
 pub use predict::{JITTER_RAYS, Prediction};

@@ -15,6 +15,7 @@ use bdpm_photon::{PhotonMap, TraceOptions};
 use bdpm_scene::Scene;
 
 use crate::bdpm::{Techniques, scene_default_radius};
+use crate::correction::CANDIDATES;
 use crate::table::PixelWeights;
 use bdpm_settings::{Mode, RenderSettings};
 
@@ -163,6 +164,14 @@ pub fn estimate_memory(
             items.push(MemoryItem {
                 name: "per-pixel weight table",
                 bytes: pixels * size_of::<PixelWeights>() as u64,
+                lower: "--resolution",
+            });
+        }
+        if needs.balance_correction {
+            // Each pixel's pass estimate per candidate, and each candidate's filtered image.
+            items.push(MemoryItem {
+                name: "balance-correction pilot",
+                bytes: pixels * (2 * CANDIDATES.len() * size_of::<f64>()) as u64,
                 lower: "--resolution",
             });
         }

@@ -49,7 +49,7 @@
 //! Units: every term is a variance of a radiance, W²·m⁻⁴·sr⁻².
 use bdpm_bdf::luminance;
 use bdpm_geometry::{Domain, Rng};
-use bdpm_mis::{Budget, Heuristic, effective_samples};
+use bdpm_mis::{Heuristic, Weigher, effective_samples};
 
 use crate::inputs::Arrival;
 use rayon::prelude::*;
@@ -140,6 +140,12 @@ impl Renderer<'_> {
                 mode: self.settings().mode,
             });
         }
+        if h.needs().balance_correction && self.correction().is_none() {
+            return Err(RenderError::NoCorrection {
+                weights: h.name(),
+                mode: self.settings().mode,
+            });
+        }
         let mut mix = self.mix(h);
         if mix.cache.is_none() {
             return Err(RenderError::NoCache);
@@ -153,7 +159,7 @@ impl Renderer<'_> {
         let mut terms = vec![None; w * hgt];
         terms.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
             for (x, out) in row.iter_mut().enumerate() {
-                *out = self.pixel_terms(&mix, h, x as u32, y as u32);
+                *out = self.pixel_terms(&mix, x as u32, y as u32);
             }
         });
         let pick = |f: fn(&Terms) -> f64| -> Vec<f64> {
@@ -175,7 +181,7 @@ impl Renderer<'_> {
     }
 
     /// The terms of pixel (x, y), or None if its centre sees no surface facing the camera.
-    fn pixel_terms(&self, mix: &Mix<'_>, h: Heuristic, x: u32, y: u32) -> Option<Terms> {
+    fn pixel_terms(&self, mix: &Mix<'_>, x: u32, y: u32) -> Option<Terms> {
         let scene = self.scene();
         let s = self.settings();
         let cam = &scene.camera();
@@ -196,11 +202,8 @@ impl Renderer<'_> {
         let n_eff = effective_samples(n_b, overlap);
         // The weights' inputs exactly as the renderer passes them.
         let table = self.pixel_table().map(|t| t.get(x, y));
-        let budget = table.map_or(mix.budget, |p| Budget {
-            camera_samples: p.camera_samples,
-            ..mix.budget
-        });
-        let pixel_terms = table.map(|p| &p.terms);
+        let factor = self.correction().map_or(1.0, |c| c.get(x, y));
+        let weigher = mix.weigher(table, factor);
 
         // The model's own directions: as many as the preprint's A/B rays unless given, so that
         // a prediction does not get noisier where the table takes fewer.
@@ -223,7 +226,7 @@ impl Renderer<'_> {
                 let [a, b] = in_cell(cell, grid, [u[1], u[2]]);
                 u = [u[0], a, b];
             }
-            let d = direction(mix, h, &budget, pixel_terms, &x0, u).unwrap_or_default();
+            let d = direction(mix, &weigher, &x0, u).unwrap_or_default();
             sum += d.value;
             sum_sq += d.value * d.value;
             photons_x0 += d.photons_x0;
@@ -340,9 +343,7 @@ impl Renderer<'_> {
 /// when the sample finds no x₁ (it then contributes zero, as in the renderer).
 fn direction(
     mix: &Mix<'_>,
-    h: Heuristic,
-    budget: &Budget,
-    terms: Option<&bdpm_mis::PixelTerms>,
+    weigher: &Weigher,
     x0: &FirstVertex<'_>,
     u: [f32; 3],
 ) -> Option<Direction> {
@@ -360,16 +361,17 @@ fn direction(
     let x1 = scene.weight_vertex(&sh1);
     let pair = mix.pair(x0, &x1, v, mix.f_at_x0(x0, v));
     let dist2 = (x1.p - x0.sh.p).length_squared();
-    let per_light = h.needs().densities;
+    let needs = weigher.heuristic().needs();
+    let per_light = needs.densities;
     // The longer paths' weight for the model's stand-in light path (`optimal-path` weighs each
     // photon by its own f₁ at x₁; the model has only the cell's average, which makes it
     // `optimal-split`).
     let merge = mix.path_pair(x0, &x1, (v, dist2), Arrival::Modelled, pair);
-    let w_merge = h.weight(budget, &merge, terms).w1;
+    let w_merge = weigher.weight(&merge).w1;
     // Weights that tell one-bounce paths from merge paths (`optimal-split`, `optimal-path`).
-    let w_direct = if h.needs().path_kinds {
+    let w_direct = if needs.path_kinds {
         let one = mix.path_pair(x0, &x1, (v, dist2), Arrival::Light(0), pair);
-        h.weight(budget, &one, terms).w1
+        weigher.weight(&one).w1
     } else {
         w_merge
     };
@@ -384,7 +386,7 @@ fn direction(
         }
         let w = if per_light {
             let one_bounce = mix.path_pair(x0, &x1, (v, dist2), Arrival::Light(l), pair);
-            h.weight(budget, &one_bounce, terms).w1
+            weigher.weight(&one_bounce).w1
         } else {
             w_direct
         };

@@ -11,6 +11,7 @@ use bdpm_mis::{Budget, Heuristic, NoiseModel};
 use bdpm_photon::{PhotonMap, TraceOptions};
 
 use crate::bdpm::{BATCH, Job, Mix, Slots, Techniques, WeightStats, scene_default_radius};
+use crate::correction::{CandidateSums, Correction, PILOT_PASSES, pilot_seed};
 use crate::sampler::PixelSamples;
 use crate::stage::Stage;
 use crate::table::{self, PixelTable, TableSpec};
@@ -92,6 +93,17 @@ pub enum RenderError {
         /// The renderer's mode.
         mode: Mode,
     },
+    /// The weights asked for read `corrected-balance`'s per-pixel factors, which the mode did
+    /// not learn.
+    #[error(
+        "the weights '{weights}' need corrected-balance's per-pixel factors, which mode '{mode}' does not learn"
+    )]
+    NoCorrection {
+        /// The weights' name.
+        weights: &'static str,
+        /// The renderer's mode.
+        mode: Mode,
+    },
     /// The noise model needs the radiance cache, which was not built.
     #[error(
         "the noise model needs the radiance cache: build the renderer with with_model_inputs()"
@@ -150,6 +162,8 @@ pub struct Renderer<'a> {
     per_visit_inputs: bool,
     cache: Option<RadianceCache>,
     table: Option<PixelTable>,
+    /// `corrected-balance`'s per-pixel factors.
+    correction: Option<Correction>,
     probe: Option<&'a dyn StageProbe>,
 }
 
@@ -187,6 +201,7 @@ impl<'a> Renderer<'a> {
             per_visit_inputs: false,
             cache: None,
             table: None,
+            correction: None,
             probe: None,
         };
         if let Some(h) = renderer.heuristic {
@@ -259,6 +274,42 @@ impl<'a> Renderer<'a> {
             });
             self.table = Some(table);
         }
+        if needs.balance_correction {
+            self.build_correction();
+        }
+    }
+
+    /// Learns `corrected-balance`'s per-pixel factors from [`PILOT_PASSES`] passes of
+    /// `balance` on the pilot's own streams (crate::correction).
+    fn build_correction(&mut self) {
+        let start = std::time::Instant::now();
+        let mut pilot = self.settings.clone();
+        pilot.seed = pilot_seed(self.settings.seed);
+        let mix = Mix {
+            pilot: true,
+            ..self.mix(Heuristic::Balance)
+        };
+        let pixels = self.settings.width as usize * self.settings.height as usize;
+        let mut second = vec![CandidateSums::default(); pixels];
+        for pass in 0..PILOT_PASSES {
+            let (_, estimates) = self.bdpm_pass(&mix, &pilot, pass, &|_| {});
+            for (m, f) in second.iter_mut().zip(&estimates) {
+                m.add_squares(f, 1.0 / f64::from(PILOT_PASSES));
+            }
+        }
+        let correction = Correction::from_moments(self.settings.width, &second);
+        self.stages.push(StageReport {
+            stage: Stage::BalanceCorrection,
+            seconds: start.elapsed().as_secs_f64(),
+            bytes: correction.bytes(),
+            detail: correction.summary(),
+        });
+        self.correction = Some(correction);
+    }
+
+    /// `corrected-balance`'s per-pixel factors, when the mode uses them.
+    pub fn correction(&self) -> Option<&Correction> {
+        self.correction.as_ref()
     }
 
     /// Builds the radiance cache of method.md §5 from its own photon stream.
@@ -321,6 +372,7 @@ impl<'a> Renderer<'a> {
             budget: self.budget(),
             inv_area: 1.0 / (std::f32::consts::PI * self.radius * self.radius),
             cache: self.cache.as_ref(),
+            pilot: false,
             #[cfg(feature = "test-hooks")]
             camera_x1_weighting: self.camera_x1_weighting,
             #[cfg(feature = "test-hooks")]
@@ -496,8 +548,22 @@ impl Renderer<'_> {
         pass: u32,
         progress: &(dyn Fn(u64) + Sync),
     ) -> PassOutput {
-        let s = &self.settings;
-        let needs = heuristic.needs();
+        self.bdpm_pass(&self.mix(heuristic), &self.settings, pass, progress)
+            .0
+    }
+
+    /// Pass `pass` of the mix `mix` under `s` (the render's settings, or the pilot's with
+    /// their own seed). With [`Mix::pilot`] it also returns each pixel's pass estimate under
+    /// every candidate factor of `corrected-balance` (luminance), and reads neither the pixel
+    /// table nor the factors (the pilot weighs with `balance`); otherwise that list is empty.
+    fn bdpm_pass(
+        &self,
+        mix: &Mix<'_>,
+        s: &RenderSettings,
+        pass: u32,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> (PassOutput, Vec<CandidateSums>) {
+        let needs = mix.needs;
         self.enter(Stage::Photons);
         let t_photons = std::time::Instant::now();
         let options = TraceOptions {
@@ -509,29 +575,29 @@ impl Renderer<'_> {
             max_depth: 1024,
         };
         let map = PhotonMap::trace(self.scene, &options, self.radius);
-        let mix = self.mix(heuristic);
         let prev_inputs = mix.prev_inputs(&map);
         let photon_seconds = t_photons.elapsed().as_secs_f64();
         self.leave(Stage::Photons);
         self.enter(Stage::Camera);
-        let table = self.table.as_ref();
+        let (table, correction) = if mix.pilot {
+            (None, None)
+        } else {
+            (self.table.as_ref(), self.correction.as_ref())
+        };
         let t_camera = std::time::Instant::now();
         let (w, h) = (s.width as usize, s.height as usize);
-        let dropped = AtomicU64::new(0);
-        let weight_stats = std::sync::Mutex::new(WeightStats::default());
-        let mut estimates = vec![DVec3::ZERO; w * h];
-        let mut techniques = vec![Techniques::default(); if self.techniques { w * h } else { 0 }];
         let record = self.techniques;
-        let render_row = |y: usize, row: &mut [DVec3], mut trow: Option<&mut [Techniques]>| {
-            let mut row_dropped = 0;
-            let mut row_stats = WeightStats::default();
+        let render_row = |y: usize| -> Row {
+            let mut row = Row::default();
             let mut slots = Slots::default();
             let mut layout = PixelSamples::new(s);
-            for (x, px) in row.iter_mut().enumerate() {
+            for x in 0..w {
                 let pixel = (y * w + x) as u64;
                 let mut sum = DVec3::ZERO;
                 let mut tsum = Techniques::default();
-                let weigher = mix.weigher(table.map(|t| t.get(x as u32, y as u32)));
+                let mut csum = CandidateSums::default();
+                let factor = correction.map_or(1.0, |c| c.get(x as u32, y as u32));
+                let weigher = mix.weigher(table.map(|t| t.get(x as u32, y as u32)), factor);
                 layout.start(pass, pixel);
                 for first in (0..s.spp).step_by(BATCH) {
                     let count = (s.spp - first).min(BATCH as u32);
@@ -545,6 +611,7 @@ impl Renderer<'_> {
                             rng: c.rng,
                             bdf: c.bdf,
                             out: Techniques::default(),
+                            pilot: CandidateSums::default(),
                         }
                     });
                     let jobs = &mut jobs[..count as usize];
@@ -554,10 +621,11 @@ impl Renderer<'_> {
                         jobs,
                         &mut slots,
                         &weigher,
-                        &mut row_stats,
+                        &mut row.stats,
                     );
                     // Summed in sample order, so the pixel does not depend on the batching.
-                    for t in jobs.iter().map(|j| &j.out) {
+                    for job in jobs.iter() {
+                        let t = &job.out;
                         let value = t.total();
                         if value.is_finite() {
                             sum += value;
@@ -568,58 +636,73 @@ impl Renderer<'_> {
                                 tsum.x1_raw += t.x1_raw;
                                 tsum.x1_weighted += t.x1_weighted;
                             }
+                            if mix.pilot {
+                                csum.add_sums(&job.pilot);
+                                csum.add_to_all(f64::from(luminance(t.direct.as_vec3())));
+                            }
                         } else {
-                            row_dropped += 1;
+                            row.dropped += 1;
                         }
                     }
                 }
                 let n = s.spp as f64;
-                *px = sum / n;
-                if let Some(trow) = trow.as_deref_mut() {
-                    trow[x] = Techniques {
+                row.estimates.push(sum / n);
+                if record {
+                    row.techniques.push(Techniques {
                         direct: tsum.direct / n,
                         x0_raw: tsum.x0_raw / n,
                         x0_weighted: tsum.x0_weighted / n,
                         x1_raw: tsum.x1_raw / n,
                         x1_weighted: tsum.x1_weighted / n,
-                    };
+                    });
+                }
+                if mix.pilot {
+                    row.candidates.push(csum.scaled(1.0 / n));
                 }
             }
-            dropped.fetch_add(row_dropped, Ordering::Relaxed);
-            // Integer sums: the total does not depend on the order rows finish in.
-            weight_stats
-                .lock()
-                .unwrap_or_else(|e| e.into_inner())
-                .add(&row_stats);
             progress(1);
+            row
         };
-        if record {
-            estimates
-                .par_chunks_mut(w)
-                .zip(techniques.par_chunks_mut(w))
-                .enumerate()
-                .for_each(|(y, (row, trow))| render_row(y, row, Some(trow)));
-        } else {
-            estimates
-                .par_chunks_mut(w)
-                .enumerate()
-                .for_each(|(y, row)| render_row(y, row, None));
-        }
+        let rows: Vec<Row> = (0..h).into_par_iter().map(render_row).collect();
         self.leave(Stage::Camera);
-        PassOutput {
+        let mut estimates = Vec::with_capacity(w * h);
+        let mut techniques = Vec::with_capacity(if record { w * h } else { 0 });
+        let mut candidates = Vec::new();
+        let mut dropped = 0;
+        let mut weights = WeightStats::default();
+        for row in rows {
+            estimates.extend(row.estimates);
+            techniques.extend(row.techniques);
+            candidates.extend(row.candidates);
+            dropped += row.dropped;
+            // Integer sums: the total does not depend on the order rows finish in.
+            weights.add(&row.stats);
+        }
+        let out = PassOutput {
             estimates,
-            dropped: dropped.into_inner(),
+            dropped,
             samples: (w * h) as u64 * s.spp as u64,
             stage_seconds: vec![
                 (Stage::Photons, photon_seconds),
                 (Stage::Camera, t_camera.elapsed().as_secs_f64()),
             ],
-            techniques: if record { Some(techniques) } else { None },
+            techniques: record.then_some(techniques),
             photons_stored: map.photons().len() as u64,
             photon_map_bytes: map.memory_bytes(),
-            weights: weight_stats.into_inner().unwrap_or_else(|e| e.into_inner()),
-        }
+            weights,
+        };
+        (out, candidates)
     }
+}
+
+/// One image row of a BDPM pass, gathered in row order.
+#[derive(Default)]
+struct Row {
+    estimates: Vec<DVec3>,
+    techniques: Vec<Techniques>,
+    candidates: Vec<CandidateSums>,
+    dropped: u64,
+    stats: WeightStats,
 }
 
 /// What one pass produced: the per-pixel estimates and counters.

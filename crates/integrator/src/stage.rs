@@ -25,6 +25,8 @@ pub enum Stage {
     PixelTable,
     /// The per-pixel footprints alone (ρ, N_eff), built once.
     PixelFootprints,
+    /// `corrected-balance`'s per-pixel factors, learnt once from a pilot of `balance`.
+    BalanceCorrection,
 }
 
 impl Stage {
@@ -39,6 +41,7 @@ impl Stage {
             Stage::RadianceCache => "radiance cache",
             Stage::PixelTable => "pixel table",
             Stage::PixelFootprints => "pixel footprints",
+            Stage::BalanceCorrection => "balance correction",
         }
     }
 }

@@ -147,6 +147,9 @@ pub struct Needs {
     /// One-bounce paths (L₀(x₁)) get another weight than merge paths at the same (x₀, x₁),
     /// so the two are weighted apart ([`PathInputs::kind`]; `optimal-split`, `optimal-path`).
     pub path_kinds: bool,
+    /// A correction factor per pixel, learnt by a pilot of `balance` on its own random
+    /// stream, scales BDD=1's density ([`Weigher::with_correction`]; `corrected-balance`).
+    pub balance_correction: bool,
 }
 
 /// What the weight of one full path through the pair (x₀, x₁) may depend on, in three groups:
@@ -328,6 +331,13 @@ pub enum Heuristic {
     /// exactly `balance`. r ∈ [0, 1] and r = 1 when β = 0, so `camis` never favours BDD=1
     /// more than `balance` does.
     Camis,
+    /// The balance heuristic with BDD=1's density scaled by a per-pixel factor c learnt from
+    /// data, in the style of Hua, Grittmann and Slusallek 2025 ("Correct your balance
+    /// heuristic"): w₁ = c·p_C/(c·p_C + p_L) for every path kind, so BDD=0's merge at x₀ is
+    /// corrected as much as BDD=1's (method-notes.md, "corrected-balance"). The factor comes
+    /// from [`Weigher::with_correction`] (1 without one: `balance` exactly); see
+    /// [`corrected_share`] for how a pilot scores candidate factors from `balance`'s own w₁.
+    CorrectedBalance,
 }
 
 impl Heuristic {
@@ -411,6 +421,11 @@ impl Heuristic {
                 densities: true,
                 ..mix
             },
+            Heuristic::CorrectedBalance => Needs {
+                densities: true,
+                balance_correction: true,
+                ..mix
+            },
         }
     }
 
@@ -437,6 +452,9 @@ pub struct Weigher {
     correlation: f64,
     /// Whether c·B was clamped to 1 − [`CB_EPSILON`] for this pixel.
     clamped_cb: bool,
+    /// `corrected-balance`'s factor on BDD=1's density for this pixel (dimensionless, 1 by
+    /// default; the other modes ignore it).
+    correction: f64,
 }
 
 impl Weigher {
@@ -450,6 +468,17 @@ impl Weigher {
             scale: Scale::new(budget),
             correlation: mul(budget.correlation_factor(), g_tilde),
             clamped_cb,
+            correction: 1.0,
+        }
+    }
+
+    /// The same weigher with `corrected-balance`'s factor c on BDD=1's density for this pixel
+    /// (dimensionless; NaN or negative read as 0, i.e. BDD=0 only). Only
+    /// [`Heuristic::CorrectedBalance`] reads it.
+    pub fn with_correction(self, c: f64) -> Self {
+        Weigher {
+            correction: nonneg(c),
+            ..self
         }
     }
 
@@ -495,6 +524,10 @@ impl Weigher {
             Heuristic::Balance => Weight::plain(density_share(&scale.budget, pair, 1)),
             Heuristic::Power => Weight::plain(density_share(&scale.budget, pair, 2)),
             Heuristic::Camis => Weight::plain(camis(&scale.budget, pair)),
+            Heuristic::CorrectedBalance => Weight::plain(corrected_share(
+                density_share(&scale.budget, pair, 1),
+                self.correction,
+            )),
         }
     }
 
@@ -809,6 +842,22 @@ fn camis(budget: &Budget, pair: &Pair) -> f64 {
             share(camera_density, nonneg(pair.path.light_density), 1, 0.5)
         }
     }
+}
+
+/// The balance weight w₁ = p_C/(p_C + p_L) with BDD=1's density scaled by `c`:
+/// c·p_C/(c·p_C + p_L) = c·w₁/(c·w₁ + 1 − w₁), written in w₁ alone so that a pilot that knows
+/// only `balance`'s w₁ of a path can score any candidate c (`corrected-balance`).
+///
+/// `w1` is clamped into [0, 1] (NaN read as 0) and `c` read as 0 where NaN or negative. c = 1
+/// returns w₁ exactly; c = 0 gives 0 and c = +∞ gives 1 wherever w₁ > 0. The result is in
+/// [0, 1] and non-decreasing in c and in w₁.
+pub fn corrected_share(w1: f64, c: f64) -> f64 {
+    let w1 = nonneg(w1).min(1.0);
+    if c == 1.0 {
+        return w1;
+    }
+    // Both zero only where c·w₁ = 0 and w₁ = 1, i.e. c = 0: BDD=1 is switched off.
+    share(mul(nonneg(c), w1), 1.0 - w1, 1, 0.0)
 }
 
 /// aᵖ/(aᵖ + bᵖ) for a, b ≥ 0 (possibly +∞), as 1/(1 + (b/a)ᵖ).

@@ -88,6 +88,7 @@ modes! {
     "balance" => Balance,
     "power" => Power,
     "camis" => Camis,
+    "corrected-balance" => CorrectedBalance,
 }
 
 /// A name that is not a weighting mode; its message lists the valid names.

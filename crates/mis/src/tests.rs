@@ -491,6 +491,7 @@ fn names_round_trip() {
         Heuristic::Balance,
         Heuristic::Power,
         Heuristic::Camis,
+        Heuristic::CorrectedBalance,
     ];
     let names: Vec<_> = all.iter().map(Heuristic::name).collect();
     assert_eq!(names, Heuristic::ALL_NAMES);
@@ -574,6 +575,13 @@ fn needs_follow_method_table() {
     assert_eq!(needs("balance"), density);
     assert_eq!(needs("power"), density);
     assert_eq!(needs("camis"), density);
+    assert_eq!(
+        needs("corrected-balance"),
+        Needs {
+            balance_correction: true,
+            ..density
+        }
+    );
 }
 
 #[test]
@@ -782,4 +790,63 @@ fn split_and_path_weights_guard_degenerate_inputs() {
         }
     }
     assert_eq!(split_weighted_radiance(&SIMPLE, 0.0, 0.0, 0.0, 0.0), 0.0);
+}
+
+/// `corrected-balance` is c·p_C/(c·p_C + p_L) for both path kinds, `balance` bit for bit at
+/// c = 1 and without a factor, and its pilot's formula in w₁ alone agrees with it.
+#[test]
+fn corrected_balance_scales_the_camera_density() {
+    let corrected = |pair: &Pair, c: f64| {
+        Weigher::new(Heuristic::CorrectedBalance, &SIMPLE, None)
+            .with_correction(c)
+            .weight(pair)
+            .w1
+    };
+    // Merge: p_C = 3, p_L = 1 (balance ¾); one bounce: p_C = 1 against S·N_F·2·1.5 = 3 (¼).
+    let merge = densities(PathKind::Merge, 3.0, 1.0, 123.0);
+    let one_bounce = densities(PathKind::OneBounce, 1.0, 1.5, 2.0);
+    assert_close(corrected(&merge, 0.25), 0.75 / 1.75);
+    assert_close(corrected(&merge, 4.0), 12.0 / 13.0);
+    assert_close(corrected(&one_bounce, 0.5), 0.5 / 3.5);
+    assert_close(corrected(&one_bounce, 9.0), 0.75);
+    for pair in [merge, one_bounce, densities(PathKind::Merge, 0.0, 0.0, 0.0)] {
+        let balance = Heuristic::Balance.weight(&SIMPLE, &pair, None).w1;
+        assert_eq!(corrected(&pair, 1.0), balance);
+        assert_eq!(
+            Heuristic::CorrectedBalance.weight(&SIMPLE, &pair, None).w1,
+            balance
+        );
+        for c in [1e-3, 0.3, 2.0, 50.0] {
+            assert_eq!(corrected(&pair, c), corrected_share(balance, c));
+        }
+    }
+}
+
+#[test]
+fn corrected_share_guards() {
+    assert_eq!(corrected_share(0.4, 1.0), 0.4);
+    // c = 0 switches BDD=1 off, c = ∞ switches it on wherever balance gives it anything.
+    for w in [0.0, 0.3, 1.0] {
+        assert_eq!(corrected_share(w, 0.0), 0.0);
+        assert_eq!(corrected_share(w, -2.0), 0.0);
+        assert_eq!(corrected_share(w, f64::NAN), 0.0);
+    }
+    assert_eq!(corrected_share(0.3, f64::INFINITY), 1.0);
+    assert_eq!(corrected_share(0.0, f64::INFINITY), 0.0);
+    assert_eq!(corrected_share(1.0, 0.5), 1.0);
+    assert_eq!(corrected_share(f64::NAN, 2.0), 0.0);
+    assert_eq!(corrected_share(1.5, 2.0), 1.0);
+    // Monotone in c and in w₁ after rounding.
+    let cs = [0.0, 1e-12, 1e-3, 0.25, 1.0, 4.0, 1e3, 1e12, f64::INFINITY];
+    let ws = [0.0, 1e-300, 1e-9, 0.2, 0.5, 0.8, 1.0 - 1e-12, 1.0];
+    for &w in &ws {
+        for pair in cs.windows(2) {
+            assert!(corrected_share(w, pair[0]) <= corrected_share(w, pair[1]));
+        }
+    }
+    for &c in &cs {
+        for pair in ws.windows(2) {
+            assert!(corrected_share(pair[0], c) <= corrected_share(pair[1], c));
+        }
+    }
 }

@@ -48,7 +48,7 @@ pub type CliResult<T> = Result<T, String>;
 #[derive(Args, Debug, Clone, Default)]
 pub struct Overrides {
     /// Integrator and weight mode: path, light, bdd0, bdd1, threshold, algebraic-direct, algebraic,
-    /// optimal, optimal-split, optimal-path, balance, power, camis.
+    /// optimal, optimal-split, optimal-path, balance, power, camis, corrected-balance.
     #[arg(long)]
     pub mode: Option<String>,
     /// Number of passes.
