@@ -168,10 +168,11 @@ pub fn estimate_memory(
             });
         }
         if needs.balance_correction {
-            // Each pixel's pass estimate per candidate, and each candidate's filtered image.
+            // Per pixel and candidate: the pass estimate, the second moment and the filtered
+            // second moment, all held at once when the factors are chosen.
             items.push(MemoryItem {
                 name: "balance-correction pilot",
-                bytes: pixels * (2 * CANDIDATES.len() * size_of::<f64>()) as u64,
+                bytes: pixels * (3 * CANDIDATES.len() * size_of::<f64>()) as u64,
                 lower: "--resolution",
             });
         }
