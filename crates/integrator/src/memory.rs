@@ -168,8 +168,8 @@ pub fn estimate_memory(
             });
         }
         if needs.balance_correction {
-            // Per pixel and candidate: the pass estimate, the second moment and the filtered
-            // second moment, all held at once when the factors are chosen.
+            // Per pixel and candidate, at the pilot's peak: the pass's per-row sums, their
+            // concatenation, and the second moments.
             items.push(MemoryItem {
                 name: "balance-correction pilot",
                 bytes: pixels * (3 * CANDIDATES.len() * size_of::<f64>()) as u64,
