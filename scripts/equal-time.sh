@@ -9,6 +9,8 @@
 # does not fall, so this overstates the error of a biased render).
 # Usage:
 #   scripts/equal-time.sh REFERENCE.exr SECONDS THREADS REPEATS SCENE.toml...
+# A SCENE argument may carry flags for that file's renders alone, in one quoted word, e.g.
+#   "scenes/cornell-lambert.toml --mode balance --light-tracing true".
 # e.g. (docs/results.md, "Defaults that win at equal time"):
 #   scripts/equal-time.sh out/ref/lambert-light-400.exr 20 2 3 \
 #     scenes/preprint/cornell-lambert.toml scenes/cornell-lambert.toml
@@ -22,8 +24,9 @@ trap 'rm -rf "$tmp"' EXIT
 read -r -a extra <<< "${EXTRA:-}"
 for i in $(seq "$repeats"); do
   for scene in "$@"; do
-    key=$(echo "$scene" | tr '/.' '__')
-    "$bin" render "$scene" --time-budget "$budget" --threads "$threads" --seed "$i" \
+    key=$(echo "$scene" | tr '/. ' '___')
+    read -r -a words <<< "$scene"
+    "$bin" render "${words[@]}" --time-budget "$budget" --threads "$threads" --seed "$i" \
       --passes 100000 "${extra[@]}" -o "$tmp/run.exr" --quiet > /dev/null
     line=$("$bin" compare "$tmp/run.exr" "$ref" | grep "as reference")
     python3 - "$tmp/run.json" "$line" "$scene" "$i" "$budget" >> "$tmp/$key.txt" <<'PY'
@@ -42,7 +45,7 @@ done
 echo "| scene file | renders | median rel. RMSE | median rel. RMSE at the budget | median relMSE | median wall s | median passes |"
 echo "|---|---:|---:|---:|---:|---:|---:|"
 for scene in "$@"; do
-  key=$(echo "$scene" | tr '/.' '__')
+  key=$(echo "$scene" | tr '/. ' '___')
   python3 - "$tmp/$key.txt" "$scene" <<'PY'
 import statistics as st, sys
 rows = [list(map(float, l.split())) for l in open(sys.argv[1])]

@@ -139,3 +139,80 @@ fn glossy_modes_agree_with_the_path_reference() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// Light tracing in BDD=0's place (`light_tracing`, method-notes.md): each photon arrival is
+/// connected to the camera with BDD=0's weight 1 − w₁, w₁ the mode's weight against light
+/// tracing's density. Every mixing mode must stay unbiased, and a mix whose splats weigh with
+/// the merge's two-way w₁ while the camera side uses the light-traced one (the two sides of a
+/// path disagree) must fail the same check.
+#[test]
+fn light_traced_mixes_agree_with_the_light_reference_and_one_sided_weights_do_not() {
+    let (scene, settings) = scene();
+    let mut failures = Vec::new();
+    // Half the merge tests' passes and photons: connections see the ceiling spot at once.
+    let traced = |mode: &str| {
+        let mut s = with_mode(settings, mode, 16, 64, 100_000);
+        s.radius = Some(RADIUS);
+        s.light_tracing = true;
+        s
+    };
+    // One mode per branch of `Weigher::weight_light_traced` and of the splat: w₁ = 0 (`bdd0`),
+    // a fixed weight (`threshold`), the balance family (`balance`; `camis` with its walk of
+    // the light path; `corrected-balance` with its pilot), `power`, and the noise model with
+    // the path's inputs (`optimal-path`) and with x₁'s alone (`algebraic`).
+    let modes = [
+        "bdd0",
+        "threshold",
+        "balance",
+        "camis",
+        "corrected-balance",
+        "power",
+        "optimal-path",
+        "algebraic",
+    ];
+    for mode in modes {
+        let film = render(scene, &traced(mode));
+        if let Err(e) = check(&format!("{mode} + light tracing"), &film) {
+            failures.push(e);
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+
+    // Few camera samples and a small radius put N_B·S·p_C(x₀) far from 1, so the two weights
+    // differ.
+    let mut s = traced("balance");
+    s.spp = 4;
+    s.radius = Some(0.002);
+    let one_sided = Renderer::new(scene, &s)
+        .unwrap()
+        .with_two_way_splat_weights(true);
+    let bad = render_with(&one_sided);
+    let (within, mean_diff, mean_se) = films_agree(&bad, reference(), 4.0);
+    eprintln!(
+        "two-way splat weights: within {within:.4}, image mean {mean_diff:+.4} ± {mean_se:.4}"
+    );
+    assert!(
+        within < 0.9 || mean_diff.abs() > 0.05,
+        "the one-sided weights were not detected: within {within:.4}, mean {mean_diff:+.4}"
+    );
+}
+
+/// `cornell-glossy` with light tracing in BDD=0's place, against the independent `path`
+/// reference: the connection evaluates the glossy BDF towards the camera, and the weights
+/// read the light path's f₁ (`optimal-path`).
+#[test]
+fn light_traced_glossy_mixes_agree_with_the_path_reference() {
+    let (scene, settings) = glossy();
+    let mut failures = Vec::new();
+    for mode in ["balance", "optimal-path"] {
+        let mut s = with_mode(settings, mode, 32, 128, 250_000);
+        s.radius = Some(0.015);
+        s.light_tracing = true;
+        let film = render(scene, &s);
+        let name = format!("glossy {mode} + light tracing");
+        if let Err(e) = check_against(&name, &film, glossy_reference()) {
+            failures.push(e);
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}

@@ -131,6 +131,7 @@ pub(crate) fn run(args: WeightsArgs) -> CliResult<()> {
             RenderError::NoWeights(_) | RenderError::PerLightPathWeights(_) => {
                 format!("{mode_source}: {e}")
             }
+            RenderError::LightTracing(_) => format!("{}: {e}", args.scene.display()),
             _ => format!("{target_flag}: {e}"),
         })?;
 

@@ -131,6 +131,8 @@ pub(crate) struct Mix<'a> {
     /// `corrected-balance`'s pilot: every weighted contribution also goes into the sample's
     /// [`Job::pilot`] under each candidate factor (crate::correction).
     pub(crate) pilot: bool,
+    /// BDD=0's paths are sampled by light tracing ([`Mix::splat`]) instead of merged at x₀.
+    pub(crate) light_tracing: bool,
     /// Test-only variant: weight the x₀ photon sum with w₁(x₀, x₁ᶜ) of the camera's x₁, as
     /// the preprint's eq. 2–3 read literally. It is biased; a test shows it.
     #[cfg(feature = "test-hooks")]
@@ -139,6 +141,9 @@ pub(crate) struct Mix<'a> {
     /// ([`Mix::prev_inputs`]); the image bits must not change.
     #[cfg(feature = "test-hooks")]
     pub(crate) per_visit_inputs: bool,
+    /// Test-only: the splats ignore light tracing's density ratio (a biased mix).
+    #[cfg(feature = "test-hooks")]
+    pub(crate) two_way_splat_weights: bool,
 }
 
 /// The camera side of x₀: the shading point, its outgoing direction and its BDF data.
@@ -165,18 +170,23 @@ impl<'a> Mix<'a> {
     }
 
     /// [`Self::first_vertex`] for a hit already shaded for `u`.
-    fn first_vertex_shaded<'s>(&'s self, sh: Shading, u: Vec3) -> Option<FirstVertex<'s>> {
+    pub(crate) fn first_vertex_shaded<'s>(
+        &'s self,
+        sh: Shading,
+        u: Vec3,
+    ) -> Option<FirstVertex<'s>> {
         let u_local = sh.frame.to_local(u);
         if u_local.z <= 0.0 {
             return None;
         }
         let bdf = self.scene.bdf_at(&sh);
         let out = bdf.outgoing(u_local);
-        let (acceptance_area, primary_density) = if self.heuristic == Heuristic::Camis {
-            self.primary_terms(&sh, u)
-        } else {
-            (0.0, 0.0)
-        };
+        let (acceptance_area, primary_density) =
+            if self.heuristic == Heuristic::Camis || self.light_tracing {
+                self.primary_terms(&sh, u)
+            } else {
+                (0.0, 0.0)
+            };
         Some(FirstVertex {
             sh,
             u,
@@ -218,8 +228,22 @@ impl<'a> Mix<'a> {
         Weigher::new(self.heuristic, &budget, pixel.map(|p| &p.terms)).with_correction(correction)
     }
 
-    fn w1(&self, pair: &Pair, weigher: &Weigher, stats: &mut WeightStats) -> f64 {
-        let w = weigher.weight(pair);
+    /// Whether the camera side merges photons at x₀ (BDD=0 by merging, not light tracing).
+    pub(crate) fn merges_at_x0(&self) -> bool {
+        self.needs.photons_at_x0 && !self.light_tracing
+    }
+
+    /// w₁ for `pair` under `weigher`, counted in `stats`; with light tracing in BDD=0's place,
+    /// [`Weigher::weight_light_traced`] with N_B·S·p_C(x₀) (both sides of a path compute it
+    /// from x₀ alone).
+    pub(crate) fn w1(&self, pair: &Pair, weigher: &Weigher, stats: &mut WeightStats) -> f64 {
+        let w = if self.light_tracing {
+            let b = &self.budget;
+            let ratio = b.camera_samples * b.merge_area * pair.x0.primary_density;
+            weigher.weight_light_traced(pair, ratio)
+        } else {
+            weigher.weight(pair)
+        };
         stats.evaluations += 1;
         stats.outside_unit += w.outside_unit as u64;
         stats.clamped_cb += w.clamped_cb as u64;
@@ -258,7 +282,7 @@ impl<'a> Mix<'a> {
                 if slot.second.is_some() {
                     map.advance_query(&mut slot.query1);
                 }
-                if self.needs.photons_at_x0 {
+                if self.merges_at_x0() {
                     map.advance_query(&mut slot.query0);
                 }
             }
@@ -270,7 +294,7 @@ impl<'a> Mix<'a> {
                 let out = (&mut job.out, &mut job.pilot);
                 self.merge_at_x1(x0, map, second, &slot.query1, weigher, stats, out);
             }
-            if self.needs.photons_at_x0 {
+            if self.merges_at_x0() {
                 let photons = (map, prev_inputs);
                 self.merge_at_x0(
                     x0,
@@ -311,7 +335,7 @@ impl<'a> Mix<'a> {
         let Some(x0) = self.first_vertex_shaded(sh0, u) else {
             return;
         };
-        if self.needs.photons_at_x0 {
+        if self.merges_at_x0() {
             map.restart_query(&mut slot.query0, x0.sh.p);
         }
         if self.needs.second_vertex {

@@ -11,7 +11,7 @@ use bdpm_bdf::{luminance, survival_at};
 use bdpm_cache::{CacheSlot, RadianceCache};
 use bdpm_geometry::Frame;
 use bdpm_mis::{Heuristic, Pair, PathKind, X0Inputs, X1Inputs, acceptance_probability};
-use bdpm_photon::{Photon, PhotonMap};
+use bdpm_photon::{PathVertex, Photon, PhotonMap};
 use bdpm_scene::WeightVertex;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -27,10 +27,11 @@ pub(crate) enum Arrival<'m> {
     /// computed from the light's position (a photon's stored direction at its first vertex is
     /// the emitted ray's, which the camera side does not have).
     Light(usize),
-    /// Scattered at the stored light-path vertex `from` of `map` (x₂) and arriving at x₁ along
-    /// `incoming` (unit, pointing away from x₁): a merge path …→x₂→x₁→x₀.
+    /// Scattered at the light-path vertex `vertices[from]` (x₂; the vertices stored path by
+    /// path, as [`PhotonMap::vertices`] holds them) and arriving at x₁ along `incoming` (unit,
+    /// pointing away from x₁): a merge path …→x₂→x₁→x₀.
     Vertex {
-        map: &'m PhotonMap,
+        vertices: &'m [PathVertex],
         from: u32,
         incoming: Vec3,
     },
@@ -156,7 +157,7 @@ impl<'a> Mix<'a> {
                 }
             }
             Arrival::Vertex {
-                map,
+                vertices,
                 from,
                 incoming,
             } => {
@@ -169,7 +170,7 @@ impl<'a> Mix<'a> {
                     pair.path.camera_density = pc;
                     pair.path.light_density = pl;
                     if self.heuristic == Heuristic::Camis {
-                        pair.path.light_suffix = self.light_suffix(map, x0, x1, from, pc);
+                        pair.path.light_suffix = self.light_suffix(vertices, x0, x1, from, pc);
                     }
                 }
             }
@@ -214,7 +215,7 @@ impl<'a> Mix<'a> {
         base: Pair,
     ) -> Pair {
         let arrival = Arrival::Vertex {
-            map,
+            vertices: map.vertices(),
             from: ph.prev,
             incoming: ph.incoming,
         };
@@ -257,7 +258,7 @@ impl<'a> Mix<'a> {
         } else {
             // Light paths are stored vertex after vertex: x₂ is the vertex before y_p.
             Arrival::Vertex {
-                map,
+                vertices: map.vertices(),
                 from: ph.prev - 1,
                 incoming: prev.incoming,
             }
@@ -318,7 +319,7 @@ impl<'a> Mix<'a> {
     /// techniques get the same β for the same path.
     fn light_suffix(
         &self,
-        map: &PhotonMap,
+        vertices: &[PathVertex],
         x0: &FirstVertex<'_>,
         x1: &WeightVertex,
         start: u32,
@@ -332,7 +333,7 @@ impl<'a> Mix<'a> {
         let mut index = start;
         let mut beta = 1.0;
         loop {
-            let y = map.vertex(index);
+            let y = &vertices[index as usize];
             let d = to_p - y.at.p;
             let d2 = d.length_squared();
             if d2 <= 0.0 {
@@ -352,7 +353,7 @@ impl<'a> Mix<'a> {
                 return beta * acceptance_probability(emission, area);
             }
             // A map not stored path by path (hand-made in tests) ends the walk here.
-            if index == 0 || map.vertex(index - 1).depth + 1 != y.depth {
+            if index == 0 || vertices[index as usize - 1].depth + 1 != y.depth {
                 debug_assert!(false, "light-path vertices are not consecutive");
                 return beta;
             }
@@ -418,7 +419,7 @@ impl<'a> Mix<'a> {
             || self.camera_x1_weighting()
             || self.per_visit_inputs();
         let isotropic = self.cache_needed().is_none_or(|c| c.is_isotropic());
-        if !(self.needs.photons_at_x0 && reads_inputs && isotropic) || per_visit {
+        if !(self.merges_at_x0() && reads_inputs && isotropic) || per_visit {
             return Vec::new();
         }
         // Computed in path order and then gathered into grid order: the vertices read in the

@@ -10,6 +10,7 @@
 //! Architecture invariant: no file IO; the driver writes images and reports.
 
 pub mod bdpm;
+mod connect;
 mod correction;
 mod film;
 mod inputs;

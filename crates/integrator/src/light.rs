@@ -10,6 +10,7 @@ use bdpm_scene::Scene;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
+use crate::connect::connect;
 use crate::render::{PassOutput, accumulate};
 use crate::sampler::PixelSamples;
 use crate::stage::Stage;
@@ -65,40 +66,15 @@ pub(crate) fn render_light_pass(
         light_visibility: false,
         max_depth: 1024,
     };
-    let k = 1.0 / cam.pixel_area();
     // Splats come back in photon order, so the sums below do not depend on the thread count.
     let splats: Vec<(u32, Vec3)> = trace_photons(scene, &options, |arrival, out| {
         if arrival.vertex.depth == 0 {
             return;
         }
         let sh = &arrival.shading;
-        let to_cam = cam.position() - sh.p;
-        let d2 = to_cam.length_squared();
-        if d2 <= 0.0 || sh.ng.dot(to_cam) <= 0.0 {
-            return;
+        if let Some(c) = connect(scene, sh, arrival.vertex.incoming, arrival.power) {
+            out.push((c.y * w as u32 + c.x, c.value));
         }
-        let wc = to_cam / d2.sqrt();
-        let Some((fx, fy)) = cam.project(sh.p) else {
-            return;
-        };
-        let cos_cam = cam.forward().dot(-wc);
-        let cos_x = sh.frame.n.dot(wc);
-        if cos_cam <= 0.0 || cos_x <= 0.0 {
-            return;
-        }
-        let f = scene.eval(sh, wc, arrival.vertex.incoming);
-        if f == Vec3::ZERO
-            || scene
-                .geometry()
-                .occluded(scene.spawn(sh, wc), cam.position())
-        {
-            return;
-        }
-        // Radiance averaged over the pixel's image-plane area: dA_plane = dω/cos³θ_c and
-        // dω = cos_x dA/d², so a photon adds f·E_p·cos_x/(d²·cos³θ_c·a_pixel).
-        let value = f * arrival.power * (cos_x * k / (d2 * cos_cam * cos_cam * cos_cam));
-        let pixel = fy as u32 * w as u32 + fx as u32;
-        out.push((pixel, value));
     });
     let mut light = vec![DVec3::ZERO; w * h];
     let mut light_dropped = 0;

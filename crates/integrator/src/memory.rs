@@ -10,11 +10,12 @@
 //! [`PILOT_PHOTONS`] photons is traced to measure them.
 
 use bdpm_geometry::Domain;
-use bdpm_mis::NoiseModel;
+use bdpm_mis::{Heuristic, NoiseModel};
 use bdpm_photon::{PhotonMap, TraceOptions};
 use bdpm_scene::Scene;
 
 use crate::bdpm::{Techniques, scene_default_radius};
+use crate::connect::Splat;
 use crate::correction::CANDIDATES;
 use crate::table::PixelWeights;
 use bdpm_settings::{Mode, RenderSettings};
@@ -143,6 +144,16 @@ pub fn estimate_memory(
                         * PHOTON_MAP_PEAK_FACTOR) as u64,
                     lower: "--photons",
                 }),
+            }
+            if s.light_tracing && s.heuristic().is_some_and(|h| h != Heuristic::Bdd1) {
+                // Every arrival of depth ≥ 1 that the camera sees is a splat, held until the
+                // pass adds them in photon order; a growing list can hold twice its length.
+                items.push(MemoryItem {
+                    name: "light-tracing splats per pass",
+                    bytes: (s.photons as f64 * stored_per_emitted * (2 * size_of::<Splat>()) as f64)
+                        as u64,
+                    lower: "--photons",
+                });
             }
             if let Some(h) = s.heuristic()
                 && h.needs().radiance_cache

@@ -134,6 +134,9 @@ impl Renderer<'_> {
     /// --headroom`). If `h` reads the pixel table's A and B, the renderer's mode must have
     /// built it (an `optimal*` mode); otherwise the error says so.
     pub fn predict_variance_for(&self, h: Heuristic) -> Result<Prediction, RenderError> {
+        if self.light_traced() {
+            return Err(RenderError::LightTracing(h.name()));
+        }
         if h.needs().pixel_table && !self.pixel_table().is_some_and(|t| t.has_terms()) {
             return Err(RenderError::NoPixelTable {
                 weights: h.name(),

@@ -11,6 +11,7 @@ use bdpm_mis::{Budget, Heuristic, NoiseModel};
 use bdpm_photon::{PhotonMap, TraceOptions};
 
 use crate::bdpm::{BATCH, Job, Mix, Slots, Techniques, WeightStats, scene_default_radius};
+use crate::connect::Splats;
 use crate::correction::{CandidateSums, Correction, PILOT_PASSES, pilot_seed};
 use crate::sampler::PixelSamples;
 use crate::stage::Stage;
@@ -83,6 +84,12 @@ pub enum RenderError {
     /// The mode (`path`, `light`) has no noise model.
     #[error("mode '{0}' has no noise model to predict")]
     NoNoiseModel(Mode),
+    /// The render samples BDD=0 by light tracing (`light_tracing`), which the noise model and
+    /// the weight maps (both of the merge at x₀) do not describe.
+    #[error(
+        "light_tracing = true: mode '{0}' then samples BDD=0 by light tracing, which the noise model and the weight maps (both of the merge at x0) do not describe; set light_tracing = false"
+    )]
+    LightTracing(&'static str),
     /// The weights asked for read the pixel table's A and B, which the mode did not build.
     #[error(
         "the weights '{weights}' need the pixel table's A and B, which mode '{mode}' does not build"
@@ -160,6 +167,8 @@ pub struct Renderer<'a> {
     camera_x1_weighting: bool,
     #[cfg(feature = "test-hooks")]
     per_visit_inputs: bool,
+    #[cfg(feature = "test-hooks")]
+    two_way_splat_weights: bool,
     cache: Option<RadianceCache>,
     table: Option<PixelTable>,
     /// `corrected-balance`'s per-pixel factors.
@@ -199,6 +208,8 @@ impl<'a> Renderer<'a> {
             camera_x1_weighting: false,
             #[cfg(feature = "test-hooks")]
             per_visit_inputs: false,
+            #[cfg(feature = "test-hooks")]
+            two_way_splat_weights: false,
             cache: None,
             table: None,
             correction: None,
@@ -373,10 +384,13 @@ impl<'a> Renderer<'a> {
             inv_area: 1.0 / (std::f32::consts::PI * self.radius * self.radius),
             cache: self.cache.as_ref(),
             pilot: false,
+            light_tracing: self.settings.light_tracing && heuristic != Heuristic::Bdd1,
             #[cfg(feature = "test-hooks")]
             camera_x1_weighting: self.camera_x1_weighting,
             #[cfg(feature = "test-hooks")]
             per_visit_inputs: self.per_visit_inputs,
+            #[cfg(feature = "test-hooks")]
+            two_way_splat_weights: self.two_way_splat_weights,
         }
     }
 
@@ -406,6 +420,17 @@ impl<'a> Renderer<'a> {
         self
     }
 
+    /// Test-only: with light tracing, weigh the splats with the merge's two-way w₁ (without
+    /// light tracing's density ratio) while the camera side uses the light-traced one: the two
+    /// sides of a path then disagree, and a test must see the bias. Only with the feature
+    /// `test-hooks`.
+    #[cfg(feature = "test-hooks")]
+    #[doc(hidden)]
+    pub fn with_two_way_splat_weights(mut self, on: bool) -> Self {
+        self.two_way_splat_weights = on;
+        self
+    }
+
     /// The scene this renderer draws.
     pub fn scene(&self) -> &Scene {
         self.scene
@@ -431,6 +456,12 @@ impl<'a> Renderer<'a> {
     /// ([`RenderSettings::heuristic`]); `None` for `path` and `light`.
     pub fn heuristic(&self) -> Option<Heuristic> {
         self.heuristic
+    }
+
+    /// Whether BDD=0's paths are sampled by light tracing: `light_tracing` set and a mode
+    /// with a BDD=0 part (not `bdd1`, `path` or `light`).
+    pub fn light_traced(&self) -> bool {
+        self.settings.light_tracing && self.heuristic.is_some_and(|h| h != Heuristic::Bdd1)
     }
 
     /// The preparatory stages that ran, with their cost.
@@ -530,6 +561,20 @@ impl Mix<'_> {
     pub(crate) fn per_visit_inputs(&self) -> bool {
         false
     }
+
+    /// Test hook: the splats' weights without light tracing's density ratio.
+    #[cfg(feature = "test-hooks")]
+    #[inline]
+    pub(crate) fn two_way_splat_weights(&self) -> bool {
+        self.two_way_splat_weights
+    }
+
+    /// Without the feature `test-hooks`: never.
+    #[cfg(not(feature = "test-hooks"))]
+    #[inline]
+    pub(crate) fn two_way_splat_weights(&self) -> bool {
+        false
+    }
 }
 
 impl Renderer<'_> {
@@ -574,16 +619,33 @@ impl Renderer<'_> {
             light_visibility: needs.direct_at_x1,
             max_depth: 1024,
         };
-        let map = PhotonMap::trace(self.scene, &options, self.radius);
-        let prev_inputs = mix.prev_inputs(&map);
-        let photon_seconds = t_photons.elapsed().as_secs_f64();
-        self.leave(Stage::Photons);
-        self.enter(Stage::Camera);
         let (table, correction) = if mix.pilot {
             (None, None)
         } else {
             (self.table.as_ref(), self.correction.as_ref())
         };
+        let weigher_at = |x: u32, y: u32| {
+            let factor = correction.map_or(1.0, |c| c.get(x, y));
+            mix.weigher(table.map(|t| t.get(x, y)), factor)
+        };
+        let (map, splats) = if mix.light_tracing {
+            PhotonMap::trace_visiting(
+                self.scene,
+                &options,
+                self.radius,
+                |_| Splats::default(),
+                |acc, a, vertices| mix.splat(a, vertices, weigher_at, acc),
+            )
+        } else {
+            (
+                PhotonMap::trace(self.scene, &options, self.radius),
+                Vec::new(),
+            )
+        };
+        let prev_inputs = mix.prev_inputs(&map);
+        let photon_seconds = t_photons.elapsed().as_secs_f64();
+        self.leave(Stage::Photons);
+        self.enter(Stage::Camera);
         let t_camera = std::time::Instant::now();
         let (w, h) = (s.width as usize, s.height as usize);
         let record = self.techniques;
@@ -596,8 +658,7 @@ impl Renderer<'_> {
                 let mut sum = DVec3::ZERO;
                 let mut tsum = Techniques::default();
                 let mut csum = CandidateSums::default();
-                let factor = correction.map_or(1.0, |c| c.get(x as u32, y as u32));
-                let weigher = mix.weigher(table.map(|t| t.get(x as u32, y as u32)), factor);
+                let weigher = weigher_at(x as u32, y as u32);
                 layout.start(pass, pixel);
                 for first in (0..s.spp).step_by(BATCH) {
                     let count = (s.spp - first).min(BATCH as u32);
@@ -677,6 +738,26 @@ impl Renderer<'_> {
             dropped += row.dropped;
             // Integer sums: the total does not depend on the order rows finish in.
             weights.add(&row.stats);
+        }
+        // Light tracing's splats, in photon order (so the sums do not depend on the threads).
+        for chunk in &splats {
+            weights.add(&chunk.stats);
+            for s in &chunk.list {
+                let p = s.pixel as usize;
+                let weighted = s.raw * (1.0 - s.w1) as f32;
+                if !(s.raw.is_finite() && weighted.is_finite()) {
+                    dropped += 1;
+                    continue;
+                }
+                estimates[p] += weighted.as_dvec3();
+                if record {
+                    techniques[p].x0_raw += s.raw.as_dvec3();
+                    techniques[p].x0_weighted += weighted.as_dvec3();
+                }
+                if mix.pilot {
+                    candidates[p].add(f64::from(luminance(s.raw)), s.w1, false);
+                }
+            }
         }
         let out = PassOutput {
             estimates,

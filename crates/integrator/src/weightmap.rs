@@ -41,6 +41,9 @@ impl Renderer<'_> {
         if h.needs().densities || h.needs().x1_scattering {
             return Err(RenderError::PerLightPathWeights(h.name()));
         }
+        if self.light_traced() {
+            return Err(RenderError::LightTracing(h.name()));
+        }
         let scene = self.scene();
         let cam = &scene.camera();
         let dir = match target {

@@ -55,8 +55,9 @@ pub fn run(command: Command) -> Result<ExitCode, String> {
 }
 
 /// The keys a `--modes` entry may set ([`Variant`]).
-const KEYS: [&str; 7] = [
+const KEYS: [&str; 8] = [
     "sampler",
+    "light_tracing",
     "radius",
     "spp",
     "photons",
@@ -102,6 +103,9 @@ impl Variant {
                 "sampler" => {
                     value.parse::<Sampler>().map_err(|e| bad(&e.to_string()))?;
                     settings.sampler = Some(value.to_string());
+                }
+                "light_tracing" => {
+                    settings.light_tracing = Some(value.parse().map_err(|_| bad("true or false"))?)
                 }
                 "radius" => {
                     let radius = RadiusInput::Text(value.to_string());

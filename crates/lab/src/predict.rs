@@ -16,7 +16,7 @@
 //! weight could gain there (OUT.exr layers `floor_V` and `headroom`, OUT-headroom.png).
 use std::path::{Path, PathBuf};
 
-use bdpm_integrator::{Mode, Prediction, RenderSettings, Renderer};
+use bdpm_integrator::{Mode, Prediction, RenderError, RenderSettings, Renderer};
 use bdpm_mis::Heuristic;
 use clap::Args;
 use serde::Serialize;
@@ -447,8 +447,17 @@ impl Setup<'_> {
             &self.pool,
         );
         let renderer = pool
-            .install(|| Renderer::new(scene, settings).map(Renderer::with_model_inputs))
+            .install(|| Renderer::new(scene, settings))
             .map_err(|e| format!("{}: {e}", args.scene.display()))?;
+        // Refused before the model's inputs are built: the model is of the merge at x₀.
+        if let Some(h) = renderer.heuristic().filter(|_| renderer.light_traced()) {
+            return Err(format!(
+                "{}: {}",
+                args.scene.display(),
+                RenderError::LightTracing(h.name())
+            ));
+        }
+        let renderer = pool.install(|| renderer.with_model_inputs());
         check_settings(&self.measured, settings, &renderer, &args.measured)?;
         // Every other setting (depth, cache, table, clamp, …), which the header lists no
         // field of.

@@ -482,6 +482,58 @@ impl Weigher {
         }
     }
 
+    /// w₁ when BDD=0's paths are sampled by light tracing (every photon arrival connected to
+    /// the camera) instead of merged at x₀ (method-notes.md, "Light tracing in place of the
+    /// merge at x₀"). `ratio` = N_B·S·p_C(x₀) (dimensionless: N_B camera samples per pixel,
+    /// S the merge area, p_C(x₀) the camera's density of x₀ within its pixel, m⁻²) is BDD=0's
+    /// density of a path over light tracing's: a merge finds a photon with probability
+    /// N_B·p_C·S, a connection finds it once. A ratio of 0 (or NaN, or negative) gives w₁ = 0:
+    /// the camera cannot sample that x₀.
+    ///
+    /// - `balance`, `camis`, `corrected-balance`: BDD=1's share with light tracing's density
+    ///   in BDD=0's place, [`corrected_share`]`(w₁, ratio)` (exact for `balance`; `camis`
+    ///   keeps its correlation factor on BDD=1's merge); `power` likewise with ratio².
+    /// - The model-based modes: the noise model with light tracing's BDD=0 photon noise,
+    ///   Φ·p_C/N_F per unit of ∫(1 − w₁)²f²L cos, in place of the merge's Φ·N_eff/(N_F·S·N_B):
+    ///   the same functional with `ratio` in place of N_eff (method-notes.md), so every N f̃
+    ///   of the weights reads `ratio` (κ, b/L and the pixel's A, B and correlation term are
+    ///   the merge's).
+    /// - `bdd0`, `bdd1`, `threshold`: as [`Self::weight`] (they do not read densities).
+    pub fn weight_light_traced(&self, pair: &Pair, ratio: f64) -> Weight {
+        let ratio = nonneg(ratio);
+        let fixed = matches!(
+            self.heuristic,
+            Heuristic::Bdd0 | Heuristic::Bdd1 | Heuristic::Threshold { .. }
+        );
+        if fixed {
+            return self.weight(pair);
+        }
+        if ratio == 0.0 {
+            return Weight::plain(0.0);
+        }
+        match self.heuristic {
+            Heuristic::Balance | Heuristic::Camis | Heuristic::CorrectedBalance => {
+                let w = self.weight(pair);
+                Weight {
+                    w1: corrected_share(w.w1, ratio),
+                    ..w
+                }
+            }
+            Heuristic::Power => {
+                let w = self.weight(pair);
+                Weight {
+                    w1: corrected_share(w.w1, mul(ratio, ratio)),
+                    ..w
+                }
+            }
+            _ => {
+                let mut scaled = *self;
+                scaled.scale.budget.camera_samples = ratio;
+                scaled.weight(pair)
+            }
+        }
+    }
+
     /// The heuristic it weighs with.
     pub fn heuristic(&self) -> Heuristic {
         self.heuristic

@@ -287,6 +287,59 @@ fn balance_and_power_match_hand_values() {
     );
 }
 
+/// Light tracing in BDD=0's place: the balance family divides BDD=0's density by the ratio,
+/// the model-based modes read the ratio where they read N_B, the fixed modes ignore it, and a
+/// ratio of 0 (x₀ the camera cannot sample) leaves the path to light tracing.
+#[test]
+fn light_traced_weights_match_hand_values() {
+    // p_C = 3, p_L = 1: `balance` 3/(3 + 1/2) = 6/7 and `power` 9/(9 + 1/4) = 36/37 at ratio 2.
+    let merge = densities(PathKind::Merge, 3.0, 1.0, 123.0);
+    let weigher = |h| Weigher::new(h, &SIMPLE, None);
+    assert_close(
+        weigher(Heuristic::Balance)
+            .weight_light_traced(&merge, 2.0)
+            .w1,
+        6.0 / 7.0,
+    );
+    assert_close(
+        weigher(Heuristic::Power)
+            .weight_light_traced(&merge, 2.0)
+            .w1,
+        36.0 / 37.0,
+    );
+    // Ratio 1: a merge and a connection are equally likely, so nothing changes.
+    assert_close(
+        weigher(Heuristic::Balance)
+            .weight_light_traced(&merge, 1.0)
+            .w1,
+        0.75,
+    );
+    // `optimal` with f̃ = ½, L = 4, b/L = 2, κ = 4, A = 1, B = 0 at ratio 4: N f̃ = 2,
+    // D = 2 + 2 + 4 = 8, N·c·G̃ = S·(N_F − 1)/Φ·A = ½, w₁ = (2 + ½)/8 = 5/16, the merge's
+    // weight with N_B = 4.
+    let pair = lit(0.5, 1.0, 3.0, 8.0);
+    let pixel = PixelTerms { a: 1.0, b: 0.0 };
+    let traced = Weigher::new(OPTIMAL, &SIMPLE, Some(&pixel)).weight_light_traced(&pair, 4.0);
+    assert_close(traced.w1, 5.0 / 16.0);
+    let four = Budget {
+        camera_samples: 4.0,
+        ..SIMPLE
+    };
+    assert_close(OPTIMAL.weight(&four, &pair, Some(&pixel)).w1, 5.0 / 16.0);
+    for h in [Heuristic::Balance, OPTIMAL] {
+        assert_eq!(weigher(h).weight_light_traced(&pair, 0.0).w1, 0.0);
+        assert_eq!(weigher(h).weight_light_traced(&pair, f64::NAN).w1, 0.0);
+    }
+    for h in [
+        Heuristic::Bdd0,
+        Heuristic::Bdd1,
+        Heuristic::Threshold { radius: 0.2 },
+    ] {
+        let w = weigher(h);
+        assert_eq!(w.weight_light_traced(&pair, 2.0), w.weight(&pair));
+    }
+}
+
 #[test]
 fn balance_for_lambert_merge_is_one_over_one_plus_q() {
     // Lambert x₀ and x₁ at distance d with cosines cos₀, cos₁; photon survival q at x₁.

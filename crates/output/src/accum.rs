@@ -746,8 +746,9 @@ mod tests {
         let (s, e) = changed(&|s| s.seed = 2);
         assert_ne!(s, settings);
         assert_eq!(e, estimator);
-        let relevant: [&dyn Fn(&mut RenderSettings); 6] = [
+        let relevant: [&dyn Fn(&mut RenderSettings); 7] = [
             &|s| s.spp = 5,
+            &|s| s.light_tracing = true,
             &|s| s.mode = Mode::Path,
             &|s| s.threshold_radius = 0.3,
             &|s| s.clamp_weights = true,

@@ -85,6 +85,10 @@ pub struct Overrides {
     /// (every sample uniform, the preprint's layout).
     #[arg(long)]
     pub sampler: Option<String>,
+    /// Sample BDD=0's paths by light tracing, each photon connected to the camera (true), or
+    /// by merging photons at the camera's first vertex (false).
+    #[arg(long)]
+    pub light_tracing: Option<bool>,
     /// Photons traced for the radiance cache of the model-based weights (default: N_F).
     #[arg(long, allow_negative_numbers = true, value_parser = whole::<u64>)]
     pub cache_photons: Option<u64>,
@@ -167,6 +171,8 @@ pub fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> CliResul
             Setting::CachePhotons => "--cache-photons".into(),
             Setting::CacheBins => "--cache-bins".into(),
             Setting::PixelTableRays => "--pixel-table-rays".into(),
+            // Either --light-tracing or --no-jitter: name both.
+            Setting::LightTracing => "--light-tracing / --no-jitter".into(),
             other => format!("render.{}", other.key()),
         };
         format!("{flag}: {e}")
@@ -245,6 +251,7 @@ impl Overrides {
             pixel_jitter: self.no_jitter.then_some(false),
             noise_model: self.noise_model.clone(),
             sampler: self.sampler.clone(),
+            light_tracing: self.light_tracing,
             cache_photons: self.cache_photons,
             cache_bins: self.cache_bins,
             pixel_table_rays: self.pixel_table_rays,
@@ -283,6 +290,9 @@ impl Overrides {
         }
         if let Some(m) = &o.sampler {
             push("--sampler", m.clone());
+        }
+        if let Some(b) = o.light_tracing {
+            push("--light-tracing", b.to_string());
         }
         if let Some(n) = o.cache_photons {
             push("--cache-photons", n.to_string());

@@ -4,7 +4,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::scene::PhotonScene;
-use crate::trace::{PathVertex, TraceOptions, trace_chunks};
+use crate::trace::{PathVertex, PhotonArrival, TraceOptions, trace_chunks};
 use bdpm_grid::{GridQuery, HashGrid};
 
 /// A stored photon: an arrival at a surface after ≥ 1 scattering (method.md §1). The first
@@ -125,6 +125,25 @@ impl PhotonMap {
         options: &TraceOptions,
         radius: f32,
     ) -> PhotonMap {
+        Self::trace_visiting(scene, options, radius, |_| (), |_, _, _| {}).0
+    }
+
+    /// [`Self::trace`] that also shows every arrival to `visit`, with the light-path vertices
+    /// the arrival's own chunk has kept before it (in path order, so a stored photon's
+    /// previous vertex y_p is the slice's last element and y_p's predecessors, while their
+    /// depths count down, are the elements before it). `new(chunk)` makes each chunk's
+    /// accumulator; they come back in chunk order, so anything `visit` records in them is, in
+    /// that order, a pure function of (scene, options), whatever the thread count.
+    ///
+    /// # Panics
+    /// As [`Self::trace`].
+    pub fn trace_visiting<A: Send, S: PhotonScene + ?Sized>(
+        scene: &S,
+        options: &TraceOptions,
+        radius: f32,
+        new: impl Fn(u64) -> A + Sync,
+        visit: impl Fn(&mut A, &PhotonArrival, &[PathVertex]) + Sync,
+    ) -> (PhotonMap, Vec<A>) {
         // Only the vertices a path goes on from are kept: they are the previous vertices y_p
         // the weights read. A path's last vertex (where it was absorbed, and every depth-0
         // vertex of a path that ended there) is nobody's y_p; keeping those too held 2.6 times
@@ -132,11 +151,12 @@ impl PhotonMap {
         let chunks = trace_chunks(
             scene,
             options,
-            |_| {
+            |c| {
                 let vertices = Vec::<PathVertex>::new();
-                (vertices, Vec::<Vec3>::new(), Vec::<Photon>::new())
+                (vertices, Vec::<Vec3>::new(), Vec::<Photon>::new(), new(c))
             },
-            |(vertices, positions, photons), a| {
+            |(vertices, positions, photons, acc), a| {
+                visit(acc, a, vertices);
                 if a.vertex.depth >= 1 {
                     // The path went on from its previous arrival, which was therefore the last
                     // vertex pushed.
@@ -179,8 +199,9 @@ impl PhotonMap {
         });
         // The parts are freed before the grid's sort arrays are allocated: holding both was
         // the photon stage's memory peak.
-        drop(chunks);
-        PhotonMap::from_parts(positions, photons, vertices, options.photons, radius)
+        let visited = chunks.into_iter().map(|c| c.3).collect();
+        let map = PhotonMap::from_parts(positions, photons, vertices, options.photons, radius);
+        (map, visited)
     }
 
     /// Builds a map from photons, their positions (m, `positions[i]` is `photons[i]`'s) and

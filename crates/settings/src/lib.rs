@@ -282,6 +282,17 @@ pub struct RenderSettings {
     /// How a pixel's camera samples are placed within a pass ([`Sampler`]).
     #[cfg_attr(feature = "serde", serde(with = "serde_names"))]
     pub sampler: Sampler,
+    /// Sample BDD=0's paths by light tracing (each photon arrival connected to the camera,
+    /// with BDD=0's weight) instead of merging photons at the camera's x₀: the same photons
+    /// without the merge's hit noise, kernel bias or gathers (method-notes.md). The mixing
+    /// modes only; `bdd1` has no BDD=0 part, and the `path` and `light` references ignore it.
+    /// Serialised only when set, so that the settings hash of every render without it (and so
+    /// its accumulation files) stays what it was.
+    #[cfg_attr(
+        feature = "serde",
+        serde(default, skip_serializing_if = "std::ops::Not::not")
+    )]
+    pub light_tracing: bool,
 }
 
 /// A/B rays per pixel when the footprint noise model weighs jittered samples: there N_eff is
@@ -359,6 +370,8 @@ pub enum Setting {
     CachePhotons,
     /// [`RenderSettings::pixel_table_rays`].
     PixelTableRays,
+    /// [`RenderSettings::light_tracing`].
+    LightTracing,
 }
 
 impl Setting {
@@ -379,6 +392,7 @@ impl Setting {
             Setting::CacheBins => "cache_bins",
             Setting::CachePhotons => "cache_photons",
             Setting::PixelTableRays => "pixel_table_rays",
+            Setting::LightTracing => "light_tracing",
         }
     }
 
@@ -459,6 +473,13 @@ pub enum SettingsError {
         /// Every accepted name.
         expected: Vec<&'static str>,
     },
+    /// Light tracing with pixel jitter off: a connection lands anywhere in its pixel and so
+    /// estimates the pixel's area average, while unjittered camera samples estimate the
+    /// radiance through the pixel's centre; a mix of the two converges to neither.
+    #[error(
+        "light tracing estimates a pixel's average over its area, which a render without pixel jitter (pixel_jitter = false) does not: turn one of them off"
+    )]
+    LightTracingWithoutJitter,
 }
 
 impl SettingsError {
@@ -471,6 +492,7 @@ impl SettingsError {
             | SettingsError::RadiusText(_) => Setting::Radius,
             SettingsError::ThresholdRadius(_) => Setting::ThresholdRadius,
             SettingsError::ResolutionCount(_) => Setting::Resolution,
+            SettingsError::LightTracingWithoutJitter => Setting::LightTracing,
             SettingsError::Length { setting, .. } | SettingsError::UnknownName { setting, .. } => {
                 *setting
             }
@@ -570,6 +592,9 @@ impl RenderSettings {
                 MAX_PIXEL_TABLE_RAYS.into(),
             )?;
         }
+        if self.light_tracing && !self.pixel_jitter {
+            return Err(SettingsError::LightTracingWithoutJitter);
+        }
         Ok(())
     }
 
@@ -602,6 +627,7 @@ impl RenderSettings {
             pixel_jitter: self.pixel_jitter,
             noise_model: self.noise_model.name(),
             sampler: self.sampler.name(),
+            light_tracing: self.light_tracing,
         }
     }
 }
@@ -634,6 +660,7 @@ impl Default for RenderSettings {
             pixel_jitter: true,
             noise_model: NoiseModel::Footprint,
             sampler: Sampler::Stratified,
+            light_tracing: false,
         }
     }
 }

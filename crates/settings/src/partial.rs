@@ -52,6 +52,8 @@ pub struct PartialSettings {
     pub sampler: Option<String>,
     /// [`RenderSettings::roulette_depth`].
     pub roulette_depth: Option<u32>,
+    /// [`RenderSettings::light_tracing`].
+    pub light_tracing: Option<bool>,
     /// The render's default output file (a scene file's `output`). Not a render setting:
     /// [`PartialSettings::apply`] leaves it to the caller.
     pub output: Option<PathBuf>,
@@ -134,6 +136,7 @@ impl PartialSettings {
         s.pixel_table_rays = self.pixel_table_rays.or(s.pixel_table_rays);
         s.clamp_weights = self.clamp_weights.unwrap_or(s.clamp_weights);
         s.pixel_jitter = self.pixel_jitter.unwrap_or(s.pixel_jitter);
+        s.light_tracing = self.light_tracing.unwrap_or(s.light_tracing);
         s.validate()
     }
 }

@@ -47,6 +47,8 @@ pub struct SettingsRecord {
     pub noise_model: &'static str,
     /// `independent` or `stratified` ([`crate::Sampler`]).
     pub sampler: &'static str,
+    /// BDD=0's paths by light tracing instead of the merge at x₀.
+    pub light_tracing: bool,
 }
 
 impl SettingsRecord {
@@ -62,6 +64,7 @@ impl SettingsRecord {
             ("pixel_jitter", self.pixel_jitter.to_string()),
             ("noise_model", self.noise_model.into()),
             ("sampler", self.sampler.into()),
+            ("light_tracing", self.light_tracing.to_string()),
             ("radius_m", self.radius_m.to_string()),
             (
                 "radius_px",

@@ -22,6 +22,24 @@ fn counts_out_of_range_name_their_setting() {
 }
 
 #[test]
+fn light_tracing_needs_jittered_pixels() {
+    let s = RenderSettings {
+        light_tracing: true,
+        ..RenderSettings::default()
+    };
+    assert_eq!(s.validate(), Ok(()));
+    let s = RenderSettings {
+        pixel_jitter: false,
+        ..s
+    };
+    assert_eq!(s.validate(), Err(SettingsError::LightTracingWithoutJitter));
+    assert_eq!(
+        SettingsError::LightTracingWithoutJitter.setting(),
+        Setting::LightTracing
+    );
+}
+
+#[test]
 fn radius_errors_are_typed() {
     assert_eq!(check_radius(-1.0), Err(RadiusError::NotPositive(-1.0)));
     assert_eq!(check_radius(1e-20), Err(RadiusError::BelowMinimum(1e-20)));

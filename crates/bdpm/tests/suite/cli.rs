@@ -487,6 +487,12 @@ fn weights_needs_a_mode_with_weights() {
         .arg(scene("preprint/cornell-lambert.toml"))
         .args(["--pixel", "40,4", "--mode", "bdd1", "--resolution", "8x8"]));
     assert_one_line_error(&out, &["--pixel", "outside"]);
+    let out = run(bdpm()
+        .arg("weights")
+        .arg(scene("preprint/cornell-lambert.toml"))
+        .args(["--pixel", "4,4", "--mode", "optimal", "--resolution", "8x8"])
+        .args(["--light-tracing", "true"]));
+    assert_one_line_error(&out, &["cornell-lambert.toml", "light_tracing = true"]);
 }
 
 /// `bdpm compare`: a render and its rerun with 1 thread are bit-identical (exit 0 with
@@ -652,6 +658,16 @@ fn predict_compares_the_noise_model_with_a_render() {
             .arg(dir.path("q.exr")));
         assert_one_line_error(&out, needles);
     }
+    // The model is of the merge at x₀: light tracing in its place is refused.
+    let out = run(bdpm()
+        .arg("predict")
+        .arg(scene("preprint/cornell-lambert.toml"))
+        .args(settings)
+        .args(["--light-tracing", "true", "--measured"])
+        .arg(&rendered)
+        .arg("-o")
+        .arg(dir.path("q.exr")));
+    assert_one_line_error(&out, &["cornell-lambert.toml", "light_tracing = true"]);
 }
 
 /// A quiet render of the Cornell scene with the arguments `args` to `out`, its standard
@@ -1003,7 +1019,7 @@ fn memory_is_estimated_before_the_render_and_refused_above_the_limit() {
     let dir = TempDir::new("memory");
     // (arguments, what the error must name). 10⁹ photons need some 250 GB: refused at
     // once, as is a film beyond a tiny limit; either would otherwise abort mid-render.
-    let cases: [(&[&str], &str); 2] = [
+    let cases: [(&[&str], &str); 3] = [
         (
             &[
                 "--mode",
@@ -1025,6 +1041,20 @@ fn memory_is_estimated_before_the_render_and_refused_above_the_limit() {
                 "20M",
             ],
             "--resolution",
+        ),
+        // Light tracing holds a pass's splats as well as its photon map.
+        (
+            &[
+                "--mode",
+                "balance",
+                "--light-tracing",
+                "true",
+                "--photons",
+                "1000000000",
+                "--max-memory",
+                "4G",
+            ],
+            "light-tracing splats per pass",
         ),
     ];
     for (args, knob) in cases {
