@@ -3,7 +3,7 @@
 //! written as a float EXR and as a false-colour PNG on a log scale with x₀ marked.
 use std::path::{Path, PathBuf};
 
-use bdpm_integrator::{Mode, RenderError, Renderer, WeightMap, WeightTarget};
+use bdpm_integrator::{Mode, RenderError, Renderer, WeightMap, WeightTarget, weight_map_heuristic};
 use clap::{ArgGroup, Args};
 use glam::Vec3;
 
@@ -104,12 +104,13 @@ pub(crate) fn run(args: WeightsArgs) -> CliResult<()> {
     } else {
         format!("{}: render.mode = \"{mode}\"", args.scene.display())
     };
-    if matches!(mode, Mode::Path | Mode::Light) {
-        // Checked before building anything: these modes have no weights, and the message
-        // should say where the mode came from.
-        let e = check_mode_via_library(&scene, &settings);
-        return Err(format!("{mode_source}: {e}"));
-    }
+    // Checked before building anything (a mode's preparation can take a pass), and the
+    // message says where the mode, or light tracing, came from.
+    let refused = |e: RenderError| match e {
+        RenderError::LightTracing(_) => format!("{}: {e}", args.scene.display()),
+        _ => format!("{mode_source}: {e}"),
+    };
+    weight_map_heuristic(&settings).map_err(refused)?;
     let (target, target_flag) = match (args.x0, args.pixel) {
         (Some(p), _) => (WeightTarget::Point(p), "--x0"),
         (None, Some((x, y))) => (WeightTarget::Pixel(x, y), "--pixel"),
@@ -127,13 +128,7 @@ pub(crate) fn run(args: WeightsArgs) -> CliResult<()> {
         .map_err(|e| format!("{}: {e}", args.scene.display()))?;
     let map = pool
         .install(|| renderer.weight_map(target))
-        .map_err(|e| match e {
-            RenderError::NoWeights(_) | RenderError::PerLightPathWeights(_) => {
-                format!("{mode_source}: {e}")
-            }
-            RenderError::LightTracing(_) => format!("{}: {e}", args.scene.display()),
-            _ => format!("{target_flag}: {e}"),
-        })?;
+        .map_err(|e| format!("{target_flag}: {e}"))?;
 
     let attributes = vec![
         ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
@@ -190,18 +185,6 @@ pub(crate) fn run(args: WeightsArgs) -> CliResult<()> {
     }
     say!("wrote {}, {}", exr_path.display(), png_path.display());
     Ok(())
-}
-
-/// The library's own message for a mode without weights (so the wording stays in one place).
-fn check_mode_via_library(
-    scene: &bdpm_scene::Scene,
-    settings: &bdpm_integrator::RenderSettings,
-) -> String {
-    // Path and light renderers prepare nothing, so building one to ask is cheap.
-    match Renderer::new(scene, settings).map(|r| r.weight_map(WeightTarget::Pixel(0, 0))) {
-        Ok(Err(e)) | Err(e) => e.to_string(),
-        Ok(Ok(_)) => format!("mode '{}' has no weights", settings.mode),
-    }
 }
 
 /// The PNG: w₀ on a log scale from 0.008 to 1 (viridis), black where no surface is seen, a red

@@ -45,4 +45,4 @@ pub use bdpm_settings::{
 pub use sampler::strata;
 pub use stage::Stage;
 pub use table::{PixelTable, PixelWeights};
-pub use weightmap::{WeightMap, WeightTarget};
+pub use weightmap::{WeightMap, WeightTarget, weight_map_heuristic};

@@ -3,6 +3,9 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+use bdpm_mis::Heuristic;
+use bdpm_settings::RenderSettings;
+
 use crate::render::{RenderError, Renderer, TargetError};
 use crate::table::{TableSpec, pixel_weights};
 
@@ -31,19 +34,29 @@ pub struct WeightMap {
     pub x0_pixel: (u32, u32),
 }
 
+/// The heuristic whose weight map `settings` ask for, or why they have none, from the
+/// settings alone: a caller can refuse before a renderer prepares anything (the pilot of
+/// `corrected-balance`, the radiance cache). `path` and `light` have no weights; a mode that
+/// weighs each light path by its incoming direction at x₁ has no map over x₁ alone; the map
+/// is of the merge at x₀, not of light tracing in its place.
+pub fn weight_map_heuristic(settings: &RenderSettings) -> Result<Heuristic, RenderError> {
+    let Some(h) = settings.heuristic() else {
+        return Err(RenderError::NoWeights(settings.mode));
+    };
+    if h.needs().densities || h.needs().x1_scattering {
+        return Err(RenderError::PerLightPathWeights(h.name()));
+    }
+    if settings.light_tracing && h != Heuristic::Bdd1 {
+        return Err(RenderError::LightTracing(h.name()));
+    }
+    Ok(h)
+}
+
 impl Renderer<'_> {
-    /// Computes the weight map of this renderer's mode for x₀ at `target`. The `path` and
-    /// `light` modes have no weights and give an error.
+    /// Computes the weight map of this renderer's mode for x₀ at `target`; the modes
+    /// [`weight_map_heuristic`] refuses give its error.
     pub fn weight_map(&self, target: WeightTarget) -> Result<WeightMap, RenderError> {
-        let Some(h) = self.heuristic() else {
-            return Err(RenderError::NoWeights(self.settings().mode));
-        };
-        if h.needs().densities || h.needs().x1_scattering {
-            return Err(RenderError::PerLightPathWeights(h.name()));
-        }
-        if self.light_traced() {
-            return Err(RenderError::LightTracing(h.name()));
-        }
+        let h = weight_map_heuristic(self.settings())?;
         let scene = self.scene();
         let cam = &scene.camera();
         let dir = match target {

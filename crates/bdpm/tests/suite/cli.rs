@@ -482,6 +482,15 @@ fn weights_needs_a_mode_with_weights() {
         .arg(scene("preprint/cornell-lambert.toml"))
         .args(["--pixel", "4,4", "--mode", "path", "--resolution", "8x8"]));
     assert_one_line_error(&out, &["--mode path", "no weights"]);
+    // Refused from the settings, before the mode's pilot pass would run.
+    let out = run(bdpm()
+        .arg("weights")
+        .arg(scene("preprint/cornell-lambert.toml"))
+        .args(["--pixel", "4,4", "--mode", "corrected-balance"]));
+    assert_one_line_error(
+        &out,
+        &["--mode corrected-balance", "incoming direction at x1"],
+    );
     let out = run(bdpm()
         .arg("weights")
         .arg(scene("preprint/cornell-lambert.toml"))
