@@ -96,7 +96,9 @@ impl Mix<'_> {
         weigher: impl Fn(u32, u32) -> Weigher,
         splats: &mut Splats,
     ) {
-        if a.vertex.depth == 0 || matches!(self.heuristic, Heuristic::Bdd1) {
+        // Depth 0 is direct light at x, which the camera side adds exactly. (`bdd1` has no
+        // BDD=0 part and never light-traces: `Mix::light_tracing` is false for it.)
+        if a.vertex.depth == 0 {
             return;
         }
         let Some(c) = connect(self.scene, &a.shading, a.vertex.incoming, a.power) else {

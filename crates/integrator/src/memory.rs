@@ -10,7 +10,7 @@
 //! [`PILOT_PHOTONS`] photons is traced to measure them.
 
 use bdpm_geometry::Domain;
-use bdpm_mis::{Heuristic, NoiseModel};
+use bdpm_mis::NoiseModel;
 use bdpm_photon::{PhotonMap, TraceOptions};
 use bdpm_scene::Scene;
 
@@ -145,7 +145,7 @@ pub fn estimate_memory(
                     lower: "--photons",
                 }),
             }
-            if s.light_tracing && s.heuristic().is_some_and(|h| h != Heuristic::Bdd1) {
+            if s.light_traced() {
                 // Every arrival of depth ≥ 1 that the camera sees is a splat, held until the
                 // pass adds them in photon order; a growing list can hold twice its length.
                 items.push(MemoryItem {

@@ -461,7 +461,7 @@ impl<'a> Renderer<'a> {
     /// Whether BDD=0's paths are sampled by light tracing: `light_tracing` set and a mode
     /// with a BDD=0 part (not `bdd1`, `path` or `light`).
     pub fn light_traced(&self) -> bool {
-        self.settings.light_tracing && self.heuristic.is_some_and(|h| h != Heuristic::Bdd1)
+        self.settings.light_traced()
     }
 
     /// The preparatory stages that ran, with their cost.

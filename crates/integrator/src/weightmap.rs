@@ -46,7 +46,7 @@ pub fn weight_map_heuristic(settings: &RenderSettings) -> Result<Heuristic, Rend
     if h.needs().densities || h.needs().x1_scattering {
         return Err(RenderError::PerLightPathWeights(h.name()));
     }
-    if settings.light_tracing && h != Heuristic::Bdd1 {
+    if settings.light_traced() {
         return Err(RenderError::LightTracing(h.name()));
     }
     Ok(h)

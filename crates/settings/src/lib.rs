@@ -540,6 +540,12 @@ impl RenderSettings {
         })
     }
 
+    /// Whether BDD=0's paths are sampled by light tracing: `light_tracing` set and a mode with
+    /// a BDD=0 part (a mixing mode other than `bdd1`; `path` and `light` ignore the setting).
+    pub fn light_traced(&self) -> bool {
+        self.light_tracing && self.mode.kind().is_some_and(|k| k != HeuristicKind::Bdd1)
+    }
+
     /// Checks every setting: counts at least 1 and within [`limits`], a given merge radius
     /// usable ([`check_radius`]) and the threshold radius finite, > 0 and normal. The first
     /// problem found is returned.
