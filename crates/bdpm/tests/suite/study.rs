@@ -17,7 +17,7 @@ fn study(cwd: &Path, out: &str) -> String {
             "--modes",
             "bdd0,optimal",
             "--passes",
-            "2",
+            "4",
             "--resolution",
             "8x8",
         ])
@@ -58,7 +58,7 @@ fn study_writes_csv_plots_and_table_deterministically() {
     let csv = study(dir, "a");
     let lines: Vec<&str> = csv.lines().collect();
     assert!(lines[0].starts_with("mode,pass,wall_time_s,rmse,rel_rmse,mean_sqrt_v,cpu_time_s"));
-    assert_eq!(lines.len(), 1 + 2 * 2, "{csv}");
+    assert_eq!(lines.len(), 1 + 2 * 4, "{csv}");
     for line in &lines[1..] {
         let f: Vec<&str> = line.split(',').collect();
         assert_eq!(f.len(), 9, "{line}");
@@ -90,6 +90,12 @@ fn study_writes_csv_plots_and_table_deterministically() {
     let md = std::fs::read_to_string(dir.join("a/study.md")).expect("md");
     assert!(
         md.contains("| bdd0 |") && md.contains("| optimal |"),
+        "{md}"
+    );
+    // Two passes in each half (even, odd): the regional choice is cross-validated.
+    assert!(
+        md.contains("Choosing the mode per 8 × 8-pixel block")
+            && md.contains("Chosen on the even passes and judged on the odd ones"),
         "{md}"
     );
     let cached: Vec<_> = std::fs::read_dir(dir.join("out"))
