@@ -151,97 +151,146 @@ pub(crate) fn efficiency(mean_v: f64, seconds_per_pass: f64) -> f64 {
 /// Side of the square pixel blocks over which [`regional_choice`] picks a variant.
 pub(crate) const REGION_SIDE: usize = 8;
 
+/// One variant's images for [`regional_choice`], luminance per pixel (row-major).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ModeImages<'a> {
+    /// Per-pass variance V (W²·m⁻⁴·sr⁻²); empty without two passes.
+    pub(crate) variance: &'a [f64],
+    /// The mean over the passes (W·m⁻²·sr⁻¹).
+    pub(crate) mean: &'a [f64],
+    /// Passes K behind `mean` and `variance`.
+    pub(crate) passes: usize,
+}
+
 /// What choosing the variant per image region would buy: see [`regional_choice`].
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct RegionalChoice {
-    /// The best single variant's relV·(time per pass) over the best per-block mix's, both from
-    /// all passes: ≥ 1, the efficiency in relV that a per-region choice among the variants
-    /// could reach at most.
+    /// The best single variant's figure over the best per-block mix's, both from all passes:
+    /// ≥ 1, the most a per-region choice among the variants could gain.
     pub(crate) gain: f64,
     /// The same with the choices made on one half of the passes (even or odd) and judged on
     /// the other, the geometric mean of the two ways round: what a choice made from estimates
     /// keeps. Below 1 when the in-sample gain is the estimates' noise. `None` without two
     /// passes in each half.
     pub(crate) cross_validated: Option<f64>,
-    /// Index of the best single variant (least relV·time per pass).
+    /// Index of the best single variant.
     pub(crate) best_single: usize,
     /// Per variant, the share of the image's pixels whose block the best mix gives it.
     pub(crate) shares: Vec<f64>,
 }
 
-/// Each variant's part of relV per block of pixels, and each block's share of the pixels.
+/// Each variant's part of relV and of the squared bias per block of pixels, and each block's
+/// share of the pixels.
 struct Blocks {
     /// `parts[b][k]`: Σ over block b's pixels of V_k/(R² + ε), divided by the image's pixels.
     parts: Vec<Vec<f64>>,
+    /// `bias[b][k]`: the same sum of ((I_k − R)² − V_k/K_k − σ_R²)/(R² + ε), an unbiased
+    /// estimate of the squared bias (noisy, can be negative).
+    bias: Vec<Vec<f64>>,
     weight: Vec<f64>,
 }
 
 impl Blocks {
-    fn new(variances: &[&[f64]], reference: &[f64], width: usize, side: usize) -> Option<Blocks> {
+    fn new(
+        modes: &[ModeImages<'_>],
+        reference: &[f64],
+        ref_var: &[f64],
+        width: usize,
+        side: usize,
+    ) -> Option<Blocks> {
         let n = reference.len();
-        if width == 0 || side == 0 || variances.iter().any(|v| v.len() != n) {
+        let fits = |m: &ModeImages<'_>| m.variance.len() == n && m.mean.len() == n && m.passes > 1;
+        if width == 0 || side == 0 || ref_var.len() != n || !modes.iter().all(fits) {
             return None;
         }
         let eps = rel_epsilon(reference);
         let (bw, bh) = (width.div_ceil(side), (n / width).div_ceil(side));
-        let mut parts = vec![vec![0.0f64; variances.len()]; bw * bh];
+        let mut parts = vec![vec![0.0f64; modes.len()]; bw * bh];
+        let mut bias = parts.clone();
         let mut weight = vec![0.0f64; bw * bh];
         for (i, r) in reference.iter().enumerate() {
             let b = (i / width / side) * bw + (i % width) / side;
+            let scale = 1.0 / ((r * r + eps) * n as f64);
             weight[b] += 1.0 / n as f64;
-            for (k, v) in variances.iter().enumerate() {
-                parts[b][k] += v[i] / (r * r + eps) / n as f64;
+            for (k, m) in modes.iter().enumerate() {
+                let v = m.variance[i];
+                parts[b][k] += v * scale;
+                bias[b][k] += ((m.mean[i] - r).powi(2) - v / m.passes as f64 - ref_var[i]) * scale;
             }
         }
         parts
             .iter()
+            .chain(&bias)
             .flatten()
             .all(|p| p.is_finite())
-            .then_some(Blocks { parts, weight })
+            .then_some(Blocks {
+                parts,
+                bias,
+                weight,
+            })
     }
 
-    /// relV·(time per pass) of the mix that gives block b variant `choice[b]`.
-    fn merit(&self, choice: &[usize], seconds: &[f64]) -> f64 {
-        let rel_v: f64 = choice.iter().zip(&self.parts).map(|(&c, p)| p[c]).sum();
+    /// The figure of merit of the mix that gives block b variant `choice[b]`, less is
+    /// better: relV·(time per pass) without a `time`, and relMSE after `time` s (squared
+    /// bias plus relV over the passes that time buys) with one.
+    fn merit(&self, choice: &[usize], seconds: &[f64], time: Option<f64>) -> f64 {
+        let pick = |rows: &[Vec<f64>]| -> f64 { choice.iter().zip(rows).map(|(&c, p)| p[c]).sum() };
         let t: f64 = choice
             .iter()
             .zip(&self.weight)
             .map(|(&c, w)| w * seconds[c])
             .sum();
-        rel_v * t
+        match time {
+            None => pick(&self.parts) * t,
+            Some(time) => pick(&self.bias) + pick(&self.parts) * t / time,
+        }
     }
 
-    /// The best single variant (every block the same) and the best mix.
-    fn best(&self, seconds: &[f64]) -> (Vec<usize>, Vec<usize>) {
+    /// The best single variant (every block the same) and the best mix found.
+    fn best(&self, seconds: &[f64], time: Option<f64>) -> (Vec<usize>, Vec<usize>) {
         let k = seconds.len();
         let blocks = self.parts.len();
         let singles: Vec<f64> = (0..k)
-            .map(|j| self.merit(&vec![j; blocks], seconds))
+            .map(|j| self.merit(&vec![j; blocks], seconds, time))
             .collect();
         let single = (0..k)
             .min_by(|&a, &b| singles[a].total_cmp(&singles[b]))
             .unwrap_or(0);
         let (mut best, mut choice) = (singles[single], vec![single; blocks]);
-        // The product is minimised over the minimisers of relV + λ·t, λ in units of the best
-        // single variant's relV per second from 2⁻¹² to 2¹², and λ = 0.
-        let scale = singles[single] / seconds[single].powi(2);
-        let lambdas =
-            std::iter::once(0.0).chain((-48..=48).map(|e| scale * (e as f64 / 4.0).exp2()));
-        for lambda in lambdas {
-            let c: Vec<usize> = self
-                .parts
-                .iter()
-                .zip(&self.weight)
-                .map(|(p, w)| {
-                    let cost = |j: usize| p[j] + lambda * w * seconds[j];
-                    (0..k)
-                        .min_by(|&a, &b| cost(a).total_cmp(&cost(b)))
-                        .unwrap_or(0)
-                })
-                .collect();
-            let m = self.merit(&c, seconds);
-            if m < best {
-                (best, choice) = (m, c);
+        // The candidates minimise, block by block, bias + c·relV + λ·time, which makes the
+        // mix's terms separable: c is the time per pass over `time` (1 without one, where
+        // the bias is not counted), λ from 2⁻¹² to 2¹² in units of the best single variant's
+        // relV per second, and 0.
+        let t0 = seconds[single];
+        let rel_v0: f64 = self.parts.iter().map(|p| p[single]).sum();
+        let cs: Vec<f64> = match time {
+            None => vec![1.0],
+            Some(time) => (-16..=16)
+                .map(|e| t0 / time * (e as f64 / 4.0).exp2())
+                .collect(),
+        };
+        let bias_weight = if time.is_some() { 1.0 } else { 0.0 };
+        for &c in &cs {
+            let scale = c * rel_v0 / t0;
+            let lambdas =
+                std::iter::once(0.0).chain((-48..=48).map(|e| scale * (e as f64 / 4.0).exp2()));
+            for lambda in lambdas {
+                let pick: Vec<usize> = (0..blocks)
+                    .map(|b| {
+                        let cost = |j: usize| {
+                            bias_weight * self.bias[b][j]
+                                + c * self.parts[b][j]
+                                + lambda * self.weight[b] * seconds[j]
+                        };
+                        (0..k)
+                            .min_by(|&x, &y| cost(x).total_cmp(&cost(y)))
+                            .unwrap_or(0)
+                    })
+                    .collect();
+                let m = self.merit(&pick, seconds, time);
+                if m < best {
+                    (best, choice) = (m, pick);
+                }
             }
         }
         (vec![single; blocks], choice)
@@ -249,47 +298,52 @@ impl Blocks {
 }
 
 /// The most that choosing among the variants per `side` × `side` block of pixels (a radius or
-/// a weight per pixel, say) could gain in relV efficiency over the best single variant.
+/// a weight per pixel, say) could gain over the best single variant.
 ///
-/// `variances[k]` holds variant k's per-pass variance V per pixel (row-major, `width` wide)
-/// from all its passes, `halves[h][k]` the same from its even (h = 0) or odd passes only;
-/// `seconds[k]` its time per pass; `reference` the reference luminance (relV's R). A mix that
-/// gives block b variant k_b has relV Σ_b relV_b(k_b) (each block's part of the image's mean)
-/// and, with a pass's cost spread evenly over the pixels, time per pass Σ_b (n_b/N)·t(k_b);
-/// its figure of merit is their product, as relV·t is a single variant's. The product is
-/// minimised over the mixes that minimise relV + λ·t for some λ ≥ 0 (a sweep over λ; every
-/// single variant is a candidate too). The in-sample gain flatters the mix (the least of noisy
-/// estimates); the cross-validated one does not. Both leave out the kernel bias, which grows
-/// with the radius.
+/// `modes[k]` holds variant k's images from all its passes, `halves[h][k]` from its even
+/// (h = 0) or odd passes only; `seconds[k]` its time per pass; `reference` the reference
+/// luminance (relV's R) and `ref_var` its variance per pixel. A mix that gives block b variant
+/// k_b has relV Σ_b relV_b(k_b) (each block's part of the image's mean) and, with a pass's
+/// cost spread evenly over the pixels, time per pass t = Σ_b (n_b/N)·t(k_b). Without `time`
+/// the figure is relV·t, whose inverse is the efficiency in relV, and the kernel bias is left
+/// out; with `time` it is the relMSE after that many seconds, Σ_b bias²_b(k_b) + relV·t/time,
+/// the squared bias estimated per block from the mean's error against the reference. The
+/// figure is minimised over mixes that minimise a separable bias + c·relV + λ·t (a sweep
+/// over c and λ; every single variant is a candidate too). The in-sample gain flatters the
+/// mix (the least of noisy estimates); the cross-validated one does not.
 ///
 /// `None` with fewer than two variants or a variant without finite variances.
 pub(crate) fn regional_choice(
-    variances: &[&[f64]],
-    halves: [&[&[f64]]; 2],
+    modes: &[ModeImages<'_>],
+    halves: [&[ModeImages<'_>]; 2],
     seconds: &[f64],
     reference: &[f64],
-    width: usize,
-    side: usize,
+    ref_var: &[f64],
+    (width, side): (usize, usize),
+    time: Option<f64>,
 ) -> Option<RegionalChoice> {
-    let k = variances.len();
+    let k = modes.len();
     if k < 2 || seconds.len() != k || seconds.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
         return None;
     }
-    let all = Blocks::new(variances, reference, width, side)?;
-    let (single, mix) = all.best(seconds);
-    let gain = all.merit(&single, seconds) / all.merit(&mix, seconds);
+    if time.is_some_and(|t| !(t.is_finite() && t > 0.0)) {
+        return None;
+    }
+    let all = Blocks::new(modes, reference, ref_var, width, side)?;
+    let (single, mix) = all.best(seconds, time);
+    let gain = all.merit(&single, seconds, time) / all.merit(&mix, seconds, time);
     let folds: Option<Vec<Blocks>> = halves
         .iter()
         .map(|h| {
             (h.len() == k)
-                .then(|| Blocks::new(h, reference, width, side))
+                .then(|| Blocks::new(h, reference, ref_var, width, side))
                 .flatten()
         })
         .collect();
     let cross_validated = folds.map(|f| {
         let judged = |chosen_on: &Blocks, judge: &Blocks| {
-            let (single, mix) = chosen_on.best(seconds);
-            judge.merit(&single, seconds) / judge.merit(&mix, seconds)
+            let (single, mix) = chosen_on.best(seconds, time);
+            judge.merit(&single, seconds, time) / judge.merit(&mix, seconds, time)
         };
         (judged(&f[0], &f[1]) * judged(&f[1], &f[0])).sqrt()
     });
@@ -305,53 +359,87 @@ pub(crate) fn regional_choice(
     })
 }
 
-/// The report's paragraph on [`regional_choice`] among the study's modes (empty when it has
-/// no answer: one mode, or one pass).
-fn regional_paragraph(runs: &[ModeRun], reference: &[f64], width: usize, clock: &str) -> String {
-    let variances: Vec<&[f64]> = runs.iter().map(|r| r.variance.as_slice()).collect();
-    let halves: [Vec<&[f64]>; 2] = [0, 1].map(|h| {
+/// The report's paragraph on [`regional_choice`] among the study's modes, in relV
+/// efficiency and in relMSE at the equal-time point `time` (empty when it has no answer:
+/// one mode, or one pass).
+fn regional_paragraph(
+    runs: &[ModeRun],
+    reference: &[f64],
+    ref_var: &[f64],
+    width: usize,
+    clock: &str,
+    time: f64,
+) -> String {
+    let modes: Vec<ModeImages<'_>> = runs
+        .iter()
+        .map(|r| ModeImages {
+            variance: &r.variance,
+            mean: &r.mean,
+            passes: r.points.len(),
+        })
+        .collect();
+    let halves: [Vec<ModeImages<'_>>; 2] = [0, 1].map(|h| {
         runs.iter()
-            .map(|r| r.half_variances[h].as_slice())
+            .map(|r| ModeImages {
+                variance: &r.half_variances[h],
+                mean: &r.half_means[h],
+                // Passes 1, 3, … are the even half (index 0).
+                passes: (r.points.len() + 1 - h) / 2,
+            })
             .collect()
     });
     let seconds: Vec<f64> = runs.iter().map(ModeRun::seconds_per_pass).collect();
-    let Some(c) = regional_choice(
-        &variances,
-        [&halves[0], &halves[1]],
-        &seconds,
-        reference,
-        width,
-        REGION_SIDE,
-    ) else {
+    let choose = |time| {
+        regional_choice(
+            &modes,
+            [&halves[0], &halves[1]],
+            &seconds,
+            reference,
+            ref_var,
+            (width, REGION_SIDE),
+            time,
+        )
+    };
+    let Some(c) = choose(None) else {
         return String::new();
     };
-    let shares: Vec<String> = runs
-        .iter()
-        .zip(&c.shares)
-        .filter(|(_, s)| **s > 0.0)
-        .map(|(r, s)| format!("`{}` {:.0} %", r.name, 100.0 * s))
-        .collect();
-    let cv = match c.cross_validated {
-        Some(g) => format!(
-            " Chosen on the even passes and judged on the odd ones, and the other way round, \
-             the mix keeps **{g:.3}×** (the in-sample figure flatters it: the least of noisy \
-             estimates)."
-        ),
-        None => " (Too few passes to cross-validate the choice: the figure flatters the mix, \
-                 the least of noisy estimates.)"
-            .into(),
+    let shares = |c: &RegionalChoice| -> String {
+        runs.iter()
+            .zip(&c.shares)
+            .filter(|(_, s)| **s > 0.0)
+            .map(|(r, s)| format!("`{}` {:.0} %", r.name, 100.0 * s))
+            .collect::<Vec<_>>()
+            .join(", ")
     };
-    format!(
+    let cv = |c: &RegionalChoice| match c.cross_validated {
+        Some(g) => format!("cross-validated **{g:.3}×**"),
+        None => "not cross-validated (too few passes)".into(),
+    };
+    let mut text = format!(
         "Choosing the mode per {side} × {side}-pixel block instead of one for the image (a radius \
-         or a weight per pixel, say) reaches, in sample, {gain:.3}× the efficiency in relV \
-         (1/(relV · {clock} time per pass)) of the best single mode, `{best}`, with the blocks \
-         given to {shares}.{cv} A pass's time is taken as spread evenly over the pixels; the \
-         kernel bias, which grows with the radius, is left out.",
+         or a weight per pixel, say), kernel bias left out: {gain:.3}× the efficiency in relV \
+         (1/(relV · {clock} time per pass)) of the best single mode, `{best}`, in sample, with \
+         the blocks given to {shares}; {cv} (chosen on the even passes and judged on the odd \
+         ones, and the other way round: the in-sample figure flatters the mix, the least of \
+         noisy estimates). A pass's time is taken as spread evenly over the pixels.",
         side = REGION_SIDE,
         gain = c.gain,
         best = runs[c.best_single].name,
-        shares = shares.join(", "),
-    )
+        shares = shares(&c),
+        cv = cv(&c),
+    );
+    if let Some(b) = choose(Some(time)) {
+        text.push_str(&format!(
+            " Counting the kernel bias (per block, the squared error of the mean less its \
+             variance and the reference's), relMSE at {time:.2} s: the best single mode `{best}` \
+             has {gain:.3}× the mix's in sample, with the blocks given to {shares}; {cv}.",
+            best = runs[b.best_single].name,
+            gain = b.gain,
+            shares = shares(&b),
+            cv = cv(&b),
+        ));
+    }
+    text
 }
 
 /// The record of one pass of one mode.
@@ -392,6 +480,10 @@ pub(crate) struct ModeRun {
     /// V per pixel from the even passes (first, third, …) and from the odd ones; empty with
     /// fewer than two passes in the half.
     pub(crate) half_variances: [Vec<f64>; 2],
+    /// The luminance per pixel after the last pass (W·m⁻²·sr⁻¹), and over the even and the
+    /// odd passes alone.
+    pub(crate) mean: Vec<f64>,
+    pub(crate) half_means: [Vec<f64>; 2],
     pub(crate) dropped: u64,
 }
 
@@ -681,6 +773,8 @@ struct Study<'a> {
     dir: PathBuf,
     /// The reference's luminance per pixel, and its image mean.
     ref_lum: Vec<f64>,
+    /// The reference's variance per pixel (luminance; zeros without a stderr layer).
+    ref_var: Vec<f64>,
     ref_mean: f64,
     floor: ErrorFloor,
     refs: RefFacts,
@@ -754,6 +848,7 @@ fn prepare(args: &StudyArgs) -> CliResult<Study<'_>> {
         stem,
         dir,
         ref_lum,
+        ref_var,
         ref_mean,
         floor,
         refs,
@@ -956,7 +1051,12 @@ impl Study<'_> {
                 mean_v,
                 rel_v,
                 variance: variance.unwrap_or_default(),
-                half_variances: m.halves.map(|h| h.variance().unwrap_or_default()),
+                half_variances: m
+                    .halves
+                    .each_ref()
+                    .map(|h| h.variance().unwrap_or_default()),
+                mean: m.lum.mean(),
+                half_means: m.halves.each_ref().map(PixelStats::mean),
                 dropped: m.film.dropped(),
             };
             if !self.args.quiet {
@@ -1030,7 +1130,14 @@ impl Study<'_> {
             }
         }
         all_files.extend(files);
-        let regional = regional_paragraph(&runs, &self.ref_lum, w as usize, &args.clock);
+        let regional = regional_paragraph(
+            &runs,
+            &self.ref_lum,
+            &self.ref_var,
+            w as usize,
+            &args.clock,
+            equal_time(&runs),
+        );
         let md = markdown(
             &self.header(),
             &self.refs,
@@ -1117,91 +1224,150 @@ mod tests {
         assert_eq!(without_floor(1.0, 2.0), 0.02);
     }
 
-    /// A 16 × 8 image of two 8 × 8 blocks, V = `left` on the left one and `right` on the right.
+    /// A 16 × 8 image of two 8 × 8 blocks, `left` on the left one and `right` on the right.
     fn halves(left: f64, right: f64) -> Vec<f64> {
         (0..128)
             .map(|i| if i % 16 < 8 { left } else { right })
             .collect()
     }
 
-    /// No per-half variances: no cross-validated figure.
-    const NO_HALVES: [&[&[f64]]; 2] = [&[], &[]];
+    /// The reference of the regional tests (R = 1, no error of its own) and its variance.
+    fn flat() -> (Vec<f64>, Vec<f64>) {
+        (vec![1.0; 128], vec![0.0; 128])
+    }
 
-    #[test]
-    fn regional_choice_cross_validated_sees_through_noise() {
-        let reference = vec![1.0; 128];
-        // In the even passes variant 0 looks better on the left, in the odd ones on the
-        // right, and over all passes the two are alike: a choice made on one half loses on
-        // the other (relV ∝ 2 against 1.5 for either variant alone).
-        let (a0, b0) = (halves(1.0, 2.0), halves(2.0, 1.0));
-        let all = halves(1.5, 1.5);
-        let c = regional_choice(
-            &[&all, &all],
-            [&[&a0, &b0], &[&b0, &a0]],
-            &[1.0, 1.0],
-            &reference,
-            16,
-            8,
+    /// The images of a variant with per-pass variance `v` over K = 4 passes and no bias: the
+    /// mean's squared error is exactly V/K.
+    fn unbiased(v: &[f64]) -> Images {
+        (
+            v.to_vec(),
+            v.iter().map(|v| 1.0 + (v / 4.0).sqrt()).collect(),
         )
-        .unwrap();
-        assert_eq!(c.gain, 1.0);
-        let cv = c.cross_validated.unwrap();
-        assert!((cv - 0.75).abs() < 1e-12, "{c:?}");
-        // Where the halves agree, the choice keeps its gain.
-        let (a, b) = (halves(1.0, 4.0), halves(4.0, 1.0));
-        let c = regional_choice(
-            &[&a, &b],
-            [&[&a, &b], &[&a, &b]],
-            &[1.0, 1.0],
+    }
+
+    /// A variant's (V, mean) per pixel.
+    type Images = (Vec<f64>, Vec<f64>);
+
+    fn images(im: &Images) -> ModeImages<'_> {
+        ModeImages {
+            variance: &im.0,
+            mean: &im.1,
+            passes: 4,
+        }
+    }
+
+    /// [`regional_choice`] of 16 × 8 images in 8 × 8 blocks.
+    fn choice(
+        modes: &[&Images],
+        halves: Option<[&[&Images]; 2]>,
+        seconds: &[f64],
+        time: Option<f64>,
+    ) -> Option<RegionalChoice> {
+        let (reference, ref_var) = flat();
+        let modes: Vec<ModeImages<'_>> = modes.iter().map(|m| images(m)).collect();
+        let halves: [Vec<ModeImages<'_>>; 2] = match halves {
+            Some(h) => h.map(|h| h.iter().map(|m| images(m)).collect()),
+            None => [Vec::new(), Vec::new()],
+        };
+        regional_choice(
+            &modes,
+            [&halves[0], &halves[1]],
+            seconds,
             &reference,
-            16,
-            8,
+            &ref_var,
+            (16, 8),
+            time,
         )
-        .unwrap();
-        assert!((c.cross_validated.unwrap() - 2.5).abs() < 1e-12, "{c:?}");
     }
 
     #[test]
     fn regional_choice_of_variants_better_in_different_halves() {
-        let reference = vec![1.0; 128];
-        let (a, b) = (halves(1.0, 4.0), halves(4.0, 1.0));
-        let c = regional_choice(&[&a, &b], NO_HALVES, &[1.0, 1.0], &reference, 16, 8).unwrap();
+        let (a, b) = (unbiased(&halves(1.0, 4.0)), unbiased(&halves(4.0, 1.0)));
+        let c = choice(&[&a, &b], None, &[1.0, 1.0], None).unwrap();
         // Either alone: relV ∝ (1 + 4)/2; each half its better variant: ∝ 1.
         assert!((c.gain - 2.5).abs() < 1e-12, "{c:?}");
         assert_eq!(c.shares, vec![0.5, 0.5]);
+        assert_eq!(c.cross_validated, None);
     }
 
     #[test]
     fn regional_choice_weighs_relv_against_the_mix_s_time() {
-        let reference = vec![1.0; 128];
+        let a = unbiased(&halves(1.0, 1.0));
         // One variant better everywhere at the same cost: nothing to gain.
-        let (a, b) = (halves(1.0, 1.0), halves(2.0, 3.0));
-        let c = regional_choice(&[&a, &b], NO_HALVES, &[1.0, 1.0], &reference, 16, 8).unwrap();
+        let b = unbiased(&halves(2.0, 3.0));
+        let c = choice(&[&a, &b], None, &[1.0, 1.0], None).unwrap();
         assert_eq!(
             (c.gain, c.best_single, c.shares.clone()),
             (1.0, 0, vec![1.0, 0.0])
         );
         // Half the variance everywhere for twice the time: any mix is worse than either
         // alone ((1 − f/2)(1 + f) ≥ 1), although per block relV·t ties.
-        let half = halves(0.5, 0.5);
-        let c = regional_choice(&[&a, &half], NO_HALVES, &[1.0, 2.0], &reference, 16, 8).unwrap();
+        let half = unbiased(&halves(0.5, 0.5));
+        let c = choice(&[&a, &half], None, &[1.0, 2.0], None).unwrap();
         assert!((c.gain - 1.0).abs() < 1e-12, "{c:?}");
         // A quarter of the variance on the left for twice the time: the left block to it
         // gives relV ∝ 0.625 at 1.5 s, against 1 at 1 s for the cheap variant alone.
-        let left = halves(0.25, 1.0);
-        let c = regional_choice(&[&a, &left], NO_HALVES, &[1.0, 2.0], &reference, 16, 8).unwrap();
+        let left = unbiased(&halves(0.25, 1.0));
+        let c = choice(&[&a, &left], None, &[1.0, 2.0], None).unwrap();
         assert!((c.gain - 16.0 / 15.0).abs() < 1e-12, "{c:?}");
         assert_eq!((c.best_single, c.shares.clone()), (0, vec![0.5, 0.5]));
     }
 
     #[test]
+    fn regional_choice_cross_validated_sees_through_noise() {
+        // In the even passes variant 0 looks better on the left, in the odd ones on the
+        // right, and over all passes the two are alike: a choice made on one half loses on
+        // the other (relV ∝ 2 against 1.5 for either variant alone).
+        let (a0, b0) = (unbiased(&halves(1.0, 2.0)), unbiased(&halves(2.0, 1.0)));
+        let all = unbiased(&halves(1.5, 1.5));
+        let c = choice(
+            &[&all, &all],
+            Some([&[&a0, &b0], &[&b0, &a0]]),
+            &[1.0, 1.0],
+            None,
+        )
+        .unwrap();
+        assert_eq!(c.gain, 1.0);
+        assert!((c.cross_validated.unwrap() - 0.75).abs() < 1e-12, "{c:?}");
+        // Where the halves agree, the choice keeps its gain.
+        let (a, b) = (unbiased(&halves(1.0, 4.0)), unbiased(&halves(4.0, 1.0)));
+        let c = choice(&[&a, &b], Some([&[&a, &b], &[&a, &b]]), &[1.0, 1.0], None).unwrap();
+        assert!((c.cross_validated.unwrap() - 2.5).abs() < 1e-12, "{c:?}");
+    }
+
+    #[test]
+    fn regional_choice_at_a_time_counts_the_bias() {
+        // The same variance, each variant biased by 1 (relative, squared) on one side: in
+        // relV nothing to choose; in relMSE after 1 s (one pass of 1 s) either alone has
+        // 0.5 + 1, each side its unbiased variant 1.
+        let biased = |left: f64, right: f64| {
+            let b2 = halves(left, right);
+            (
+                halves(1.0, 1.0),
+                b2.iter()
+                    .map(|b| 1.0 + (0.25 + b).sqrt())
+                    .collect::<Vec<_>>(),
+            )
+        };
+        let (a, b) = (biased(1.0, 0.0), biased(0.0, 1.0));
+        let c = choice(&[&a, &b], None, &[1.0, 1.0], None).unwrap();
+        assert_eq!(c.gain, 1.0);
+        let c = choice(&[&a, &b], None, &[1.0, 1.0], Some(1.0)).unwrap();
+        assert!((c.gain - 1.5).abs() < 1e-12, "{c:?}");
+        assert_eq!(c.shares, vec![0.5, 0.5]);
+        // After 10 s the variance is a tenth: 0.5 + 0.1 against 0.1.
+        let c = choice(&[&a, &b], None, &[1.0, 1.0], Some(10.0)).unwrap();
+        assert!((c.gain - 6.0).abs() < 1e-9, "{c:?}");
+    }
+
+    #[test]
     fn regional_choice_needs_two_variants_with_variances() {
-        let reference = vec![1.0; 128];
-        let a = halves(1.0, 1.0);
-        assert!(regional_choice(&[&a], NO_HALVES, &[1.0], &reference, 16, 8).is_none());
-        let nan = halves(f64::NAN, 1.0);
-        assert!(regional_choice(&[&a, &nan], NO_HALVES, &[1.0, 1.0], &reference, 16, 8).is_none());
-        assert!(regional_choice(&[&a, &a], NO_HALVES, &[1.0, 0.0], &reference, 16, 8).is_none());
+        let a = unbiased(&halves(1.0, 1.0));
+        assert!(choice(&[&a], None, &[1.0], None).is_none());
+        let nan = unbiased(&halves(f64::NAN, 1.0));
+        assert!(choice(&[&a, &nan], None, &[1.0, 1.0], None).is_none());
+        assert!(choice(&[&a, &a], None, &[1.0, 0.0], None).is_none());
+        assert!(choice(&[&a, &a], None, &[1.0, 1.0], Some(0.0)).is_none());
     }
 
     #[test]
@@ -1235,6 +1401,8 @@ mod tests {
             rel_v: 1.0,
             variance: Vec::new(),
             half_variances: [Vec::new(), Vec::new()],
+            mean: Vec::new(),
+            half_means: [Vec::new(), Vec::new()],
             dropped: 0,
         };
         let runs = [

@@ -95,7 +95,8 @@ fn study_writes_csv_plots_and_table_deterministically() {
     // Two passes in each half (even, odd): the regional choice is cross-validated.
     assert!(
         md.contains("Choosing the mode per 8 × 8-pixel block")
-            && md.contains("Chosen on the even passes and judged on the odd ones"),
+            && md.contains("cross-validated **1.000×**")
+            && md.contains("Counting the kernel bias"),
         "{md}"
     );
     let cached: Vec<_> = std::fs::read_dir(dir.join("out"))
