@@ -215,3 +215,62 @@ fn no_mode_predicts_less_than_the_floor() {
         gaps[1]
     );
 }
+
+/// `direct_boost`: where a pixel takes M direct-light samples per camera sample, the model
+/// divides L₀'s part of T_jitter by M, and the predicted V of those pixels follows the measured
+/// one down; every other pixel's prediction keeps its bits. cornell-lambert at 16², where the
+/// ceiling spot above the light falls in two pixels and their V is mostly L₀'s jitter.
+#[test]
+fn direct_boost_lowers_the_predicted_jitter_where_it_samples_more() {
+    let (scene, settings) = load("preprint/cornell-lambert.toml", 16, 16);
+    let mut s = with_mode(&settings, "balance", 32, 128, 100_000);
+    s.radius = Some(0.01);
+    let run = |boost: u32| {
+        let s = RenderSettings {
+            direct_boost: boost,
+            ..s.clone()
+        };
+        let renderer = Renderer::new(&scene, &s)
+            .expect("valid settings")
+            .with_model_inputs();
+        let p = renderer.predict_variance().expect("balance has a noise model");
+        let m: Vec<u32> = (0..256)
+            .map(|i| renderer.direct_samples().map_or(1, |d| d.at(i % 16, i / 16)))
+            .collect();
+        let film = bdpm_suite::render_with(&renderer);
+        let measured: Vec<f64> = film.pass_variance().iter().map(|c| lum(*c)).collect();
+        (p, m, measured)
+    };
+    let (one, m_one, v_one) = run(1);
+    let (many, m, v_many) = run(16);
+    assert!(m_one.iter().all(|&m| m == 1));
+    let boosted: Vec<usize> = (0..256).filter(|&i| m[i] > 1).collect();
+    assert!(!boosted.is_empty(), "the spot takes more than one sample");
+    for i in 0..256 {
+        if m[i] > 1 {
+            assert!(
+                many.t_jitter[i] < 0.5 * one.t_jitter[i],
+                "pixel {i}, M {}: T_jitter {} against {}",
+                m[i],
+                many.t_jitter[i],
+                one.t_jitter[i]
+            );
+        } else {
+            assert_eq!(many.t_jitter[i], one.t_jitter[i], "pixel {i}");
+            assert_eq!(many.total[i], one.total[i], "pixel {i}");
+        }
+    }
+    let sum = |v: &[f64]| boosted.iter().map(|&i| v[i]).sum::<f64>();
+    let (predicted_fall, measured_fall) = (
+        sum(&one.total) / sum(&many.total),
+        sum(&v_one) / sum(&v_many),
+    );
+    eprintln!(
+        "boosted pixels {boosted:?}: predicted V falls {predicted_fall:.2}x, measured \
+         {measured_fall:.2}x (32 passes each)"
+    );
+    // Each measured sum has ~25 % standard error (32 passes, 2 pixels): a fall within a
+    // factor 1.6 of the predicted one.
+    let r = predicted_fall / measured_fall;
+    assert!((1.0 / 1.6..1.6).contains(&r), "predicted over measured fall {r:.2}");
+}

@@ -19,6 +19,9 @@ pub enum Domain {
     /// The per-pass layout of a pixel's camera samples (the stratified sampler's strata and
     /// permutations), apart from each sample's own camera stream.
     PixelPattern = 6,
+    /// The further direct-light points of a camera sample (`direct_boost`), apart from its
+    /// own camera stream so that the rest of the sample is the same numbers with or without.
+    DirectSamples = 7,
 }
 
 /// A deterministic random stream: a PCG (128-bit MCG, XSL-RR output) whose state is a hash of

@@ -82,6 +82,19 @@ pub(crate) struct Job {
     /// The weighted parts of the value under each candidate factor of `corrected-balance`'s
     /// pilot (only when [`Mix::pilot`]; direct light at x₀ is not in it).
     pub(crate) pilot: CandidateSums,
+    /// Further points where direct light at x₀ is evaluated (`direct_boost`), if any.
+    pub(crate) direct_extra: Option<DirectExtra>,
+}
+
+/// The further direct-light points of one camera sample (crate::direct): `count` uniform
+/// points of the region `corner + [0, size)` of the image (pixels), which is the part of the
+/// pixel that the sample itself is uniform over, from their own stream.
+#[derive(Clone, Debug)]
+pub(crate) struct DirectExtra {
+    pub(crate) count: u32,
+    pub(crate) corner: [f32; 2],
+    pub(crate) size: [f32; 2],
+    pub(crate) rng: Rng,
 }
 
 /// Room for the state of a batch of samples between their rays and their gathers, reused from
@@ -323,15 +336,21 @@ impl<'a> Mix<'a> {
         let scene = self.scene;
         let cam = &scene.camera();
         let dir = cam.ray_direction(job.x, job.y);
-        let Some(hit0) = scene
+        let hit0 = scene
             .geometry()
-            .intersect(cam.position(), dir, f32::INFINITY)
-        else {
+            .intersect(cam.position(), dir, f32::INFINITY);
+        let u = -dir;
+        let sh0 = hit0.map(|hit| scene.shade(&hit, u));
+        let direct = sh0.as_ref().map_or(Vec3::ZERO, |sh| scene.direct(sh, u));
+        job.out.direct = match &mut job.direct_extra {
+            // The mean of L₀ over the sample's point and the further ones, whether or not
+            // the sample's own ray meets anything.
+            Some(extra) => extra_direct(scene, direct, extra),
+            None => direct.as_dvec3(),
+        };
+        let Some(sh0) = sh0 else {
             return;
         };
-        let u = -dir;
-        let sh0 = scene.shade(&hit0, u);
-        job.out.direct = scene.direct(&sh0, u).as_dvec3();
         let Some(x0) = self.first_vertex_shaded(sh0, u) else {
             return;
         };
@@ -544,4 +563,26 @@ impl<'a> Mix<'a> {
 pub fn scene_default_radius(scene: &Scene) -> f32 {
     let (lo, hi) = scene.geometry().bounds();
     bdpm_settings::default_radius((hi - lo).max_element())
+}
+
+/// The mean of L₀ at x₀ over a camera sample's own point (`own`, W·m⁻²·sr⁻¹) and its
+/// further points `extra`, each a primary ray and shadow rays (none if it meets nothing).
+fn extra_direct(scene: &Scene, own: Vec3, extra: &mut DirectExtra) -> DVec3 {
+    let cam = scene.camera();
+    let mut sum = own.as_dvec3();
+    for _ in 0..extra.count {
+        let [a, b] = extra.rng.uniform2();
+        let dir = cam.ray_direction(
+            extra.corner[0] + a * extra.size[0],
+            extra.corner[1] + b * extra.size[1],
+        );
+        if let Some(hit) = scene
+            .geometry()
+            .intersect(cam.position(), dir, f32::INFINITY)
+        {
+            let sh = scene.shade(&hit, -dir);
+            sum += scene.direct(&sh, -dir).as_dvec3();
+        }
+    }
+    sum / (extra.count + 1) as f64
 }

@@ -12,6 +12,7 @@
 pub mod bdpm;
 mod connect;
 mod correction;
+mod direct;
 mod film;
 mod inputs;
 mod light;
@@ -28,6 +29,7 @@ mod weightmap;
 pub use bdpm::{Techniques, WeightStats, scene_default_radius};
 pub use bdpm_mis::NoiseModel;
 pub use correction::{CANDIDATES, Correction, PILOT_PASSES, pilot_seed};
+pub use direct::DirectSamples;
 pub use film::{Film, PassSums, PassValue};
 pub use memory::{MemoryEstimate, MemoryItem, PILOT_PHOTONS, estimate_memory, human_bytes};
 pub use predict::{JITTER_RAYS, Prediction};

@@ -291,8 +291,10 @@ impl Renderer<'_> {
             c.lookup(centre.sh.prim, centre.sh.p, centre.u).0 as f64
         });
         let strata = pixel_strata(self.settings());
-        let (mut sum, mut sum_sq, mut within, mut previous, mut cell) =
-            (0.0, 0.0, 0.0, 0.0, (0, 0));
+        // Sums over the rays of (L₀, L_d) and of their products, and the same over the pairs'
+        // half squared differences: the pixel's `direct_boost` M divides L₀'s share.
+        let (mut sum, mut sum_sq, mut within) = ([0.0; 2], [0.0; 3], [0.0; 3]);
+        let (mut previous, mut cell) = ([0.0; 2], (0, 0));
         for m in 0..JITTER_RAYS {
             let mut rng = Rng::new(seed, Domain::PixelTable, [pixel, m as u64, 2]);
             let mut jitter = rng.uniform2();
@@ -309,7 +311,7 @@ impl Renderer<'_> {
             let value = scene
                 .geometry()
                 .intersect(cam.position(), dir, f32::INFINITY)
-                .map_or(0.0, |hit| {
+                .map_or([0.0; 2], |hit| {
                     let u = -dir;
                     let sh = scene.shade(&hit, u);
                     let direct = luminance(scene.direct(&sh, u)) as f64;
@@ -322,22 +324,40 @@ impl Renderer<'_> {
                         Some(c) => c.lookup(hit.prim, hit.p, u).0 as f64,
                         None => 0.0,
                     };
-                    direct + ld
+                    [direct, ld]
                 });
-            sum += value;
-            sum_sq += value * value;
+            let [d, l] = value;
+            sum[0] += d;
+            sum[1] += l;
+            sum_sq[0] += d * d;
+            sum_sq[1] += l * l;
+            sum_sq[2] += d * l;
             if m % 2 == 1 {
-                within += 0.5 * (value - previous).powi(2);
+                let (dd, dl) = (d - previous[0], l - previous[1]);
+                within[0] += 0.5 * dd * dd;
+                within[1] += 0.5 * dl * dl;
+                within[2] += 0.5 * dd * dl;
             }
             previous = value;
         }
+        // A sample's value is the mean of L₀ over M points of its region plus L_d at its own:
+        // Var = Var(L₀)/M + Var(L_d) + 2·Cov(L₀, L_d)/M.
+        let inv_m = 1.0 / self.direct_samples().map_or(1, |d| d.at(x, y)) as f64;
+        let combine = |[dd, ll, dl]: [f64; 3]| dd * inv_m + ll + 2.0 * dl * inv_m;
         let m = JITTER_RAYS as f64;
         match strata {
             // The mean variance within a cell: N_B stratified samples, one per cell, have a
             // mean whose variance is that over N_B (falling faster than 1/N_B at an edge,
             // which crosses few cells).
-            Some(_) => within / (m / 2.0),
-            None => ((sum_sq - sum * sum / m) / (m - 1.0)).max(0.0),
+            Some(_) => combine(within) / (m / 2.0),
+            None => {
+                let moments = [
+                    sum_sq[0] - sum[0] * sum[0] / m,
+                    sum_sq[1] - sum[1] * sum[1] / m,
+                    sum_sq[2] - sum[0] * sum[1] / m,
+                ];
+                (combine(moments) / (m - 1.0)).max(0.0)
+            }
         }
     }
 }

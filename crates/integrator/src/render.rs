@@ -10,9 +10,12 @@ use bdpm_cache::{CacheSettings, RadianceCache};
 use bdpm_mis::{Budget, Heuristic, NoiseModel};
 use bdpm_photon::{PhotonMap, TraceOptions};
 
-use crate::bdpm::{BATCH, Job, Mix, Slots, Techniques, WeightStats, scene_default_radius};
+use crate::bdpm::{
+    BATCH, DirectExtra, Job, Mix, Slots, Techniques, WeightStats, scene_default_radius,
+};
 use crate::connect::Splats;
 use crate::correction::{CandidateSums, Correction, PILOT_PASSES, pilot_seed};
+use crate::direct::DirectSamples;
 use crate::sampler::PixelSamples;
 use crate::stage::Stage;
 use crate::table::{self, PixelTable, TableSpec};
@@ -173,6 +176,8 @@ pub struct Renderer<'a> {
     table: Option<PixelTable>,
     /// `corrected-balance`'s per-pixel factors.
     correction: Option<Correction>,
+    /// Direct-light samples per camera sample, per pixel (BDPM modes; `None`: one everywhere).
+    direct: Option<DirectSamples>,
     probe: Option<&'a dyn StageProbe>,
 }
 
@@ -213,10 +218,12 @@ impl<'a> Renderer<'a> {
             cache: None,
             table: None,
             correction: None,
+            direct: None,
             probe: None,
         };
         if let Some(h) = renderer.heuristic {
             renderer.prepare(h);
+            renderer.allocate_direct();
         }
         Ok(renderer)
     }
@@ -288,6 +295,34 @@ impl<'a> Renderer<'a> {
         if needs.balance_correction {
             self.build_correction();
         }
+    }
+
+    /// Fixes each pixel's direct-light samples per camera sample (crate::direct) when the
+    /// settings allow more than one; reported as a stage only when some pixel takes more.
+    fn allocate_direct(&mut self) {
+        let start = std::time::Instant::now();
+        self.direct = DirectSamples::allocate(self.scene, &self.settings);
+        if let Some(d) = &self.direct {
+            self.stages.push(StageReport {
+                stage: Stage::DirectSamples,
+                seconds: start.elapsed().as_secs_f64(),
+                bytes: d.bytes(),
+                detail: format!(
+                    "{} pixels take up to {} direct-light samples per camera sample (at most {}): \
+                     {:.4} more per camera sample over the image",
+                    d.boosted(),
+                    d.largest(),
+                    self.settings.direct_boost,
+                    d.extra_per_sample()
+                ),
+            });
+        }
+    }
+
+    /// The direct-light samples per camera sample of each pixel, when some pixel takes more
+    /// than one.
+    pub fn direct_samples(&self) -> Option<&DirectSamples> {
+        self.direct.as_ref()
     }
 
     /// Learns `corrected-balance`'s per-pixel factors from [`PILOT_PASSES`] passes of
@@ -649,6 +684,7 @@ impl Renderer<'_> {
         let t_camera = std::time::Instant::now();
         let (w, h) = (s.width as usize, s.height as usize);
         let record = self.techniques;
+        let direct = self.direct.as_ref();
         let render_row = |y: usize| -> Row {
             let mut row = Row::default();
             let mut slots = Slots::default();
@@ -659,6 +695,7 @@ impl Renderer<'_> {
                 let mut tsum = Techniques::default();
                 let mut csum = CandidateSums::default();
                 let weigher = weigher_at(x as u32, y as u32);
+                let direct_m = direct.map_or(1, |d| d.at(x as u32, y as u32));
                 layout.start(pass, pixel);
                 for first in (0..s.spp).step_by(BATCH) {
                     let count = (s.spp - first).min(BATCH as u32);
@@ -666,6 +703,15 @@ impl Renderer<'_> {
                         // Past N_B the slot is unused; sample 0's numbers fill it.
                         let k = (first + i as u32).min(s.spp - 1);
                         let c = layout.sample(k);
+                        let direct_extra = (direct_m > 1).then(|| {
+                            let (corner, size) = layout.region(k);
+                            DirectExtra {
+                                count: direct_m - 1,
+                                corner: [x as f32 + corner[0], y as f32 + corner[1]],
+                                size,
+                                rng: layout.direct_stream(k),
+                            }
+                        });
                         Job {
                             x: x as f32 + c.offset[0],
                             y: y as f32 + c.offset[1],
@@ -673,6 +719,7 @@ impl Renderer<'_> {
                             bdf: c.bdf,
                             out: Techniques::default(),
                             pilot: CandidateSums::default(),
+                            direct_extra,
                         }
                     });
                     let jobs = &mut jobs[..count as usize];

@@ -168,6 +168,30 @@ impl PixelSamples {
     }
 }
 
+impl PixelSamples {
+    /// The part of the pixel that sample `k` (< N_B) is uniform over: (its corner, its size),
+    /// offsets in the pixel. Its stratum under the stratified sampler, else the whole pixel.
+    pub(crate) fn region(&self, k: u32) -> ([f32; 2], [f32; 2]) {
+        match self.sampler {
+            Sampler::Independent => ([0.0, 0.0], [1.0, 1.0]),
+            _ => {
+                let (nx, ny) = self.grid;
+                let (sx, sy) = (1.0 / nx as f32, 1.0 / ny as f32);
+                ([(k % nx) as f32 * sx, (k / nx) as f32 * sy], [sx, sy])
+            }
+        }
+    }
+
+    /// The stream of sample `k`'s further direct-light points (`direct_boost`).
+    pub(crate) fn direct_stream(&self, k: u32) -> Rng {
+        Rng::new(
+            self.seed,
+            Domain::DirectSamples,
+            [self.pass as u64, self.pixel, k as u64],
+        )
+    }
+}
+
 /// A uniform point of cell (i, j) of an nx × ny grid of the unit square.
 #[inline]
 fn jittered(i: u32, nx: u32, j: u32, ny: u32, [u, v]: [f32; 2]) -> [f32; 2] {

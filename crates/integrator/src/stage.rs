@@ -27,6 +27,8 @@ pub enum Stage {
     PixelFootprints,
     /// `corrected-balance`'s per-pixel factors, learnt once from a pilot of `balance`.
     BalanceCorrection,
+    /// How many direct-light samples each pixel takes (`direct_boost`), fixed once.
+    DirectSamples,
 }
 
 impl Stage {
@@ -42,6 +44,7 @@ impl Stage {
             Stage::PixelTable => "pixel table",
             Stage::PixelFootprints => "pixel footprints",
             Stage::BalanceCorrection => "balance correction",
+            Stage::DirectSamples => "direct samples",
         }
     }
 }

@@ -34,6 +34,47 @@ pub struct CompareArgs {
     /// sign) from noise.
     #[arg(long, value_name = "BLOCK")]
     blocks: Option<u32>,
+    /// Also say how much of the squared error (luminance, the second file as reference, its
+    /// own error included) the N pixels of largest squared error hold, and where they lie:
+    /// whether a few pixels decide the rel. RMSE.
+    #[arg(long, value_name = "N")]
+    worst: Option<usize>,
+}
+
+/// Where the squared error of an image against a reference is concentrated: the share of
+/// Σ (a − b)² that the `n` pixels of largest (a − b)² hold, and the bounding box of those
+/// pixels, (first column, first row, last column, last row), for an image `width` wide.
+/// `None` when there is no error at all or no pixel.
+pub(crate) fn worst_pixels(
+    a: &[f64],
+    b: &[f64],
+    width: usize,
+    n: usize,
+) -> Option<(f64, [usize; 4])> {
+    let mut e: Vec<(f64, usize)> = a
+        .iter()
+        .zip(b)
+        .enumerate()
+        .map(|(i, (x, y))| ((x - y) * (x - y), i))
+        .collect();
+    let total: f64 = e.iter().map(|&(v, _)| v).sum();
+    if total.is_nan() || total <= 0.0 || n == 0 || width == 0 {
+        return None;
+    }
+    e.sort_by(|x, y| y.0.total_cmp(&x.0));
+    let top = &e[..n.min(e.len())];
+    let share = top.iter().map(|&(v, _)| v).sum::<f64>() / total;
+    let mut bbox = [usize::MAX, usize::MAX, 0, 0];
+    for &(_, i) in top {
+        let (x, y) = (i % width, i / width);
+        bbox = [
+            bbox[0].min(x),
+            bbox[1].min(y),
+            bbox[2].max(x),
+            bbox[3].max(y),
+        ];
+    }
+    Some((share, bbox))
 }
 
 /// What a comparison found, per channel over pixel luminance (Rec. 709).
@@ -252,6 +293,14 @@ pub(crate) fn run(args: CompareArgs) -> CliResult<ExitCode> {
             ))
         );
     }
+    if let Some(n) = args.worst
+        && let Some((share, [x0, y0, x1, y1])) = worst_pixels(&a_lum, &b_lum, a.width as usize, n)
+    {
+        say!(
+            "the {n} pixels of largest squared error hold {:.1}% of it (columns {x0}-{x1}, rows {y0}-{y1})",
+            100.0 * share
+        );
+    }
     match c.within {
         Some(f) => say!(
             "{:.2}% of pixels within {} combined standard errors",
@@ -284,6 +333,22 @@ mod tests {
         // ε = 0.01: relMSE = (0.1 − 0.01)/1.01.
         assert!((e.rel_mse - 0.09 / 1.01).abs() < 1e-9);
         assert_eq!(error_against(&[1.0], &[0.0], None), None);
+    }
+
+    #[test]
+    fn worst_pixels_share_and_place() {
+        // 3 × 2 pixels; squared errors 0, 1, 4 / 0, 0, 5: total 10; the two worst (5 at
+        // (2, 1) and 4 at (2, 0)) hold 90 %.
+        let b = [0.0; 6];
+        let a = [0.0, 1.0, 2.0, 0.0, 0.0, -(5.0f64.sqrt())];
+        let (share, bbox) = worst_pixels(&a, &b, 3, 2).unwrap();
+        assert!((share - 0.9).abs() < 1e-12);
+        assert_eq!(bbox, [2, 0, 2, 1]);
+        let (share, bbox) = worst_pixels(&a, &b, 3, 3).unwrap();
+        assert!((share - 1.0).abs() < 1e-12);
+        assert_eq!(bbox, [1, 0, 2, 1]);
+        assert_eq!(worst_pixels(&b, &b, 3, 2), None);
+        assert_eq!(worst_pixels(&a, &b, 3, 0), None);
     }
 
     #[test]

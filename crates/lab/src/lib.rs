@@ -55,7 +55,7 @@ pub fn run(command: Command) -> Result<ExitCode, String> {
 }
 
 /// The keys a `--modes` entry may set ([`Variant`]).
-const KEYS: [&str; 8] = [
+const KEYS: [&str; 9] = [
     "sampler",
     "light_tracing",
     "radius",
@@ -64,12 +64,13 @@ const KEYS: [&str; 8] = [
     "cache_photons",
     "cache_bins",
     "pixel_table_rays",
+    "direct_boost",
 ];
 
 /// One entry of `--modes`: a mode, and settings of its own on top of the shared ones
 /// (`MODE[:KEY=VALUE]…` with KEY one of `sampler`, `radius` (metres, or pixel footprints as
-/// `1.2px`), `spp`, `photons`, and the weights' preparation `cache_photons`, `cache_bins`,
-/// `pixel_table_rays`), so that configurations are compared side by side in one run, e.g.
+/// `1.2px`), `spp`, `photons`, the weights' preparation `cache_photons`, `cache_bins`,
+/// `pixel_table_rays`, and `direct_boost`), so that configurations are compared side by side in one run, e.g.
 /// `balance:sampler=independent,balance,optimal-path:radius=0.2px:cache_photons=500000`.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Variant {
@@ -140,6 +141,13 @@ impl Variant {
                 "pixel_table_rays" => {
                     settings.pixel_table_rays =
                         Some(value.parse().map_err(|_| bad("a whole number of rays"))?)
+                }
+                "direct_boost" => {
+                    settings.direct_boost = Some(
+                        value
+                            .parse()
+                            .map_err(|_| bad("a whole number of samples"))?,
+                    )
                 }
                 _ => {
                     return Err(bad(&format!(

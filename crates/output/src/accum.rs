@@ -732,7 +732,7 @@ mod tests {
             settings_hash(&base),
             format!("{:016x}", fnv1a(json.as_bytes()))
         );
-        assert_eq!(settings_hash(&base), "b09ca13b8d4528f6");
+        assert_eq!(settings_hash(&base), "113737363703d83e");
         let changed = |f: &dyn Fn(&mut RenderSettings)| {
             let mut s = base.clone();
             f(&mut s);
@@ -746,7 +746,7 @@ mod tests {
         let (s, e) = changed(&|s| s.seed = 2);
         assert_ne!(s, settings);
         assert_eq!(e, estimator);
-        let relevant: [&dyn Fn(&mut RenderSettings); 7] = [
+        let relevant: [&dyn Fn(&mut RenderSettings); 9] = [
             &|s| s.spp = 5,
             &|s| s.light_tracing = true,
             &|s| s.mode = Mode::Path,
@@ -754,6 +754,8 @@ mod tests {
             &|s| s.clamp_weights = true,
             &|s| s.radius_px = Some(1.0),
             &|s| s.sampler = Sampler::Independent,
+            &|s| s.direct_boost = 1,
+            &|s| s.direct_boost = 4,
         ];
         for f in relevant {
             let (s, e) = changed(f);

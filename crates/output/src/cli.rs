@@ -100,6 +100,10 @@ pub struct Overrides {
     /// noise model with jitter, else 64).
     #[arg(long, allow_negative_numbers = true, value_parser = whole::<u32>)]
     pub pixel_table_rays: Option<u32>,
+    /// The most direct-light samples per camera sample where the direct light varies steeply
+    /// over a pixel (default 16; 1 turns the extra samples off).
+    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u32>)]
+    pub direct_boost: Option<u32>,
     /// Worker threads (default: all cores; at most 8 per core, and at least 64 allowed).
     #[arg(long, allow_negative_numbers = true, value_parser = whole::<usize>)]
     pub threads: Option<usize>,
@@ -255,6 +259,7 @@ impl Overrides {
             cache_photons: self.cache_photons,
             cache_bins: self.cache_bins,
             pixel_table_rays: self.pixel_table_rays,
+            direct_boost: self.direct_boost,
             ..PartialSettings::default()
         }
     }
@@ -302,6 +307,9 @@ impl Overrides {
         }
         if let Some(n) = o.pixel_table_rays {
             push("--pixel-table-rays", n.to_string());
+        }
+        if let Some(n) = o.direct_boost {
+            push("--direct-boost", n.to_string());
         }
         if o.no_jitter {
             v.push("--no-jitter".into());

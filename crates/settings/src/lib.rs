@@ -293,6 +293,33 @@ pub struct RenderSettings {
         serde(default, skip_serializing_if = "std::ops::Not::not")
     )]
     pub light_tracing: bool,
+    /// The most direct-light samples per camera sample, M_max (1: off). Where the direct light
+    /// L₀(x₀) varies steeply over a pixel (a surface close to a point light), each camera
+    /// sample of the BDPM mix also evaluates L₀ at up to M_max − 1 further points of its own
+    /// stratum of the pixel: the pixel-integration noise of L₀ falls there for a primary and a
+    /// shadow ray each. How many a pixel gets is fixed before the passes, from the scene alone
+    /// (`bdpm_integrator`'s `direct` module), so every pass stays unbiased and independent.
+    /// Serialised only when not 1, so that the settings hash of every render without it (and
+    /// so its accumulation files) stays what it was; absent means 1.
+    #[cfg_attr(
+        feature = "serde",
+        serde(
+            default = "direct_boost_off",
+            skip_serializing_if = "is_direct_boost_off"
+        )
+    )]
+    pub direct_boost: u32,
+}
+
+/// [`RenderSettings::direct_boost`] of a serialised record that does not name it.
+#[cfg(feature = "serde")]
+fn direct_boost_off() -> u32 {
+    1
+}
+
+#[cfg(feature = "serde")]
+fn is_direct_boost_off(m: &u32) -> bool {
+    *m == 1
 }
 
 /// A/B rays per pixel when the footprint noise model weighs jittered samples: there N_eff is
@@ -315,6 +342,8 @@ pub mod limits {
     /// Most backward rays per pixel of the A/B pre-pass (256 times the default of 64). The
     /// pre-pass shows no progress, and 4·10⁹ rays per pixel would run for days.
     pub const MAX_PIXEL_TABLE_RAYS: u32 = 16384;
+    /// Most direct-light samples per camera sample ([`crate::RenderSettings::direct_boost`]).
+    pub const MAX_DIRECT_BOOST: u32 = 64;
 }
 
 /// Whether the `optimal*` weights are clamped to [0, 1], and why.
@@ -372,6 +401,8 @@ pub enum Setting {
     PixelTableRays,
     /// [`RenderSettings::light_tracing`].
     LightTracing,
+    /// [`RenderSettings::direct_boost`].
+    DirectBoost,
 }
 
 impl Setting {
@@ -393,6 +424,7 @@ impl Setting {
             Setting::CachePhotons => "cache_photons",
             Setting::PixelTableRays => "pixel_table_rays",
             Setting::LightTracing => "light_tracing",
+            Setting::DirectBoost => "direct_boost",
         }
     }
 
@@ -601,6 +633,12 @@ impl RenderSettings {
         if self.light_tracing && !self.pixel_jitter {
             return Err(SettingsError::LightTracingWithoutJitter);
         }
+        range(
+            Setting::DirectBoost,
+            self.direct_boost.into(),
+            1,
+            MAX_DIRECT_BOOST.into(),
+        )?;
         Ok(())
     }
 
@@ -634,6 +672,7 @@ impl RenderSettings {
             noise_model: self.noise_model.name(),
             sampler: self.sampler.name(),
             light_tracing: self.light_tracing,
+            direct_boost: self.direct_boost,
         }
     }
 }
@@ -667,9 +706,15 @@ impl Default for RenderSettings {
             noise_model: NoiseModel::Footprint,
             sampler: Sampler::Stratified,
             light_tracing: false,
+            // Only pixels close to a point light take more than one: on the Lambert box the
+            // ceiling above the light (docs/results.md, "Direct light near a light").
+            direct_boost: DEFAULT_DIRECT_BOOST,
         }
     }
 }
+
+/// [`RenderSettings::direct_boost`] of [`RenderSettings::default`].
+pub const DEFAULT_DIRECT_BOOST: u32 = 16;
 
 /// Photons per pass N_F of [`RenderSettings::default`].
 pub const DEFAULT_PHOTONS: u64 = 250_000;

@@ -54,6 +54,8 @@ pub struct PartialSettings {
     pub roulette_depth: Option<u32>,
     /// [`RenderSettings::light_tracing`].
     pub light_tracing: Option<bool>,
+    /// [`RenderSettings::direct_boost`].
+    pub direct_boost: Option<u32>,
     /// The render's default output file (a scene file's `output`). Not a render setting:
     /// [`PartialSettings::apply`] leaves it to the caller.
     pub output: Option<PathBuf>,
@@ -130,6 +132,7 @@ impl PartialSettings {
         set(&mut s.spp, self.spp);
         set(&mut s.cache_bins, self.cache_bins);
         set(&mut s.roulette_depth, self.roulette_depth);
+        set(&mut s.direct_boost, self.direct_boost);
         s.photons = self.photons.unwrap_or(s.photons);
         s.seed = self.seed.unwrap_or(s.seed);
         s.cache_photons = self.cache_photons.or(s.cache_photons);

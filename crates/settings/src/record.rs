@@ -49,6 +49,8 @@ pub struct SettingsRecord {
     pub sampler: &'static str,
     /// BDD=0's paths by light tracing instead of the merge at x₀.
     pub light_tracing: bool,
+    /// The most direct-light samples per camera sample (1: off).
+    pub direct_boost: u32,
 }
 
 impl SettingsRecord {
@@ -65,6 +67,7 @@ impl SettingsRecord {
             ("noise_model", self.noise_model.into()),
             ("sampler", self.sampler.into()),
             ("light_tracing", self.light_tracing.to_string()),
+            ("direct_boost", self.direct_boost.to_string()),
             ("radius_m", self.radius_m.to_string()),
             (
                 "radius_px",

@@ -386,6 +386,23 @@ fn a_duplicate_key_is_named() {
 }
 
 #[test]
+fn direct_boost_is_between_one_and_64() {
+    for bad in ["0", "65"] {
+        let m = error_of(&with(
+            "passes = 1",
+            &format!("passes = 1\ndirect_boost = {bad}"),
+        ));
+        assert!(m.contains("render.direct_boost"), "{bad}: {m}");
+    }
+    for good in ["1", "64"] {
+        let text = with("passes = 1", &format!("passes = 1\ndirect_boost = {good}"));
+        let loaded = load_scene_str(&text, Path::new("scenes"), Path::new("scenes/bad.toml"));
+        let boost = loaded.map(|l| l.settings.direct_boost);
+        assert_eq!(boost.ok(), good.parse().ok(), "{good}");
+    }
+}
+
+#[test]
 fn pixel_table_rays_are_capped() {
     let m = error_of(&with(
         "passes = 1",

@@ -1,0 +1,172 @@
+//! How many direct-light samples the camera samples of each pixel take
+//! ([`RenderSettings::direct_boost`]).
+//!
+//! Direct light L₀(x₀) is exact for a given x₀ (one shadow ray per point light), so its only
+//! noise is pixel integration: where x₀ is one of the pixel's points, L₀ varies with it. That
+//! is small almost everywhere, since stratification takes most of it, but not where a surface
+//! lies close to a point light: on the Lambert box the ceiling above the light falls off as
+//! 1/d² across each pixel's footprint (d = 6.8 cm, footprint 1.5 cm), and its ~100 pixels,
+//! 500 times brighter than the image's mean, hold a quarter of the image's per-pass variance
+//! (docs/results.md, "Direct light near a light"). There each camera sample also evaluates L₀
+//! at M − 1 further uniform points of its own stratum and takes the mean of its M values:
+//! that stratum's L₀ variance falls M-fold for M − 1 primary and shadow rays, no gathers.
+//!
+//! M per pixel is fixed before the passes from the scene alone: L₀'s luminance at four fixed
+//! points of the pixel (the centres of its quarters; no random numbers) gives its spread s
+//! over the pixel (their standard deviation, W·m⁻²·sr⁻¹), and M = ⌊s / (2·s_rms)⌋ clamped to
+//! [1, M_max], with s_rms the root mean square of s over the image. M ∝ s is the allocation
+//! that minimises Σ Jₚ/Mₚ for a given number of samples Σ Mₚ when a pixel's L₀ noise is
+//! Jₚ ∝ sₚ²; the scale 2·s_rms keeps the cost bounded whatever the scene: M > 1 needs
+//! s ≥ 4·s_rms, which at most P/16 of the P pixels have, and Σ (M − 1) ≤ Σ s/(2·s_rms) ≤ P/2
+//! (Cauchy–Schwarz), so at most half as many more direct-light samples as camera samples,
+//! each a primary and a shadow ray. On the Lambert box 102 pixels take more than one, and
+//! the image 0.9 % more direct-light samples. Since M depends on nothing random, every pass
+//! stays an unbiased, independent, identically distributed estimate, and the per-pass
+//! variance layer stays exact.
+
+use bdpm_bdf::luminance;
+use bdpm_scene::Scene;
+use bdpm_settings::RenderSettings;
+use rayon::prelude::*;
+
+/// The four fixed points of a pixel where L₀ is probed (offsets in the pixel, [0, 1)²).
+const PROBES: [[f32; 2]; 4] = [[0.25, 0.25], [0.75, 0.25], [0.25, 0.75], [0.75, 0.75]];
+
+/// M = ⌊s / (THRESHOLD·s_rms)⌋: a pixel takes more than one direct-light sample per camera
+/// sample when its spread of L₀ is at least twice this many times the image's RMS spread.
+pub(crate) const THRESHOLD: f64 = 2.0;
+
+/// Direct-light samples per camera sample, per pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DirectSamples {
+    width: u32,
+    /// M per pixel, row-major; every value in [1, M_max].
+    m: Vec<u8>,
+}
+
+impl DirectSamples {
+    /// The allocation for `scene` under `settings`: M per pixel as in the module's rule, or
+    /// `None` when nothing would take more than one (M_max = 1, no pixel jitter, or no pixel
+    /// above the threshold).
+    pub(crate) fn allocate(scene: &Scene, settings: &RenderSettings) -> Option<DirectSamples> {
+        if settings.direct_boost <= 1 || !settings.pixel_jitter {
+            return None;
+        }
+        let (w, h) = (settings.width, settings.height);
+        let spreads: Vec<f64> = (0..h)
+            .into_par_iter()
+            .flat_map_iter(|y| (0..w).map(move |x| spread(scene, x, y)))
+            .collect();
+        let m = allocation(&spreads, settings.direct_boost);
+        m.iter()
+            .any(|&m| m > 1)
+            .then_some(DirectSamples { width: w, m })
+    }
+
+    /// M of pixel (x, y).
+    #[inline]
+    pub fn at(&self, x: u32, y: u32) -> u32 {
+        self.m[(y as usize) * (self.width as usize) + x as usize] as u32
+    }
+
+    /// Pixels with M > 1.
+    pub fn boosted(&self) -> usize {
+        self.m.iter().filter(|&&m| m > 1).count()
+    }
+
+    /// Direct-light samples beyond one per camera sample, per camera sample of the image
+    /// (mean of M − 1 over the pixels).
+    pub fn extra_per_sample(&self) -> f64 {
+        self.m.iter().map(|&m| (m - 1) as f64).sum::<f64>() / self.m.len().max(1) as f64
+    }
+
+    /// The largest M of any pixel.
+    pub fn largest(&self) -> u32 {
+        self.m.iter().copied().max().unwrap_or(1) as u32
+    }
+
+    /// Bytes held.
+    pub fn bytes(&self) -> u64 {
+        self.m.len() as u64
+    }
+}
+
+/// The standard deviation of L₀'s luminance over the [`PROBES`] of pixel (x, y),
+/// W·m⁻²·sr⁻¹ (a probe that meets nothing counts as 0).
+fn spread(scene: &Scene, x: u32, y: u32) -> f64 {
+    let cam = scene.camera();
+    let values = PROBES.map(|[dx, dy]| {
+        let dir = cam.ray_direction(x as f32 + dx, y as f32 + dy);
+        scene
+            .geometry()
+            .intersect(cam.position(), dir, f32::INFINITY)
+            .map_or(0.0, |hit| {
+                let sh = scene.shade(&hit, -dir);
+                luminance(scene.direct(&sh, -dir)) as f64
+            })
+    });
+    let mean = values.iter().sum::<f64>() / 4.0;
+    (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / 4.0).sqrt()
+}
+
+/// M per pixel from the pixels' spreads: ⌊s / (THRESHOLD·s_rms)⌋ clamped to [1, `most`]
+/// (all 1 when every spread is 0 or a spread is not finite).
+pub(crate) fn allocation(spreads: &[f64], most: u32) -> Vec<u8> {
+    let most = most.clamp(1, u8::MAX as u32) as f64;
+    let mean_sq = spreads.iter().map(|s| s * s).sum::<f64>() / spreads.len().max(1) as f64;
+    let scale = THRESHOLD * mean_sq.sqrt();
+    if !(scale.is_finite() && scale > 0.0) {
+        return vec![1; spreads.len()];
+    }
+    spreads
+        .iter()
+        .map(|s| (s / scale).floor().clamp(1.0, most) as u8)
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_the_outliers_take_more_and_in_proportion() {
+        // 1000 pixels of spread 1 and two of spread 100 and 300: s_rms = √((1000 + 10⁴ +
+        // 9·10⁴)/1002) = 10.04, scale 20.08, so M = ⌊100/20.08⌋ = 4 and ⌊300/20.08⌋ = 14.
+        let mut s = vec![1.0; 1000];
+        s.push(100.0);
+        s.push(300.0);
+        let m = allocation(&s, 16);
+        assert!(m[..1000].iter().all(|&m| m == 1));
+        assert_eq!(&m[1000..], &[4, 14]);
+        // Clamped to M_max.
+        assert_eq!(&allocation(&s, 8)[1000..], &[4, 8]);
+        assert!(allocation(&s, 1).iter().all(|&m| m == 1));
+    }
+
+    #[test]
+    fn flat_or_broken_input_takes_one_everywhere() {
+        assert!(allocation(&[0.0; 50], 16).iter().all(|&m| m == 1));
+        assert!(allocation(&[1.0; 50], 16).iter().all(|&m| m == 1));
+        assert!(allocation(&[1.0, f64::NAN], 16).iter().all(|&m| m == 1));
+        assert!(allocation(&[], 16).is_empty());
+    }
+
+    #[test]
+    fn extra_samples_stay_bounded() {
+        // The bounds of the module's text, Σ (M − 1) ≤ P/2 and at most P/16 pixels with M > 1,
+        // on 1000 pixels of which n have spread x and the rest 1, for any M_max.
+        let mut boosted_somewhere = false;
+        for n in [1, 3, 10, 30, 62, 100, 300, 1000] {
+            for x in [1.0, 3.0, 10.0, 30.0, 100.0, 1e4, 1e8] {
+                let s: Vec<f64> = (0..1000).map(|i| if i < n { x } else { 1.0 }).collect();
+                let m = allocation(&s, 255);
+                let extra: u64 = m.iter().map(|&m| (m - 1) as u64).sum();
+                let boosted = m.iter().filter(|&&m| m > 1).count();
+                assert!(extra * 2 <= 1000, "n = {n}, x = {x}: {extra} extra");
+                assert!(boosted * 16 <= 1000, "n = {n}, x = {x}: {boosted} boosted");
+                boosted_somewhere |= boosted > 0;
+            }
+        }
+        assert!(boosted_somewhere);
+    }
+}
