@@ -233,9 +233,15 @@ fn direct_boost_lowers_the_predicted_jitter_where_it_samples_more() {
         let renderer = Renderer::new(&scene, &s)
             .expect("valid settings")
             .with_model_inputs();
-        let p = renderer.predict_variance().expect("balance has a noise model");
+        let p = renderer
+            .predict_variance()
+            .expect("balance has a noise model");
         let m: Vec<u32> = (0..256)
-            .map(|i| renderer.direct_samples().map_or(1, |d| d.at(i % 16, i / 16)))
+            .map(|i| {
+                renderer
+                    .direct_samples()
+                    .map_or(1, |d| d.at(i % 16, i / 16))
+            })
             .collect();
         let film = bdpm_suite::render_with(&renderer);
         let measured: Vec<f64> = film.pass_variance().iter().map(|c| lum(*c)).collect();
@@ -272,5 +278,8 @@ fn direct_boost_lowers_the_predicted_jitter_where_it_samples_more() {
     // Each measured sum has ~25 % standard error (32 passes, 2 pixels): a fall within a
     // factor 1.6 of the predicted one.
     let r = predicted_fall / measured_fall;
-    assert!((1.0 / 1.6..1.6).contains(&r), "predicted over measured fall {r:.2}");
+    assert!(
+        (1.0 / 1.6..1.6).contains(&r),
+        "predicted over measured fall {r:.2}"
+    );
 }
