@@ -14,8 +14,20 @@ fn bits(film: &bdpm_integrator::Film) -> Vec<u64> {
 #[test]
 fn images_do_not_depend_on_the_thread_count() {
     let (scene, settings) = load("preprint/cornell-glossy.toml", 24, 24);
-    for mode in ["path", "light", "optimal", "balance", "corrected-balance"] {
-        let s = with_mode(&settings, mode, 2, 2, 20_000);
+    // `balance` once more with the extra direct-light samples of the pixels near the light.
+    let modes = [
+        ("path", 1),
+        ("light", 1),
+        ("optimal", 1),
+        ("balance", 1),
+        ("corrected-balance", 1),
+        ("balance", 16),
+    ];
+    for (mode, direct_boost) in modes {
+        let s = bdpm_integrator::RenderSettings {
+            direct_boost,
+            ..with_mode(&settings, mode, 2, 2, 20_000)
+        };
         let render_on = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
@@ -23,6 +35,11 @@ fn images_do_not_depend_on_the_thread_count() {
                 .unwrap();
             pool.install(|| {
                 let renderer = Renderer::new(&scene, &s).unwrap();
+                assert_eq!(
+                    renderer.direct_samples().is_some(),
+                    direct_boost > 1,
+                    "{mode}: pixels near the light take more direct-light samples"
+                );
                 render_with(&renderer)
             })
         };
