@@ -252,12 +252,11 @@ fn direct_boost_lowers_the_predicted_jitter_where_it_samples_more() {
     assert!(m_one.iter().all(|&m| m == 1));
     let boosted: Vec<usize> = (0..256).filter(|&i| m[i] > 1).collect();
     assert!(!boosted.is_empty(), "the spot takes more than one sample");
-    for i in 0..256 {
-        if m[i] > 1 {
+    for (i, &mi) in m.iter().enumerate() {
+        if mi > 1 {
             assert!(
                 many.t_jitter[i] < 0.5 * one.t_jitter[i],
-                "pixel {i}, M {}: T_jitter {} against {}",
-                m[i],
+                "pixel {i}, M {mi}: T_jitter {} against {}",
                 many.t_jitter[i],
                 one.t_jitter[i]
             );
