@@ -221,42 +221,47 @@ fn light_traced_glossy_mixes_agree_with_the_path_reference() {
 }
 
 /// `direct_boost` (the integrator's `direct` module): the pixel that holds the ceiling spot
-/// above the light takes more direct-light samples per camera sample; the render stays
-/// unbiased against the light reference, and that pixel's per-pass variance falls. The same
-/// render with one direct-light sample (the scene file's setting) is the comparison.
+/// above the light takes more direct-light samples per camera sample, in the mix and in the
+/// `light` reference's direct term; each render stays unbiased against the light reference
+/// (one direct-light sample), and that pixel's per-pass variance falls. The same render with
+/// one direct-light sample (the scene file's setting) is the comparison.
 #[test]
 fn direct_boost_is_unbiased_and_quiets_the_ceiling_spot() {
     let (scene, _) = scene();
-    let mut s = settings_for("balance");
-    assert_eq!(s.direct_boost, 1, "the preprint file's setting");
-    let plain = render(scene, &s);
-    s.direct_boost = 16;
-    let renderer = Renderer::new(scene, &s).unwrap_or_else(|e| panic!("{e}"));
-    let direct = renderer
-        .direct_samples()
-        .expect("the ceiling spot takes more than one direct-light sample");
-    let boosted: Vec<usize> = (0..RES * RES)
-        .filter(|&i| direct.at(i % RES, i / RES) > 1)
-        .map(|i| i as usize)
-        .collect();
-    eprintln!(
-        "boosted pixels {boosted:?}, M {:?}",
-        boosted
-            .iter()
-            .map(|&i| direct.at(i as u32 % RES, i as u32 / RES))
-            .collect::<Vec<_>>()
-    );
-    assert!(!boosted.is_empty() && boosted.len() <= 4, "{boosted:?}");
-    let film = render_with(&renderer);
-    check("balance, direct_boost 16", &film).unwrap();
-    let variance = |f: &Film| -> f64 {
-        let v = f.pass_variance();
-        boosted.iter().map(|&i| lum(v[i].as_vec3()) as f64).sum()
-    };
-    let (v_boost, v_plain) = (variance(&film), variance(&plain));
-    eprintln!("per-pass variance of the boosted pixels: {v_boost:.4e} against {v_plain:.4e}");
-    assert!(
-        v_boost < 0.5 * v_plain,
-        "{v_boost:.4e} against {v_plain:.4e}"
-    );
+    for mode in ["balance", "light"] {
+        let mut s = settings_for(mode);
+        assert_eq!(s.direct_boost, 1, "the preprint file's setting");
+        let plain = render(scene, &s);
+        s.direct_boost = 16;
+        let renderer = Renderer::new(scene, &s).unwrap_or_else(|e| panic!("{e}"));
+        let direct = renderer
+            .direct_samples()
+            .expect("the ceiling spot takes more than one direct-light sample");
+        let boosted: Vec<usize> = (0..RES * RES)
+            .filter(|&i| direct.at(i % RES, i / RES) > 1)
+            .map(|i| i as usize)
+            .collect();
+        eprintln!(
+            "{mode}: boosted pixels {boosted:?}, M {:?}",
+            boosted
+                .iter()
+                .map(|&i| direct.at(i as u32 % RES, i as u32 / RES))
+                .collect::<Vec<_>>()
+        );
+        assert!(!boosted.is_empty() && boosted.len() <= 4, "{boosted:?}");
+        let film = render_with(&renderer);
+        check(&format!("{mode}, direct_boost 16"), &film).unwrap();
+        let variance = |f: &Film| -> f64 {
+            let v = f.pass_variance();
+            boosted.iter().map(|&i| lum(v[i].as_vec3()) as f64).sum()
+        };
+        let (v_boost, v_plain) = (variance(&film), variance(&plain));
+        eprintln!(
+            "{mode}: per-pass variance of the boosted pixels {v_boost:.4e} against {v_plain:.4e}"
+        );
+        assert!(
+            v_boost < 0.5 * v_plain,
+            "{mode}: {v_boost:.4e} against {v_plain:.4e}"
+        );
+    }
 }

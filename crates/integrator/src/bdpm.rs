@@ -11,6 +11,7 @@ use bdpm_photon::{PhotonMap, PhotonQuery};
 use bdpm_scene::{Scene, Shading};
 
 use crate::correction::CandidateSums;
+use crate::direct::DirectExtra;
 use crate::inputs::Arrival;
 use crate::table::PixelWeights;
 use bdpm_scene::WeightVertex;
@@ -84,17 +85,6 @@ pub(crate) struct Job {
     pub(crate) pilot: CandidateSums,
     /// Further points where direct light at x₀ is evaluated (`direct_boost`), if any.
     pub(crate) direct_extra: Option<DirectExtra>,
-}
-
-/// The further direct-light points of one camera sample (crate::direct): `count` uniform
-/// points of the region `corner + [0, size)` of the image (pixels), which is the part of the
-/// pixel that the sample itself is uniform over, from their own stream.
-#[derive(Clone, Debug)]
-pub(crate) struct DirectExtra {
-    pub(crate) count: u32,
-    pub(crate) corner: [f32; 2],
-    pub(crate) size: [f32; 2],
-    pub(crate) rng: Rng,
 }
 
 /// Room for the state of a batch of samples between their rays and their gathers, reused from
@@ -345,7 +335,7 @@ impl<'a> Mix<'a> {
         job.out.direct = match &mut job.direct_extra {
             // The mean of L₀ over the sample's point and the further ones, whether or not
             // the sample's own ray meets anything.
-            Some(extra) => extra_direct(scene, direct, extra),
+            Some(extra) => extra.mean_with(scene, direct),
             None => direct.as_dvec3(),
         };
         let Some(sh0) = sh0 else {
@@ -563,26 +553,4 @@ impl<'a> Mix<'a> {
 pub fn scene_default_radius(scene: &Scene) -> f32 {
     let (lo, hi) = scene.geometry().bounds();
     bdpm_settings::default_radius((hi - lo).max_element())
-}
-
-/// The mean of L₀ at x₀ over a camera sample's own point (`own`, W·m⁻²·sr⁻¹) and its
-/// further points `extra`, each a primary ray and shadow rays (none if it meets nothing).
-fn extra_direct(scene: &Scene, own: Vec3, extra: &mut DirectExtra) -> DVec3 {
-    let cam = scene.camera();
-    let mut sum = own.as_dvec3();
-    for _ in 0..extra.count {
-        let [a, b] = extra.rng.uniform2();
-        let dir = cam.ray_direction(
-            extra.corner[0] + a * extra.size[0],
-            extra.corner[1] + b * extra.size[1],
-        );
-        if let Some(hit) = scene
-            .geometry()
-            .intersect(cam.position(), dir, f32::INFINITY)
-        {
-            let sh = scene.shade(&hit, -dir);
-            sum += scene.direct(&sh, -dir).as_dvec3();
-        }
-    }
-    sum / (extra.count + 1) as f64
 }

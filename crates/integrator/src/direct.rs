@@ -7,7 +7,8 @@
 //! lies close to a point light: on the Lambert box the ceiling above the light falls off as
 //! 1/d² across each pixel's footprint (d = 6.8 cm, footprint 1.5 cm), and its ~100 pixels,
 //! 500 times brighter than the image's mean, hold a quarter of the image's per-pass variance
-//! (docs/results.md, "Direct light near a light"). There each camera sample also evaluates L₀
+//! (docs/results.md, "Direct light near a light"). There each camera sample of the BDPM mix,
+//! and of the `light` reference's direct term (`path` is left as it is), also evaluates L₀
 //! at M − 1 further uniform points of its own stratum and takes the mean of its M values:
 //! that stratum's L₀ variance falls M-fold for M − 1 primary and shadow rays, no gathers.
 //!
@@ -25,9 +26,46 @@
 //! variance layer stays exact.
 
 use bdpm_bdf::luminance;
+use bdpm_geometry::Rng;
 use bdpm_scene::Scene;
 use bdpm_settings::RenderSettings;
+use glam::{DVec3, Vec3};
 use rayon::prelude::*;
+
+/// The further direct-light points of one camera sample (crate::direct): `count` uniform
+/// points of the region `corner + [0, size)` of the image (pixels), which is the part of the
+/// pixel that the sample itself is uniform over, from their own stream.
+#[derive(Clone, Debug)]
+pub(crate) struct DirectExtra {
+    pub(crate) count: u32,
+    pub(crate) corner: [f32; 2],
+    pub(crate) size: [f32; 2],
+    pub(crate) rng: Rng,
+}
+
+impl DirectExtra {
+    /// The mean of L₀ at x₀ over a camera sample's own point (`own`, W·m⁻²·sr⁻¹) and these
+    /// further points, each a primary ray and shadow rays (none if it meets nothing).
+    pub(crate) fn mean_with(&mut self, scene: &Scene, own: Vec3) -> DVec3 {
+        let cam = scene.camera();
+        let mut sum = own.as_dvec3();
+        for _ in 0..self.count {
+            let [a, b] = self.rng.uniform2();
+            let dir = cam.ray_direction(
+                self.corner[0] + a * self.size[0],
+                self.corner[1] + b * self.size[1],
+            );
+            if let Some(hit) = scene
+                .geometry()
+                .intersect(cam.position(), dir, f32::INFINITY)
+            {
+                let sh = scene.shade(&hit, -dir);
+                sum += scene.direct(&sh, -dir).as_dvec3();
+            }
+        }
+        sum / (self.count + 1) as f64
+    }
+}
 
 /// The four fixed points of a pixel where L₀ is probed (offsets in the pixel, [0, 1)²).
 const PROBES: [[f32; 2]; 4] = [[0.25, 0.25], [0.75, 0.25], [0.25, 0.75], [0.75, 0.75]];

@@ -11,15 +11,18 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::connect::connect;
+use crate::direct::DirectSamples;
 use crate::render::{PassOutput, accumulate};
 use crate::sampler::PixelSamples;
 use crate::stage::Stage;
 use bdpm_settings::RenderSettings;
 
-/// Renders one pass of the `light` reference.
+/// Renders one pass of the `light` reference; `direct` gives the pixels whose direct term
+/// takes more than one point per camera sample (`direct_boost`, crate::direct).
 pub(crate) fn render_light_pass(
     scene: &Scene,
     settings: &RenderSettings,
+    direct: Option<&DirectSamples>,
     pass: u32,
     progress: &(dyn Fn(u64) + Sync),
 ) -> PassOutput {
@@ -37,17 +40,22 @@ pub(crate) fn render_light_pass(
             for (x, px) in row.iter_mut().enumerate() {
                 let pixel = (y * w + x) as u64;
                 let mut sum = DVec3::ZERO;
+                let xy = (x as u32, y as u32);
+                let m = direct.map_or(1, |d| d.at(xy.0, xy.1));
                 layout.start(pass, pixel);
                 for k in 0..settings.spp {
                     let [jx, jy] = layout.sample(k).offset;
                     let dir = cam.ray_direction(x as f32 + jx, y as f32 + jy);
-                    let l = match scene
+                    let mut l = match scene
                         .geometry()
                         .intersect(cam.position(), dir, f32::INFINITY)
                     {
                         Some(hit) => scene.direct(&scene.shade(&hit, -dir), -dir),
                         None => Vec3::ZERO,
                     };
+                    if let Some(mut extra) = layout.direct_extra(k, xy, m) {
+                        l = extra.mean_with(scene, l).as_vec3();
+                    }
                     accumulate(&mut sum, l, &mut row_dropped);
                 }
                 *px = sum / settings.spp as f64;

@@ -10,9 +10,7 @@ use bdpm_cache::{CacheSettings, RadianceCache};
 use bdpm_mis::{Budget, Heuristic, NoiseModel};
 use bdpm_photon::{PhotonMap, TraceOptions};
 
-use crate::bdpm::{
-    BATCH, DirectExtra, Job, Mix, Slots, Techniques, WeightStats, scene_default_radius,
-};
+use crate::bdpm::{BATCH, Job, Mix, Slots, Techniques, WeightStats, scene_default_radius};
 use crate::connect::Splats;
 use crate::correction::{CandidateSums, Correction, PILOT_PASSES, pilot_seed};
 use crate::direct::DirectSamples;
@@ -223,6 +221,10 @@ impl<'a> Renderer<'a> {
         };
         if let Some(h) = renderer.heuristic {
             renderer.prepare(h);
+        }
+        // The mix's camera samples and the `light` reference's direct term read it; `path`
+        // takes its direct light by next-event estimation at every vertex and does not.
+        if renderer.settings.mode != Mode::Path {
             renderer.allocate_direct();
         }
         Ok(renderer)
@@ -514,7 +516,13 @@ impl<'a> Renderer<'a> {
                 let out = if self.settings.mode == Mode::Path {
                     render_path_pass(self.scene, &self.settings, pass, progress)
                 } else {
-                    crate::light::render_light_pass(self.scene, &self.settings, pass, progress)
+                    crate::light::render_light_pass(
+                        self.scene,
+                        &self.settings,
+                        self.direct.as_ref(),
+                        pass,
+                        progress,
+                    )
                 };
                 self.leave(Stage::Pass);
                 out
@@ -703,15 +711,7 @@ impl Renderer<'_> {
                         // Past N_B the slot is unused; sample 0's numbers fill it.
                         let k = (first + i as u32).min(s.spp - 1);
                         let c = layout.sample(k);
-                        let direct_extra = (direct_m > 1).then(|| {
-                            let (corner, size) = layout.region(k);
-                            DirectExtra {
-                                count: direct_m - 1,
-                                corner: [x as f32 + corner[0], y as f32 + corner[1]],
-                                size,
-                                rng: layout.direct_stream(k),
-                            }
-                        });
+                        let direct_extra = layout.direct_extra(k, (x as u32, y as u32), direct_m);
                         Job {
                             x: x as f32 + c.offset[0],
                             y: y as f32 + c.offset[1],

@@ -25,6 +25,7 @@
 use bdpm_geometry::{Domain, Rng};
 use bdpm_settings::{RenderSettings, Sampler};
 
+use crate::direct::DirectExtra;
 use crate::settings::pixel_offset;
 
 /// The largest f32 below 1: a jittered coordinate (i + u)/n can round up to 1 in f32.
@@ -171,7 +172,7 @@ impl PixelSamples {
 impl PixelSamples {
     /// The part of the pixel that sample `k` (< N_B) is uniform over: (its corner, its size),
     /// offsets in the pixel. Its stratum under the stratified sampler, else the whole pixel.
-    pub(crate) fn region(&self, k: u32) -> ([f32; 2], [f32; 2]) {
+    fn region(&self, k: u32) -> ([f32; 2], [f32; 2]) {
         match self.sampler {
             Sampler::Independent => ([0.0, 0.0], [1.0, 1.0]),
             _ => {
@@ -182,13 +183,24 @@ impl PixelSamples {
         }
     }
 
-    /// The stream of sample `k`'s further direct-light points (`direct_boost`).
-    pub(crate) fn direct_stream(&self, k: u32) -> Rng {
-        Rng::new(
-            self.seed,
-            Domain::DirectSamples,
-            [self.pass as u64, self.pixel, k as u64],
-        )
+    /// The further direct-light points of sample `k` (< N_B) of pixel (`x`, `y`) when the
+    /// pixel takes `m` > 1 direct-light samples per camera sample (`direct_boost`): m − 1
+    /// points uniform over the sample's own region, from the stream keyed (seed,
+    /// `DirectSamples`, pass, pixel, k). `None` for m ≤ 1.
+    pub(crate) fn direct_extra(&self, k: u32, (x, y): (u32, u32), m: u32) -> Option<DirectExtra> {
+        (m > 1).then(|| {
+            let (corner, size) = self.region(k);
+            DirectExtra {
+                count: m - 1,
+                corner: [x as f32 + corner[0], y as f32 + corner[1]],
+                size,
+                rng: Rng::new(
+                    self.seed,
+                    Domain::DirectSamples,
+                    [self.pass as u64, self.pixel, k as u64],
+                ),
+            }
+        })
     }
 }
 

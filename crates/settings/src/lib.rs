@@ -295,7 +295,8 @@ pub struct RenderSettings {
     pub light_tracing: bool,
     /// The most direct-light samples per camera sample, M_max (1: off). Where the direct light
     /// L₀(x₀) varies steeply over a pixel (a surface close to a point light), each camera
-    /// sample of the BDPM mix also evaluates L₀ at up to M_max − 1 further points of its own
+    /// sample of the BDPM mix and of the `light` reference's direct term also evaluates L₀ at up to
+    /// M_max − 1 further points of its own
     /// stratum of the pixel: the pixel-integration noise of L₀ falls there for a primary and a
     /// shadow ray each. How many a pixel gets is fixed before the passes, from the scene alone
     /// (`bdpm_integrator`'s `direct` module), so every pass stays unbiased and independent.
