@@ -14,7 +14,8 @@
 # e.g. (docs/results.md, "Defaults that win at equal time"):
 #   scripts/equal-time.sh out/ref/lambert-light-400.exr 20 2 3 \
 #     scenes/preprint/cornell-lambert.toml scenes/cornell-lambert.toml
-# EXTRA="--radius 0.5px" adds flags to every render.
+# EXTRA="--radius 0.5px" adds flags to every render; FIRST_SEED=4 starts the seeds at 4
+# instead of 1 (more runs without repeating the earlier ones).
 set -euo pipefail
 ref=$1; budget=$2; threads=$3; repeats=$4; shift 4
 [ -f "$ref" ] || { echo "equal-time.sh: no reference $ref" >&2; exit 2; }
@@ -22,7 +23,8 @@ bin=${BDPM:-$(cd "$(dirname "$0")/.." && pwd)/target/release/bdpm}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 read -r -a extra <<< "${EXTRA:-}"
-for i in $(seq "$repeats"); do
+first=${FIRST_SEED:-1}
+for i in $(seq "$first" $((first + repeats - 1))); do
   for scene in "$@"; do
     key=$(echo "$scene" | tr '/. ' '___')
     read -r -a words <<< "$scene"
