@@ -5,9 +5,9 @@
 //! noise is pixel integration: where x₀ is one of the pixel's points, L₀ varies with it. That
 //! is small almost everywhere, since stratification takes most of it, but not where a surface
 //! lies close to a point light: on the Lambert box the ceiling above the light falls off as
-//! 1/d² across each pixel's footprint (d = 6.8 cm, footprint 1.5 cm), and its ~100 pixels,
-//! 500 times brighter than the image's mean, hold a quarter of the image's per-pass variance
-//! (docs/results.md, "Direct light near a light"). There each camera sample of the BDPM mix,
+//! 1/d² across each pixel's footprint (d = 6.8 cm, footprints of 1–2 cm), and its ~100
+//! pixels, hundreds of times brighter than the image's mean, hold a quarter of the image's
+//! per-pass variance (docs/results.md, "Direct light near a light"). There each camera sample of the BDPM mix,
 //! and of the `light` reference's direct term (`path` is left as it is), also evaluates L₀
 //! at M − 1 further uniform points of its own stratum and takes the mean of its M values:
 //! that stratum's L₀ variance falls M-fold for M − 1 primary and shadow rays, no gathers.
@@ -47,24 +47,30 @@ impl DirectExtra {
     /// The mean of L₀ at x₀ over a camera sample's own point (`own`, W·m⁻²·sr⁻¹) and these
     /// further points, each a primary ray and shadow rays (none if it meets nothing).
     pub(crate) fn mean_with(&mut self, scene: &Scene, own: Vec3) -> DVec3 {
-        let cam = scene.camera();
         let mut sum = own.as_dvec3();
         for _ in 0..self.count {
             let [a, b] = self.rng.uniform2();
-            let dir = cam.ray_direction(
+            let (x, y) = (
                 self.corner[0] + a * self.size[0],
                 self.corner[1] + b * self.size[1],
             );
-            if let Some(hit) = scene
-                .geometry()
-                .intersect(cam.position(), dir, f32::INFINITY)
-            {
-                let sh = scene.shade(&hit, -dir);
-                sum += scene.direct(&sh, -dir).as_dvec3();
-            }
+            sum += direct_through(scene, x, y).as_dvec3();
         }
         sum / (self.count + 1) as f64
     }
+}
+
+/// L₀ at the first surface the camera ray through image point (`x`, `y`) (pixels) meets,
+/// seen along that ray, W·m⁻²·sr⁻¹: a primary ray and shadow rays (0 if it meets nothing).
+pub(crate) fn direct_through(scene: &Scene, x: f32, y: f32) -> Vec3 {
+    let cam = scene.camera();
+    let dir = cam.ray_direction(x, y);
+    scene
+        .geometry()
+        .intersect(cam.position(), dir, f32::INFINITY)
+        .map_or(Vec3::ZERO, |hit| {
+            scene.direct(&scene.shade(&hit, -dir), -dir)
+        })
 }
 
 /// The four fixed points of a pixel where L₀ is probed (offsets in the pixel, [0, 1)²).
@@ -132,17 +138,8 @@ impl DirectSamples {
 /// The standard deviation of L₀'s luminance over the [`PROBES`] of pixel (x, y),
 /// W·m⁻²·sr⁻¹ (a probe that meets nothing counts as 0).
 fn spread(scene: &Scene, x: u32, y: u32) -> f64 {
-    let cam = scene.camera();
-    let values = PROBES.map(|[dx, dy]| {
-        let dir = cam.ray_direction(x as f32 + dx, y as f32 + dy);
-        scene
-            .geometry()
-            .intersect(cam.position(), dir, f32::INFINITY)
-            .map_or(0.0, |hit| {
-                let sh = scene.shade(&hit, -dir);
-                luminance(scene.direct(&sh, -dir)) as f64
-            })
-    });
+    let values = PROBES
+        .map(|[dx, dy]| luminance(direct_through(scene, x as f32 + dx, y as f32 + dy)) as f64);
     let mean = values.iter().sum::<f64>() / 4.0;
     (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / 4.0).sqrt()
 }

@@ -11,7 +11,7 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::connect::connect;
-use crate::direct::DirectSamples;
+use crate::direct::{DirectSamples, direct_through};
 use crate::render::{PassOutput, accumulate};
 use crate::sampler::PixelSamples;
 use crate::stage::Stage;
@@ -27,7 +27,6 @@ pub(crate) fn render_light_pass(
     progress: &(dyn Fn(u64) + Sync),
 ) -> PassOutput {
     let (w, h) = (settings.width as usize, settings.height as usize);
-    let cam = &scene.camera();
     let t_camera = std::time::Instant::now();
     let dropped = AtomicU64::new(0);
     let mut estimates = vec![DVec3::ZERO; w * h];
@@ -45,14 +44,7 @@ pub(crate) fn render_light_pass(
                 layout.start(pass, pixel);
                 for k in 0..settings.spp {
                     let [jx, jy] = layout.sample(k).offset;
-                    let dir = cam.ray_direction(x as f32 + jx, y as f32 + jy);
-                    let mut l = match scene
-                        .geometry()
-                        .intersect(cam.position(), dir, f32::INFINITY)
-                    {
-                        Some(hit) => scene.direct(&scene.shade(&hit, -dir), -dir),
-                        None => Vec3::ZERO,
-                    };
+                    let mut l = direct_through(scene, x as f32 + jx, y as f32 + jy);
                     if let Some(mut extra) = layout.direct_extra(k, xy, m) {
                         l = extra.mean_with(scene, l).as_vec3();
                     }
