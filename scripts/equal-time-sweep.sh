@@ -3,14 +3,18 @@
 # N_F, N_B and mode variants side by side (passes in turn) on the preprint's Cornell files with
 # stratified samples, each for the same time, against the long references below. Usage:
 #   scripts/equal-time-sweep.sh OUT_DIR [lambert-cpu|lambert-wall|glossy-wall|nothing-lambert|nothing-glossy]...
-# The references (make them once; about 8 and 10 minutes on 2 cores):
+# The references (make them once; about 10 and 22 minutes on 2 cores; own error 0.54 % and 2.7 %):
+#   bdpm render scenes/preprint/cornell-lambert.toml --mode light --sampler stratified --spp 60 --passes 1000 --seed 4243 -o out/ref/lambert-light-1000.exr
+#   bdpm render scenes/preprint/cornell-glossy.toml --mode path --sampler stratified --passes 4800 --seed 4244 -o out/ref/glossy-path-4800.exr
+# The sweeps in docs/results.md ran against earlier, coarser ones (own error 1.5 % and 8 %):
 #   bdpm render scenes/preprint/cornell-lambert.toml --mode light --passes 400 --seed 4242 -o out/ref/lambert-light-400.exr
 #   bdpm render scenes/preprint/cornell-glossy.toml --mode path --passes 600 --seed 4243 -o out/ref/glossy-path-600.exr
+# (LAMBERT_REF=… GLOSSY_REF=… to use those).
 set -euo pipefail
 out=$1; shift
 bin=${BDPM:-$(cd "$(dirname "$0")/.." && pwd)/target/release/bdpm}
-L=${LAMBERT_REF:-out/ref/lambert-light-400.exr}
-G=${GLOSSY_REF:-out/ref/glossy-path-600.exr}
+L=${LAMBERT_REF:-out/ref/lambert-light-1000.exr}
+G=${GLOSSY_REF:-out/ref/glossy-path-4800.exr}
 base="balance:sampler=independent"   # the preprint's layout: the scene file's own radius
 mkdir -p "$out"
 [ $# -gt 0 ] || set -- lambert-cpu lambert-wall glossy-wall

@@ -11,8 +11,8 @@
 set -euo pipefail
 out=$1; shift
 bin=${BDPM:-$(cd "$(dirname "$0")/.." && pwd)/target/release/bdpm}
-L=${LAMBERT_REF:-out/ref/lambert-light-400.exr}
-G=${GLOSSY_REF:-out/ref/glossy-path-600.exr}
+L=${LAMBERT_REF:-out/ref/lambert-light-1000.exr}
+G=${GLOSSY_REF:-out/ref/glossy-path-4800.exr}
 study() { # NAME SCENE REF MODES
   "$bin" study "$2" --modes "$4" --time-budget 40 --clock cpu --reference "$3" --quiet -o "$out/$1"
 }
