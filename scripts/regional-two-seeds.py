@@ -14,16 +14,22 @@ pass's time spread evenly over the pixels, as the study assumes). The choice min
 block, b² + c·relV + λ·t over a grid of (c, λ), keeping the best mix by the true figure.
 
 Prints the best single variant's relMSE at T over the mix's: in sample and judged on the other
-seed. Needs numpy and OpenEXR (`pip install numpy OpenEXR`); a lab script, not part of bdpm.
+seed. With TECHNIQUES=X.exr (a `bdpm render --techniques` render of the scene, e.g. 2 passes),
+also a rule with three parameters instead of a choice per block: the blocks in three classes
+by BDD=1's share of the image (x1_weighted over the total, below 0.3, 0.3–0.6, above 0.6), one
+variant per class, the best triple chosen on one seed and judged on the other.
+Needs numpy and OpenEXR (`pip install numpy OpenEXR`); a lab script, not part of bdpm.
 
-Usage: scripts/regional-two-seeds.py REFERENCE.exr SECONDS BLOCK DIR LABEL...
+Usage: [TECHNIQUES=X.exr] scripts/regional-two-seeds.py REFERENCE.exr SECONDS BLOCK DIR LABEL...
   DIR/LABEL-a.exr (+ .json) and DIR/LABEL-b.exr are the two seeds' renders of variant LABEL, e.g.
   for r in 0.25px 0.35px 0.5px 0.7px 1px 1.4px; do for s in a:1 b:2; do
     bdpm render scenes/cornell-glossy.toml --radius $r --time-budget 30 --threads 2 \\
       --seed ${s#*:} --passes 100000 -o DIR/$r-${s%:*}.exr --quiet; done; done
   scripts/regional-two-seeds.py out/ref/glossy-path-4800.exr 30 8 DIR 0.25px 0.35px 0.5px 0.7px 1px 1.4px
 """
+import itertools
 import json
+import os
 import sys
 
 import numpy as np
@@ -94,6 +100,21 @@ def main():
         choice = choose(chosen_on)
         shares = ", ".join(f"{label} {(choice == k).mean():.0%}" for k, label in enumerate(labels))
         print(f"chosen on seed {name} ({B}x{B} blocks: {shares}): best single over the mix "
+              f"{single(chosen_on) / figure(chosen_on, choice):.3f}x in sample, "
+              f"{single(judged_on) / figure(judged_on, choice):.3f}x on the other seed")
+    if "TECHNIQUES" not in os.environ:
+        return
+    layers = {k: np.asarray(v.pixels) for k, v in OpenEXR.File(os.environ["TECHNIQUES"]).channels().items()}
+    total = blocks(layers["RGB"] @ LUMINANCE)
+    share = blocks(layers["x1_weighted"] @ LUMINANCE) / np.maximum(total, 1e-30)
+    classes = np.digitize(share, [0.3, 0.6])
+    print("blocks per class of BDD=1's share (<0.3, 0.3-0.6, >0.6):",
+          [int((classes == c).sum()) for c in range(3)])
+    for name, chosen_on, judged_on in (("a", a, b), ("b", b, a)):
+        best = min(itertools.product(range(len(labels)), repeat=3),
+                   key=lambda triple: figure(chosen_on, np.array(triple)[classes]))
+        choice = np.array(best)[classes]
+        print(f"rule chosen on seed {name} ({', '.join(labels[k] for k in best)}): best single over it "
               f"{single(chosen_on) / figure(chosen_on, choice):.3f}x in sample, "
               f"{single(judged_on) / figure(judged_on, choice):.3f}x on the other seed")
 
