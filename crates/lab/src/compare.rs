@@ -134,6 +134,10 @@ pub(crate) struct ErrorFigures {
     pub(crate) rel_rmse: f64,
     /// Mean over pixels of (I − R)²/(R² + ε), ε = 0.01·mean(R)².
     pub(crate) rel_mse: f64,
+    /// The image's mean squared error is no more than the reference's own variance: the
+    /// reference cannot resolve the difference, and both figures are the floor of
+    /// [`without_floor`] (1 % of the reference's error), not a measurement.
+    pub(crate) below_reference: bool,
 }
 
 /// Rel. RMSE and relMSE of `image` against `reference` (luminance per pixel), with the
@@ -149,10 +153,12 @@ pub(crate) fn error_against(
         return None;
     }
     let var = reference_variance(reference_stderr, reference.len());
-    let mse = without_floor(rmse(image, reference).powi(2), mean(&var));
+    let (measured, floor) = (rmse(image, reference).powi(2), mean(&var));
+    let mse = without_floor(measured, floor);
     Some(ErrorFigures {
         rel_rmse: mse.sqrt() / ref_mean,
         rel_mse: without_floor(rel_mse(image, reference), rel_mean(&var, reference)),
+        below_reference: floor > 0.0 && measured <= floor,
     })
 }
 
@@ -250,7 +256,10 @@ pub(crate) fn run(args: CompareArgs) -> CliResult<ExitCode> {
             "the first against the second as reference: rel. RMSE {:.3}%, relMSE {:.4e}{}",
             100.0 * e.rel_rmse,
             e.rel_mse,
-            if b.stderr.is_some() {
+            if e.below_reference {
+                " (no more than the second's own error, which is subtracted: shown at the floor, \
+                 1 % of the second's variance; the second is too noisy to measure this error)"
+            } else if b.stderr.is_some() {
                 " (the second's own error subtracted)"
             } else {
                 " (the second has no stderr layer: its own error is included)"
@@ -332,7 +341,15 @@ mod tests {
         assert!((e.rel_rmse - 0.09f64.sqrt()).abs() < 1e-9);
         // ε = 0.01: relMSE = (0.1 − 0.01)/1.01.
         assert!((e.rel_mse - 0.09 / 1.01).abs() < 1e-9);
+        assert!(!e.below_reference);
         assert_eq!(error_against(&[1.0], &[0.0], None), None);
+        // An image equal to the reference: zero error, reported as the floor and flagged.
+        let e = error_against(&r, &r, Some(&se)).unwrap();
+        assert!(e.below_reference);
+        assert!((e.rel_rmse - (0.01f64 * 0.01).sqrt()).abs() < 1e-9);
+        // Without the reference's error there is no floor: zero is zero.
+        let e = error_against(&r, &r, None).unwrap();
+        assert_eq!((e.rel_rmse, e.below_reference), (0.0, false));
     }
 
     #[test]
