@@ -64,7 +64,8 @@ impl RadiusMap {
         let classes: Vec<usize> = sums
             .iter()
             .map(|&(x1, total)| {
-                if !(total > 0.0) {
+                // Black (or non-finite) blocks keep r.
+                if total.is_nan() || total <= 0.0 {
                     return 1;
                 }
                 let share = x1 / total;
@@ -97,7 +98,7 @@ impl RadiusMap {
         self.scales.iter().copied().fold(0.0, f32::max)
     }
 
-    /// Blocks per class (scales [`SCALES`]).
+    /// Blocks per class: at ½ r, at r and at 1.4 r.
     pub fn blocks(&self) -> [u32; 3] {
         self.blocks
     }

@@ -389,6 +389,11 @@ impl<'a> Renderer<'a> {
         }
     }
 
+    /// Each pixel's scale of the merge radius, with `adaptive_radius`.
+    pub fn radius_map(&self) -> Option<&RadiusMap> {
+        self.radius_map.as_ref()
+    }
+
     /// The direct-light samples per camera sample of each pixel, when some pixel takes more
     /// than one.
     pub fn direct_samples(&self) -> Option<&DirectSamples> {
