@@ -14,18 +14,21 @@ fn bits(film: &bdpm_integrator::Film) -> Vec<u64> {
 #[test]
 fn images_do_not_depend_on_the_thread_count() {
     let (scene, settings) = load("preprint/cornell-glossy.toml", 24, 24);
-    // `balance` once more with the extra direct-light samples of the pixels near the light.
+    // `balance` once more with the extra direct-light samples of the pixels near the light,
+    // and `optimal-path` with a radius per block of pixels from its pilot.
     let modes = [
-        ("path", 1),
-        ("light", 1),
-        ("optimal", 1),
-        ("balance", 1),
-        ("corrected-balance", 1),
-        ("balance", 16),
+        ("path", 1, false),
+        ("light", 1, false),
+        ("optimal", 1, false),
+        ("balance", 1, false),
+        ("corrected-balance", 1, false),
+        ("balance", 16, false),
+        ("optimal-path", 1, true),
     ];
-    for (mode, direct_boost) in modes {
+    for (mode, direct_boost, adaptive_radius) in modes {
         let s = bdpm_integrator::RenderSettings {
             direct_boost,
+            adaptive_radius,
             ..with_mode(&settings, mode, 2, 2, 20_000)
         };
         let render_on = |threads: usize| {

@@ -13,6 +13,7 @@ use bdpm_scene::{Scene, Shading};
 use crate::correction::CandidateSums;
 use crate::direct::DirectExtra;
 use crate::inputs::Arrival;
+use crate::radius::RadiusMap;
 use crate::table::PixelWeights;
 use bdpm_scene::WeightVertex;
 use glam::{DVec3, Vec3};
@@ -85,6 +86,8 @@ pub(crate) struct Job {
     pub(crate) pilot: CandidateSums,
     /// Further points where direct light at x₀ is evaluated (`direct_boost`), if any.
     pub(crate) direct_extra: Option<DirectExtra>,
+    /// The pixel's scale of the merge radius ([`Mix::radius_scale`]).
+    pub(crate) scale: f32,
 }
 
 /// Room for the state of a batch of samples between their rays and their gathers, reused from
@@ -129,6 +132,10 @@ pub(crate) struct Mix<'a> {
     pub(crate) budget: Budget,
     /// Merge kernel 1/S, m⁻².
     pub(crate) inv_area: f32,
+    /// Merge radius r, m (a pixel's is r times its [`Self::radius_scale`]).
+    pub(crate) radius: f32,
+    /// Each pixel's scale of r (`adaptive_radius`); `None`: r everywhere.
+    pub(crate) radius_map: Option<&'a RadiusMap>,
     /// The frozen radiance cache, when the mode needs L_d (and b).
     pub(crate) cache: Option<&'a RadianceCache>,
     /// `corrected-balance`'s pilot: every weighted contribution also goes into the sample's
@@ -216,18 +223,43 @@ impl<'a> Mix<'a> {
         (acceptance_area(d2.sqrt()), density)
     }
 
+    /// Pixel (x, y)'s scale of the merge radius: 1 without a map. Exactly 1 keeps every
+    /// kernel, gather and weight input bit for bit what it is without one.
+    #[inline]
+    pub(crate) fn radius_scale(&self, x: u32, y: u32) -> f32 {
+        self.radius_map.map_or(1.0, |m| m.scale(x, y))
+    }
+
+    /// The largest pixel radius over r: the photon grid is built for r times it.
+    pub(crate) fn largest_radius_scale(&self) -> f32 {
+        self.radius_map.map_or(1.0, |m| m.largest().max(1.0))
+    }
+
     /// The weigher of one pixel: the mode with the pixel's A, B and, where the table gives
     /// one, its N_eff in place of N_B (method.md §12; N_B itself under the pinhole model and
     /// without jitter, so those weights keep their bits), and `corrected-balance`'s factor
     /// `correction` for the pixel (1 for `balance`'s weights; the other modes ignore it).
     pub(crate) fn weigher(&self, pixel: Option<&PixelWeights>, correction: f64) -> Weigher {
-        let budget = match pixel {
+        self.weigher_scaled(pixel, correction, 1.0)
+    }
+
+    /// [`Self::weigher`] for a pixel whose merge radius is `scale` × r: its S is scale²·S.
+    pub(crate) fn weigher_scaled(
+        &self,
+        pixel: Option<&PixelWeights>,
+        correction: f64,
+        scale: f32,
+    ) -> Weigher {
+        let mut budget = match pixel {
             Some(p) => Budget {
                 camera_samples: p.camera_samples,
                 ..self.budget
             },
             None => self.budget,
         };
+        if scale != 1.0 {
+            budget.merge_area *= f64::from(scale) * f64::from(scale);
+        }
         Weigher::new(self.heuristic, &budget, pixel.map(|p| &p.terms)).with_correction(correction)
     }
 
@@ -295,13 +327,14 @@ impl<'a> Mix<'a> {
             let camera_w1 = slot.second.as_ref().map(|s| s.w_const);
             if let Some(second) = &slot.second {
                 let out = (&mut job.out, &mut job.pilot);
-                self.merge_at_x1(x0, map, second, &slot.query1, weigher, stats, out);
+                let k = self.inv_area / (job.scale * job.scale);
+                self.merge_at_x1(x0, (map, k), second, &slot.query1, weigher, stats, out);
             }
             if self.merges_at_x0() {
                 let photons = (map, prev_inputs);
                 self.merge_at_x0(
                     x0,
-                    photons,
+                    (photons, self.inv_area / (job.scale * job.scale)),
                     &slot.query0,
                     weigher,
                     camera_w1,
@@ -344,8 +377,9 @@ impl<'a> Mix<'a> {
         let Some(x0) = self.first_vertex_shaded(sh0, u) else {
             return;
         };
+        let r = self.radius * job.scale;
         if self.merges_at_x0() {
-            map.restart_query(&mut slot.query0, x0.sh.p);
+            map.restart_query_within(&mut slot.query0, x0.sh.p, r);
         }
         if self.needs.second_vertex {
             let drawn = job.rng.uniform3();
@@ -353,7 +387,7 @@ impl<'a> Mix<'a> {
             slot.second = self.start_second(
                 &x0,
                 map,
-                bdf_u,
+                (bdf_u, r),
                 (weigher, stats),
                 &mut slot.query1,
                 &mut job.pilot,
@@ -368,7 +402,7 @@ impl<'a> Mix<'a> {
         &self,
         x0: &FirstVertex<'_>,
         map: &PhotonMap,
-        u: [f32; 3],
+        (u, r): ([f32; 3], f32),
         (weigher, stats): (&Weigher, &mut WeightStats),
         query: &mut PhotonQuery,
         pilot: &mut CandidateSums,
@@ -383,7 +417,7 @@ impl<'a> Mix<'a> {
             .geometry()
             .intersect(scene.spawn(&x0.sh, v), v, f32::INFINITY)?;
         // Started before the shadow ray and the weight's inputs, which hide its first fetch.
-        map.restart_query(query, hit1.p);
+        map.restart_query_within(query, hit1.p, r);
         let wo1 = -v;
         // Likewise the weight's cache read, fetched during the shadow ray.
         let slot = self.cache_slot(hit1.prim, hit1.p, wo1);
@@ -454,7 +488,7 @@ impl<'a> Mix<'a> {
     fn merge_at_x1(
         &self,
         x0: &FirstVertex<'_>,
-        map: &PhotonMap,
+        (map, k): (&PhotonMap, f32),
         second: &Second,
         query: &PhotonQuery,
         weigher: &Weigher,
@@ -479,7 +513,6 @@ impl<'a> Mix<'a> {
         let mut ph_raw = Vec3::ZERO;
         let mut ph_weighted = Vec3::ZERO;
         let bdf1 = scene.bdf_at(&sh1);
-        let k = self.inv_area;
         map.finish_query(query, |ph| {
             let wp = ph.incoming;
             let f = scene.eval_with(&bdf1, &sh1, wo1, wp);
@@ -508,7 +541,7 @@ impl<'a> Mix<'a> {
     fn merge_at_x0(
         &self,
         x0: &FirstVertex<'_>,
-        photons: (&PhotonMap, &[[f32; 3]]),
+        (photons, k): ((&PhotonMap, &[[f32; 3]]), f32),
         query: &PhotonQuery,
         weigher: &Weigher,
         camera_w1: Option<f64>,
@@ -516,7 +549,6 @@ impl<'a> Mix<'a> {
         (t, pilot): (&mut Techniques, &mut CandidateSums),
     ) {
         let scene = self.scene;
-        let k = self.inv_area;
         let mut raw = Vec3::ZERO;
         let mut weighted = Vec3::ZERO;
         let pure = matches!(self.heuristic, Heuristic::Bdd0);

@@ -19,6 +19,7 @@ mod light;
 mod memory;
 pub mod path;
 mod predict;
+mod radius;
 mod render;
 mod sampler;
 mod settings;
@@ -33,6 +34,7 @@ pub use direct::DirectSamples;
 pub use film::{Film, PassSums, PassValue};
 pub use memory::{MemoryEstimate, MemoryItem, PILOT_PHOTONS, estimate_memory, human_bytes};
 pub use predict::{JITTER_RAYS, Prediction};
+pub use radius::RadiusMap;
 pub use render::{
     FirstHitLayers, LARGE_RADIUS_FRACTION, PassOutput, RenderError, Renderer, StageProbe,
     StageReport, TargetError, first_hit_layers, render_path_pass, resolve_radius,

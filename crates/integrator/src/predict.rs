@@ -137,6 +137,9 @@ impl Renderer<'_> {
         if self.light_traced() {
             return Err(RenderError::LightTracing(h.name()));
         }
+        if self.settings().adaptive_radius {
+            return Err(RenderError::AdaptiveRadius(h.name()));
+        }
         if h.needs().pixel_table && !self.pixel_table().is_some_and(|t| t.has_terms()) {
             return Err(RenderError::NoPixelTable {
                 weights: h.name(),

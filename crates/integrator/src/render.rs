@@ -14,10 +14,13 @@ use crate::bdpm::{BATCH, Job, Mix, Slots, Techniques, WeightStats, scene_default
 use crate::connect::Splats;
 use crate::correction::{CandidateSums, Correction, PILOT_PASSES, pilot_seed};
 use crate::direct::DirectSamples;
+use crate::radius::{BLOCK, RadiusMap, SCALES, SHARE_BOUNDS, radius_pilot_seed};
 use crate::sampler::PixelSamples;
 use crate::stage::Stage;
 use crate::table::{self, PixelTable, TableSpec};
-use bdpm_settings::{Mode, RadiusError, RenderSettings, SettingsError, check_radius};
+use bdpm_settings::{
+    ADAPTIVE_RADIUS_PILOT_PASSES, Mode, RadiusError, RenderSettings, SettingsError, check_radius,
+};
 
 /// Radiance-cache cells per largest scene extent: cells of ~9 cm in the 2.8 m Cornell box,
 /// far larger than the merge radius, as method.md §5 asks.
@@ -91,6 +94,11 @@ pub enum RenderError {
         "light_tracing = true: mode '{0}' then samples BDD=0 by light tracing, which the noise model and the weight maps (both of the merge at x0) do not describe; set light_tracing = false"
     )]
     LightTracing(&'static str),
+    /// The noise model or a weight map asked of a render with a radius per block of pixels.
+    #[error(
+        "adaptive_radius = true: mode '{0}' then merges with a radius per block of pixels, which the noise model and the weight maps (both of one radius) do not describe; set adaptive_radius = false"
+    )]
+    AdaptiveRadius(&'static str),
     /// The weights asked for read the pixel table's A and B, which the mode did not build.
     #[error(
         "the weights '{weights}' need the pixel table's A and B, which mode '{mode}' does not build"
@@ -176,6 +184,8 @@ pub struct Renderer<'a> {
     correction: Option<Correction>,
     /// Direct-light samples per camera sample, per pixel (BDPM modes; `None`: one everywhere).
     direct: Option<DirectSamples>,
+    /// Each pixel's scale of the merge radius (`adaptive_radius`; `None`: r everywhere).
+    radius_map: Option<RadiusMap>,
     probe: Option<&'a dyn StageProbe>,
 }
 
@@ -217,6 +227,7 @@ impl<'a> Renderer<'a> {
             table: None,
             correction: None,
             direct: None,
+            radius_map: None,
             probe: None,
         };
         if let Some(h) = renderer.heuristic {
@@ -236,6 +247,18 @@ impl<'a> Renderer<'a> {
         if needs.radiance_cache {
             self.build_cache();
         }
+        self.prepare_table(h);
+        if needs.balance_correction {
+            self.build_correction();
+        }
+        if self.settings.adaptive_radius {
+            self.build_radius_map(h);
+        }
+    }
+
+    /// Builds the pixel table (ρ, N_eff, and A, B) when `h` needs it, with each pixel's radius.
+    fn prepare_table(&mut self, h: Heuristic) {
+        let needs = h.needs();
         let s = &self.settings;
         let footprint = self.footprint_model() && needs.effective_samples;
         if needs.pixel_table || footprint {
@@ -294,8 +317,53 @@ impl<'a> Renderer<'a> {
             });
             self.table = Some(table);
         }
-        if needs.balance_correction {
-            self.build_correction();
+    }
+
+    /// `adaptive_radius`: [`ADAPTIVE_RADIUS_PILOT_PASSES`] passes of the mode at r on the
+    /// pilot's own streams, split by technique, give each block its radius (crate::radius);
+    /// then the pixel table, whose N_eff, A and B depend on the radius, is built again with
+    /// each pixel's.
+    fn build_radius_map(&mut self, h: Heuristic) {
+        let start = std::time::Instant::now();
+        let mut pilot = self.settings.clone();
+        pilot.seed = radius_pilot_seed(self.settings.seed);
+        let record = std::mem::replace(&mut self.techniques, true);
+        let (w, hgt) = (self.settings.width, self.settings.height);
+        let mut sums = vec![Techniques::default(); w as usize * hgt as usize];
+        {
+            let mix = self.mix(h);
+            for pass in 0..ADAPTIVE_RADIUS_PILOT_PASSES {
+                let (out, _) = self.bdpm_pass(&mix, &pilot, pass, &|_| {});
+                for (s, t) in sums.iter_mut().zip(out.techniques.iter().flatten()) {
+                    s.direct += t.direct;
+                    s.x0_weighted += t.x0_weighted;
+                    s.x1_weighted += t.x1_weighted;
+                }
+            }
+        }
+        self.techniques = record;
+        let map = RadiusMap::from_techniques(w, hgt, &sums);
+        let [small, same, large] = map.blocks();
+        self.stages.push(StageReport {
+            stage: Stage::RadiusMap,
+            seconds: start.elapsed().as_secs_f64(),
+            bytes: map.bytes(),
+            detail: format!(
+                "{ADAPTIVE_RADIUS_PILOT_PASSES} pilot passes: of {} blocks of {BLOCK}x{BLOCK} pixels, \
+                 {small} at {:.2} r (BDD=1 under {:.0}% of the block), {same} at r, {large} at \
+                 {:.2} r (over {:.0}%); r = {} m",
+                small + same + large,
+                SCALES[0],
+                100.0 * SHARE_BOUNDS[0],
+                SCALES[2],
+                100.0 * SHARE_BOUNDS[1],
+                self.radius
+            ),
+        });
+        self.radius_map = Some(map);
+        // The first table (at r, for the pilot) stays in the report: it was paid for.
+        if self.table.is_some() {
+            self.prepare_table(h);
         }
     }
 
@@ -319,6 +387,11 @@ impl<'a> Renderer<'a> {
                 ),
             });
         }
+    }
+
+    /// Each pixel's scale of the merge radius, with `adaptive_radius`.
+    pub fn radius_map(&self) -> Option<&RadiusMap> {
+        self.radius_map.as_ref()
     }
 
     /// The direct-light samples per camera sample of each pixel, when some pixel takes more
@@ -419,6 +492,8 @@ impl<'a> Renderer<'a> {
             needs: heuristic.needs(),
             budget: self.budget(),
             inv_area: 1.0 / (std::f32::consts::PI * self.radius * self.radius),
+            radius: self.radius,
+            radius_map: self.radius_map.as_ref(),
             cache: self.cache.as_ref(),
             pilot: false,
             light_tracing: self.settings.light_tracing && heuristic != Heuristic::Bdd1,
@@ -669,7 +744,7 @@ impl Renderer<'_> {
         };
         let weigher_at = |x: u32, y: u32| {
             let factor = correction.map_or(1.0, |c| c.get(x, y));
-            mix.weigher(table.map(|t| t.get(x, y)), factor)
+            mix.weigher_scaled(table.map(|t| t.get(x, y)), factor, mix.radius_scale(x, y))
         };
         let (map, splats) = if mix.light_tracing {
             PhotonMap::trace_visiting(
@@ -681,7 +756,11 @@ impl Renderer<'_> {
             )
         } else {
             (
-                PhotonMap::trace(self.scene, &options, self.radius),
+                PhotonMap::trace(
+                    self.scene,
+                    &options,
+                    self.radius * mix.largest_radius_scale(),
+                ),
                 Vec::new(),
             )
         };
@@ -720,6 +799,7 @@ impl Renderer<'_> {
                             out: Techniques::default(),
                             pilot: CandidateSums::default(),
                             direct_extra,
+                            scale: mix.radius_scale(x as u32, y as u32),
                         }
                     });
                     let jobs = &mut jobs[..count as usize];

@@ -29,6 +29,8 @@ pub enum Stage {
     BalanceCorrection,
     /// How many direct-light samples each pixel takes (`direct_boost`), fixed once.
     DirectSamples,
+    /// `adaptive_radius`'s pilot and the radius of each block of pixels (crate::radius).
+    RadiusMap,
 }
 
 impl Stage {
@@ -45,6 +47,7 @@ impl Stage {
             Stage::PixelFootprints => "pixel footprints",
             Stage::BalanceCorrection => "balance correction",
             Stage::DirectSamples => "direct samples",
+            Stage::RadiusMap => "radius map",
         }
     }
 }

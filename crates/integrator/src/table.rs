@@ -178,16 +178,20 @@ pub(crate) fn pixel_weights(
     key: u64,
 ) -> PixelWeights {
     let n_b = mix.budget.camera_samples;
+    let scale = mix.radius_scale(x as u32, y as u32);
     let overlap = if spec.footprint {
-        footprint_overlap(mix.scene, &x0.sh, (x, y), spec.radius, spec.strata)
+        footprint_overlap(mix.scene, &x0.sh, (x, y), spec.radius * scale, spec.strata)
     } else {
         1.0
     };
     let camera_samples = effective_samples(n_b, overlap);
-    let budget = Budget {
+    let mut budget = Budget {
         camera_samples,
         ..mix.budget
     };
+    if scale != 1.0 {
+        budget.merge_area *= f64::from(scale) * f64::from(scale);
+    }
     let terms = spec.rays.map_or(PixelTerms::default(), |rays| {
         pixel_terms(mix, &budget, x0, rays, spec.seed, key)
     });

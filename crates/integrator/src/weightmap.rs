@@ -49,6 +49,9 @@ pub fn weight_map_heuristic(settings: &RenderSettings) -> Result<Heuristic, Rend
     if settings.light_traced() {
         return Err(RenderError::LightTracing(h.name()));
     }
+    if settings.adaptive_radius {
+        return Err(RenderError::AdaptiveRadius(h.name()));
+    }
     Ok(h)
 }
 

@@ -55,9 +55,10 @@ pub fn run(command: Command) -> Result<ExitCode, String> {
 }
 
 /// The keys a `--modes` entry may set ([`Variant`]).
-const KEYS: [&str; 9] = [
+const KEYS: [&str; 10] = [
     "sampler",
     "light_tracing",
+    "adaptive_radius",
     "radius",
     "spp",
     "photons",
@@ -107,6 +108,10 @@ impl Variant {
                 }
                 "light_tracing" => {
                     settings.light_tracing = Some(value.parse().map_err(|_| bad("true or false"))?)
+                }
+                "adaptive_radius" => {
+                    settings.adaptive_radius =
+                        Some(value.parse().map_err(|_| bad("true or false"))?)
                 }
                 "radius" => {
                     let radius = RadiusInput::Text(value.to_string());

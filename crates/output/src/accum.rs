@@ -746,9 +746,10 @@ mod tests {
         let (s, e) = changed(&|s| s.seed = 2);
         assert_ne!(s, settings);
         assert_eq!(e, estimator);
-        let relevant: [&dyn Fn(&mut RenderSettings); 9] = [
+        let relevant: [&dyn Fn(&mut RenderSettings); 10] = [
             &|s| s.spp = 5,
             &|s| s.light_tracing = true,
+            &|s| s.adaptive_radius = true,
             &|s| s.mode = Mode::Path,
             &|s| s.threshold_radius = 0.3,
             &|s| s.clamp_weights = true,

@@ -89,6 +89,11 @@ pub struct Overrides {
     /// by merging photons at the camera's first vertex (false).
     #[arg(long)]
     pub light_tracing: Option<bool>,
+    /// A merge radius per 8×8-pixel block from a 2-pass pilot's split by technique: ½× where
+    /// BDD=1 carries under 30 % of the block's image, 1.4× above 60 % (true), or one radius for
+    /// the image (false).
+    #[arg(long)]
+    pub adaptive_radius: Option<bool>,
     /// Photons traced for the radiance cache of the model-based weights (default: N_F).
     #[arg(long, allow_negative_numbers = true, value_parser = whole::<u64>)]
     pub cache_photons: Option<u64>,
@@ -256,6 +261,7 @@ impl Overrides {
             noise_model: self.noise_model.clone(),
             sampler: self.sampler.clone(),
             light_tracing: self.light_tracing,
+            adaptive_radius: self.adaptive_radius,
             cache_photons: self.cache_photons,
             cache_bins: self.cache_bins,
             pixel_table_rays: self.pixel_table_rays,
@@ -298,6 +304,9 @@ impl Overrides {
         }
         if let Some(b) = o.light_tracing {
             push("--light-tracing", b.to_string());
+        }
+        if let Some(b) = o.adaptive_radius {
+            push("--adaptive-radius", b.to_string());
         }
         if let Some(n) = o.cache_photons {
             push("--cache-photons", n.to_string());

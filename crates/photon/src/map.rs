@@ -73,6 +73,8 @@ pub struct PhotonQuery {
     found: [u32; FOUND_CAPACITY],
     n_found: u8,
     scan: Scan,
+    /// Squared gather radius of this query, m².
+    r2: f32,
 }
 
 /// Photons a query remembers after its scan; more are found again when it is finished.
@@ -275,10 +277,18 @@ impl PhotonMap {
     /// [`Self::start_query`] into an existing query, overwriting it in place.
     #[inline]
     pub fn restart_query(&self, q: &mut PhotonQuery, x: Vec3) {
+        self.restart_query_within(q, x, self.radius);
+    }
+
+    /// [`Self::restart_query`] with a gather radius of its own, at most the grid's (scratch).
+    #[inline]
+    pub fn restart_query_within(&self, q: &mut PhotonQuery, x: Vec3, radius: f32) {
+        let radius = radius.min(self.radius);
         q.x = x;
         q.n_found = 0;
         q.scan = Scan::No;
-        self.grid.start(&mut q.grid, x, self.radius);
+        q.r2 = radius * radius;
+        self.grid.start(&mut q.grid, x, radius);
     }
 
     /// Moves `q` one stage on, each time asking the CPU to fetch what the next stage reads.
@@ -337,7 +347,7 @@ impl PhotonMap {
     /// query's point, in reporting order.
     #[inline]
     fn scan(&self, q: &PhotonQuery, mut found: impl FnMut(usize)) {
-        let r2 = self.radius * self.radius;
+        let r2 = q.r2;
         let x = q.x;
         self.grid.visit(&q.grid, |range| {
             let start = range.start;

@@ -310,7 +310,23 @@ pub struct RenderSettings {
         )
     )]
     pub direct_boost: u32,
+    /// A merge radius per 8 × 8-pixel block instead of one for the image: before the passes, a
+    /// pilot of [`ADAPTIVE_RADIUS_PILOT_PASSES`] passes of the mode on streams of its own splits
+    /// each block's image by technique, and the block's radius is ½ the radius where BDD=1
+    /// carries under 30 % of it, the radius from 30 to 60 %, and 1.4 × the radius above
+    /// (docs/results.md, "A sharper glossy reference"): where the exact direct light makes the
+    /// image a larger disk buys little, where BDD=1's merges do it buys much. The mixing modes
+    /// without light tracing. Serialised only when set, so that the settings hash of every
+    /// render without it (and so its accumulation files) stays what it was.
+    #[cfg_attr(
+        feature = "serde",
+        serde(default, skip_serializing_if = "std::ops::Not::not")
+    )]
+    pub adaptive_radius: bool,
 }
+
+/// Passes of [`RenderSettings::adaptive_radius`]'s pilot.
+pub const ADAPTIVE_RADIUS_PILOT_PASSES: u32 = 2;
 
 /// [`RenderSettings::direct_boost`] of a serialised record that does not name it.
 #[cfg(feature = "serde")]
@@ -404,6 +420,8 @@ pub enum Setting {
     LightTracing,
     /// [`RenderSettings::direct_boost`].
     DirectBoost,
+    /// [`RenderSettings::adaptive_radius`].
+    AdaptiveRadius,
 }
 
 impl Setting {
@@ -426,6 +444,7 @@ impl Setting {
             Setting::PixelTableRays => "pixel_table_rays",
             Setting::LightTracing => "light_tracing",
             Setting::DirectBoost => "direct_boost",
+            Setting::AdaptiveRadius => "adaptive_radius",
         }
     }
 
@@ -513,6 +532,11 @@ pub enum SettingsError {
         "light tracing estimates a pixel's average over its area, which a render without pixel jitter (pixel_jitter = false) does not: turn one of them off"
     )]
     LightTracingWithoutJitter,
+    /// `adaptive_radius` with light tracing, whose splats weigh with one radius for the image.
+    #[error(
+        "an adaptive radius (adaptive_radius = true) sets a merge radius per block of pixels, and light tracing (light_tracing = true) weighs its connections with one radius for the image: turn one of them off"
+    )]
+    AdaptiveRadiusWithLightTracing,
 }
 
 impl SettingsError {
@@ -526,6 +550,7 @@ impl SettingsError {
             SettingsError::ThresholdRadius(_) => Setting::ThresholdRadius,
             SettingsError::ResolutionCount(_) => Setting::Resolution,
             SettingsError::LightTracingWithoutJitter => Setting::LightTracing,
+            SettingsError::AdaptiveRadiusWithLightTracing => Setting::AdaptiveRadius,
             SettingsError::Length { setting, .. } | SettingsError::UnknownName { setting, .. } => {
                 *setting
             }
@@ -634,6 +659,9 @@ impl RenderSettings {
         if self.light_tracing && !self.pixel_jitter {
             return Err(SettingsError::LightTracingWithoutJitter);
         }
+        if self.adaptive_radius && self.light_tracing {
+            return Err(SettingsError::AdaptiveRadiusWithLightTracing);
+        }
         range(
             Setting::DirectBoost,
             self.direct_boost.into(),
@@ -674,6 +702,7 @@ impl RenderSettings {
             sampler: self.sampler.name(),
             light_tracing: self.light_tracing,
             direct_boost: self.direct_boost,
+            adaptive_radius: self.adaptive_radius,
         }
     }
 }
@@ -710,6 +739,7 @@ impl Default for RenderSettings {
             // Only pixels close to a point light take more than one: on the Lambert box the
             // ceiling above the light (docs/results.md, "Direct light near a light").
             direct_boost: DEFAULT_DIRECT_BOOST,
+            adaptive_radius: false,
         }
     }
 }

@@ -56,6 +56,8 @@ pub struct PartialSettings {
     pub light_tracing: Option<bool>,
     /// [`RenderSettings::direct_boost`].
     pub direct_boost: Option<u32>,
+    /// [`RenderSettings::adaptive_radius`].
+    pub adaptive_radius: Option<bool>,
     /// The render's default output file (a scene file's `output`). Not a render setting:
     /// [`PartialSettings::apply`] leaves it to the caller.
     pub output: Option<PathBuf>,
@@ -133,6 +135,7 @@ impl PartialSettings {
         set(&mut s.cache_bins, self.cache_bins);
         set(&mut s.roulette_depth, self.roulette_depth);
         set(&mut s.direct_boost, self.direct_boost);
+        s.adaptive_radius = self.adaptive_radius.unwrap_or(s.adaptive_radius);
         s.photons = self.photons.unwrap_or(s.photons);
         s.seed = self.seed.unwrap_or(s.seed);
         s.cache_photons = self.cache_photons.or(s.cache_photons);

@@ -51,6 +51,8 @@ pub struct SettingsRecord {
     pub light_tracing: bool,
     /// The most direct-light samples per camera sample (1: off).
     pub direct_boost: u32,
+    /// A merge radius per block of pixels from a pilot (`adaptive_radius`).
+    pub adaptive_radius: bool,
 }
 
 impl SettingsRecord {
@@ -68,6 +70,7 @@ impl SettingsRecord {
             ("sampler", self.sampler.into()),
             ("light_tracing", self.light_tracing.to_string()),
             ("direct_boost", self.direct_boost.to_string()),
+            ("adaptive_radius", self.adaptive_radius.to_string()),
             ("radius_m", self.radius_m.to_string()),
             (
                 "radius_px",

@@ -40,6 +40,27 @@ fn light_tracing_needs_jittered_pixels() {
 }
 
 #[test]
+fn adaptive_radius_refuses_light_tracing() {
+    let s = RenderSettings {
+        adaptive_radius: true,
+        ..RenderSettings::default()
+    };
+    assert_eq!(s.validate(), Ok(()));
+    let s = RenderSettings {
+        light_tracing: true,
+        ..s
+    };
+    assert_eq!(
+        s.validate(),
+        Err(SettingsError::AdaptiveRadiusWithLightTracing)
+    );
+    assert_eq!(
+        SettingsError::AdaptiveRadiusWithLightTracing.setting(),
+        Setting::AdaptiveRadius
+    );
+}
+
+#[test]
 fn radius_errors_are_typed() {
     assert_eq!(check_radius(-1.0), Err(RadiusError::NotPositive(-1.0)));
     assert_eq!(check_radius(1e-20), Err(RadiusError::BelowMinimum(1e-20)));
