@@ -180,9 +180,12 @@ pub fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> CliResul
             Setting::CachePhotons => "--cache-photons".into(),
             Setting::CacheBins => "--cache-bins".into(),
             Setting::PixelTableRays => "--pixel-table-rays".into(),
-            // Either --light-tracing or --no-jitter: name both.
+            Setting::DirectBoost => "--direct-boost".into(),
+            // A clash of two settings, either of which a flag may have set: name both.
             Setting::LightTracing => "--light-tracing / --no-jitter".into(),
-            other => format!("render.{}", other.key()),
+            Setting::AdaptiveRadius => "--adaptive-radius / --light-tracing".into(),
+            // No flag sets it; only a scene file's value reaches here.
+            Setting::ThresholdRadius => format!("render.{}", Setting::ThresholdRadius.key()),
         };
         format!("{flag}: {e}")
     })
@@ -572,6 +575,29 @@ mod tests {
             ..Default::default()
         });
         assert!(e.starts_with("--mode: unknown mode 'fast'; expected one of path, light"));
+        let e = error(Overrides {
+            adaptive_radius: Some(true),
+            light_tracing: Some(true),
+            ..Default::default()
+        });
+        assert!(
+            e.starts_with("--adaptive-radius / --light-tracing: an adaptive radius"),
+            "{e}"
+        );
+        let e = error(Overrides {
+            light_tracing: Some(true),
+            no_jitter: true,
+            ..Default::default()
+        });
+        assert!(
+            e.starts_with("--light-tracing / --no-jitter: light tracing"),
+            "{e}"
+        );
+        let e = error(Overrides {
+            direct_boost: Some(0),
+            ..Default::default()
+        });
+        assert!(e.starts_with("--direct-boost: 0 is outside [1, 64]"), "{e}");
     }
 
     #[test]
