@@ -178,6 +178,18 @@ pub fn estimate_memory(
                 lower: "--resolution",
             });
         }
+        if s.adaptive_radius {
+            // At the pilot's peak: its technique sums and one pass's layers and estimates;
+            // then the table at each pixel's radius is built beside the one at r.
+            items.push(MemoryItem {
+                name: "adaptive-radius pilot",
+                bytes: pixels
+                    * (2 * size_of::<Techniques>()
+                        + size_of::<[f64; 3]>()
+                        + size_of::<PixelWeights>()) as u64,
+                lower: "--resolution (or leave out --adaptive-radius)",
+            });
+        }
         if needs.balance_correction {
             // Per pixel and candidate, at the pilot's peak: the pass's per-row sums, their
             // concatenation, and the second moments.

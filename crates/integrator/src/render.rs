@@ -349,7 +349,7 @@ impl<'a> Renderer<'a> {
             seconds: start.elapsed().as_secs_f64(),
             bytes: map.bytes(),
             detail: format!(
-                "{ADAPTIVE_RADIUS_PILOT_PASSES} pilot passes: of {} blocks of {BLOCK}x{BLOCK} pixels, \
+                "{ADAPTIVE_RADIUS_PILOT_PASSES} pilot pass(es): of {} blocks of {BLOCK}x{BLOCK} pixels, \
                  {small} at {:.2} r (BDD=1 under {:.0}% of the block), {same} at r, {large} at \
                  {:.2} r (over {:.0}%); r = {} m",
                 small + same + large,

@@ -89,7 +89,7 @@ pub struct Overrides {
     /// by merging photons at the camera's first vertex (false).
     #[arg(long)]
     pub light_tracing: Option<bool>,
-    /// A merge radius per 8×8-pixel block from a 2-pass pilot's split by technique: ½× where
+    /// A merge radius per 8×8-pixel block from a 1-pass pilot's split by technique: ½× where
     /// BDD=1 carries under 30 % of the block's image, 1.4× above 60 % (true), or one radius for
     /// the image (false).
     #[arg(long)]

@@ -1028,7 +1028,7 @@ fn memory_is_estimated_before_the_render_and_refused_above_the_limit() {
     let dir = TempDir::new("memory");
     // (arguments, what the error must name). 10⁹ photons need some 250 GB: refused at
     // once, as is a film beyond a tiny limit; either would otherwise abort mid-render.
-    let cases: [(&[&str], &str); 3] = [
+    let cases: [(&[&str], &str); 4] = [
         (
             &[
                 "--mode",
@@ -1064,6 +1064,20 @@ fn memory_is_estimated_before_the_render_and_refused_above_the_limit() {
                 "4G",
             ],
             "light-tracing splats per pass",
+        ),
+        // The adaptive radius's pilot holds its technique sums and a second pixel table.
+        (
+            &[
+                "--mode",
+                "optimal-path",
+                "--adaptive-radius",
+                "true",
+                "--resolution",
+                "4096x4096",
+                "--max-memory",
+                "1G",
+            ],
+            "adaptive-radius pilot",
         ),
     ];
     for (args, knob) in cases {
