@@ -7,6 +7,9 @@
 # `git worktree add /tmp/old REV && (cd /tmp/old && cargo build --release)`). A binary written
 # BINARY@MODE runs that mode instead, so modes of one binary compare side by side:
 #   scripts/ab.sh 5 cornell-glossy balance 256x256 1 1 target/release/bdpm target/release/bdpm@optimal-path
+# scenes/cornell-glossy.toml sets adaptive_radius (docs/results.md, "A one-pass pilot…"): a binary
+# older than ff11630 cannot read it, and the figures of docs/performance.md before that ran it
+# with one radius; give "preprint/cornell-glossy" to time a file every binary reads.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 n=$1; scene=$2; mode=$3; res=$4; passes=$5; threads=$6; shift 6

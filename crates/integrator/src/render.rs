@@ -91,12 +91,12 @@ pub enum RenderError {
     /// The render samples BDD=0 by light tracing (`light_tracing`), which the noise model and
     /// the weight maps (both of the merge at x₀) do not describe.
     #[error(
-        "light_tracing = true: mode '{0}' then samples BDD=0 by light tracing, which the noise model and the weight maps (both of the merge at x0) do not describe; set light_tracing = false"
+        "light_tracing = true: mode '{0}' then samples BDD=0 by light tracing, which the noise model and the weight maps (both of the merge at x0) do not describe; set light_tracing = false (--light-tracing false)"
     )]
     LightTracing(&'static str),
     /// The noise model or a weight map asked of a render with a radius per block of pixels.
     #[error(
-        "adaptive_radius = true: mode '{0}' then merges with a radius per block of pixels, which the noise model and the weight maps (both of one radius) do not describe; set adaptive_radius = false"
+        "adaptive_radius = true: mode '{0}' then merges with a radius per block of pixels, which the noise model and the weight maps (both of one radius) do not describe; set adaptive_radius = false (--adaptive-radius false)"
     )]
     AdaptiveRadius(&'static str),
     /// The weights asked for read the pixel table's A and B, which the mode did not build.

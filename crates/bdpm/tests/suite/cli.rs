@@ -502,6 +502,19 @@ fn weights_needs_a_mode_with_weights() {
         .args(["--pixel", "4,4", "--mode", "optimal", "--resolution", "8x8"])
         .args(["--light-tracing", "true"]));
     assert_one_line_error(&out, &["cornell-lambert.toml", "light_tracing = true"]);
+    let out = run(bdpm()
+        .arg("weights")
+        .arg(scene("preprint/cornell-lambert.toml"))
+        .args(["--pixel", "4,4", "--mode", "optimal", "--resolution", "8x8"])
+        .args(["--adaptive-radius", "true"]));
+    assert_one_line_error(
+        &out,
+        &[
+            "cornell-lambert.toml",
+            "adaptive_radius = true",
+            "--adaptive-radius false",
+        ],
+    );
 }
 
 /// `bdpm compare`: a render and its rerun with 1 thread are bit-identical (exit 0 with
@@ -676,7 +689,31 @@ fn predict_compares_the_noise_model_with_a_render() {
         .arg(&rendered)
         .arg("-o")
         .arg(dir.path("q.exr")));
-    assert_one_line_error(&out, &["cornell-lambert.toml", "light_tracing = true"]);
+    assert_one_line_error(
+        &out,
+        &[
+            "cornell-lambert.toml",
+            "light_tracing = true",
+            "--light-tracing false",
+        ],
+    );
+    // So is a radius per block of pixels, with the flag that turns it off.
+    let out = run(bdpm()
+        .arg("predict")
+        .arg(scene("preprint/cornell-lambert.toml"))
+        .args(settings)
+        .args(["--adaptive-radius", "true", "--measured"])
+        .arg(&rendered)
+        .arg("-o")
+        .arg(dir.path("q.exr")));
+    assert_one_line_error(
+        &out,
+        &[
+            "cornell-lambert.toml",
+            "adaptive_radius = true",
+            "--adaptive-radius false",
+        ],
+    );
 }
 
 /// A quiet render of the Cornell scene with the arguments `args` to `out`, its standard
