@@ -680,40 +680,29 @@ fn predict_compares_the_noise_model_with_a_render() {
             .arg(dir.path("q.exr")));
         assert_one_line_error(&out, needles);
     }
-    // The model is of the merge at x₀: light tracing in its place is refused.
-    let out = run(bdpm()
-        .arg("predict")
-        .arg(scene("preprint/cornell-lambert.toml"))
-        .args(settings)
-        .args(["--light-tracing", "true", "--measured"])
-        .arg(&rendered)
-        .arg("-o")
-        .arg(dir.path("q.exr")));
-    assert_one_line_error(
-        &out,
-        &[
-            "cornell-lambert.toml",
-            "light_tracing = true",
-            "--light-tracing false",
-        ],
-    );
-    // So is a radius per block of pixels, with the flag that turns it off.
-    let out = run(bdpm()
-        .arg("predict")
-        .arg(scene("preprint/cornell-lambert.toml"))
-        .args(settings)
-        .args(["--adaptive-radius", "true", "--measured"])
-        .arg(&rendered)
-        .arg("-o")
-        .arg(dir.path("q.exr")));
-    assert_one_line_error(
-        &out,
-        &[
-            "cornell-lambert.toml",
-            "adaptive_radius = true",
-            "--adaptive-radius false",
-        ],
-    );
+    // The model is of the merge at x₀ with one radius: light tracing in its place, or a
+    // radius per block of pixels, is refused, naming the flag that turns it off.
+    for (flag, key) in [
+        ("--light-tracing", "light_tracing"),
+        ("--adaptive-radius", "adaptive_radius"),
+    ] {
+        let out = run(bdpm()
+            .arg("predict")
+            .arg(scene("preprint/cornell-lambert.toml"))
+            .args(settings)
+            .args([flag, "true", "--measured"])
+            .arg(&rendered)
+            .arg("-o")
+            .arg(dir.path("q.exr")));
+        assert_one_line_error(
+            &out,
+            &[
+                "cornell-lambert.toml",
+                &format!("{key} = true"),
+                &format!("{flag} false"),
+            ],
+        );
+    }
 }
 
 /// A quiet render of the Cornell scene with the arguments `args` to `out`, its standard
