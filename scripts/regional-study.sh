@@ -14,7 +14,7 @@ bin=${BDPM:-$(cd "$(dirname "$0")/.." && pwd)/target/release/bdpm}
 L=${LAMBERT_REF:-out/ref/lambert-light-1000.exr}
 G=${GLOSSY_REF:-out/ref/glossy-path-4800.exr}
 # The glossy studies ran before scenes/cornell-glossy.toml set adaptive_radius: they keep one
-# radius (light tracing, in the technique studies, is refused with a radius per block).
+# radius, as measured.
 study() { # NAME SCENE REF MODES [FLAGS...]
   "$bin" study "$2" --modes "$4" --time-budget 40 --clock cpu --reference "$3" --quiet -o "$out/$1" "${@:5}"
 }

@@ -8,9 +8,10 @@
 use std::sync::OnceLock;
 
 use bdpm_integrator::RenderSettings;
-use bdpm_integrator::{Film, Renderer};
+use bdpm_integrator::{Film, Renderer, Techniques};
 use bdpm_scene::Scene;
 use bdpm_suite::{films_agree, load, lum, render, render_with, with_mode};
+use glam::DVec3;
 
 const RES: u32 = 16;
 /// Merge radius for the tests, m: large enough for ~1 photon per gather at 10⁵ photons per
@@ -223,22 +224,57 @@ fn light_traced_mixes_agree_with_the_light_reference_and_one_sided_weights_do_no
 
 /// `cornell-glossy` with light tracing in BDD=0's place, against the independent `path`
 /// reference: the connection evaluates the glossy BDF towards the camera, and the weights
-/// read the light path's f₁ (`optimal-path`).
+/// read the light path's f₁ (`optimal-path`). Once more each with a radius per block of
+/// pixels: a splat weighs with the S of the pixel it lands in, as that pixel's camera samples
+/// do, and BDD=1's gathers reach 1.4 r. At 16² light tracing carries most of every block, so
+/// the pilot would give no block 1.4 r; the test sets the map (blocks at ½ r, r, 1.4 r, 1.4 r).
 #[test]
 fn light_traced_glossy_mixes_agree_with_the_path_reference() {
     let (scene, settings) = glossy();
     let mut failures = Vec::new();
-    for mode in ["balance", "optimal-path"] {
+    for (mode, per_block) in [
+        ("balance", false),
+        ("optimal-path", false),
+        ("balance", true),
+        ("optimal-path", true),
+    ] {
         let mut s = with_mode(settings, mode, 32, 128, 250_000);
         s.radius = Some(0.015);
         s.light_tracing = true;
-        let film = render(scene, &s);
-        let name = format!("glossy {mode} + light tracing");
+        let mut renderer = Renderer::new(scene, &s).unwrap();
+        if per_block {
+            renderer = renderer.with_radius_map(block_map(&[0.1, 0.45, 0.9, 0.9]));
+            let blocks = renderer.radius_map().expect("a radius map").blocks();
+            assert_eq!(blocks, [1, 1, 2], "blocks at 1/2 r, r, 1.4 r");
+        }
+        let film = render_with(&renderer);
+        let name = format!(
+            "glossy {mode} + light tracing{}",
+            if per_block { ", radius per block" } else { "" }
+        );
         if let Err(e) = check_against(&name, &film, glossy_reference()) {
             failures.push(e);
         }
     }
     assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// The radius map of the RES × RES image whose 8 × 8 blocks, in row order, have BDD=1 carrying
+/// `shares` of their image (`RadiusMap::from_techniques`' rule picks each block's scale).
+fn block_map(shares: &[f64]) -> bdpm_integrator::RadiusMap {
+    let blocks_per_row = RES.div_ceil(8);
+    let techniques: Vec<Techniques> = (0..RES * RES)
+        .map(|i| {
+            let (x, y) = (i % RES, i / RES);
+            let share = shares[((y / 8) * blocks_per_row + x / 8) as usize];
+            Techniques {
+                direct: DVec3::splat(1.0 - share),
+                x1_weighted: DVec3::splat(share),
+                ..Techniques::default()
+            }
+        })
+        .collect();
+    bdpm_integrator::RadiusMap::from_techniques(RES, RES, &techniques)
 }
 
 /// `direct_boost` (the integrator's `direct` module): the pixel that holds the ceiling spot

@@ -14,21 +14,23 @@ fn bits(film: &bdpm_integrator::Film) -> Vec<u64> {
 #[test]
 fn images_do_not_depend_on_the_thread_count() {
     let (scene, settings) = load("preprint/cornell-glossy.toml", 24, 24);
-    // `balance` once more with the extra direct-light samples of the pixels near the light,
-    // and `optimal-path` with a radius per block of pixels from its pilot.
+    // (mode, direct-light samples near the light, a radius per block of pixels from a pilot,
+    // light tracing in BDD=0's place).
     let modes = [
-        ("path", 1, false),
-        ("light", 1, false),
-        ("optimal", 1, false),
-        ("balance", 1, false),
-        ("corrected-balance", 1, false),
-        ("balance", 16, false),
-        ("optimal-path", 1, true),
+        ("path", 1, false, false),
+        ("light", 1, false, false),
+        ("optimal", 1, false, false),
+        ("balance", 1, false, false),
+        ("corrected-balance", 1, false, false),
+        ("balance", 16, false, false),
+        ("optimal-path", 1, true, false),
+        ("balance", 1, true, true),
     ];
-    for (mode, direct_boost, adaptive_radius) in modes {
+    for (mode, direct_boost, adaptive_radius, light_tracing) in modes {
         let s = bdpm_integrator::RenderSettings {
             direct_boost,
             adaptive_radius,
+            light_tracing,
             ..with_mode(&settings, mode, 2, 2, 20_000)
         };
         let render_on = |threads: usize| {

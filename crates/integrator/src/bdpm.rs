@@ -269,12 +269,12 @@ impl<'a> Mix<'a> {
     }
 
     /// w₁ for `pair` under `weigher`, counted in `stats`; with light tracing in BDD=0's place,
-    /// [`Weigher::weight_light_traced`] with N_B·S·p_C(x₀) (both sides of a path compute it
-    /// from x₀ alone).
+    /// [`Weigher::weight_light_traced`] with N_B·S·p_C(x₀), S the weigher's (its pixel's, with
+    /// `adaptive_radius`): both sides of a path compute it from x₀ and its pixel alone.
     pub(crate) fn w1(&self, pair: &Pair, weigher: &Weigher, stats: &mut WeightStats) -> f64 {
         let w = if self.light_tracing {
             let b = &self.budget;
-            let ratio = b.camera_samples * b.merge_area * pair.x0.primary_density;
+            let ratio = b.camera_samples * weigher.merge_area() * pair.x0.primary_density;
             weigher.weight_light_traced(pair, ratio)
         } else {
             weigher.weight(pair)

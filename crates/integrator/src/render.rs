@@ -543,6 +543,19 @@ impl<'a> Renderer<'a> {
         self
     }
 
+    /// Test-only: merge with `map`'s radius per pixel instead of the pilot's (or of one
+    /// radius), the pixel table built again for it; lets a test put blocks at every scale
+    /// where the pilot would not. Only with the feature `test-hooks`.
+    #[cfg(feature = "test-hooks")]
+    #[doc(hidden)]
+    pub fn with_radius_map(mut self, map: RadiusMap) -> Self {
+        self.radius_map = Some(map);
+        if let (Some(h), Some(_)) = (self.heuristic, &self.table) {
+            self.prepare_table(h);
+        }
+        self
+    }
+
     /// The scene this renderer draws.
     pub fn scene(&self) -> &Scene {
         self.scene
@@ -746,21 +759,19 @@ impl Renderer<'_> {
             let factor = correction.map_or(1.0, |c| c.get(x, y));
             mix.weigher_scaled(table.map(|t| t.get(x, y)), factor, mix.radius_scale(x, y))
         };
+        // Built for the largest pixel radius, which every gather's query may reach.
+        let grid_radius = self.radius * mix.largest_radius_scale();
         let (map, splats) = if mix.light_tracing {
             PhotonMap::trace_visiting(
                 self.scene,
                 &options,
-                self.radius,
+                grid_radius,
                 |_| Splats::default(),
                 |acc, a, vertices| mix.splat(a, vertices, weigher_at, acc),
             )
         } else {
             (
-                PhotonMap::trace(
-                    self.scene,
-                    &options,
-                    self.radius * mix.largest_radius_scale(),
-                ),
+                PhotonMap::trace(self.scene, &options, grid_radius),
                 Vec::new(),
             )
         };

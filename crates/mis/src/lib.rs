@@ -472,6 +472,11 @@ impl Weigher {
         }
     }
 
+    /// The merge area S this weigher reads, m² (the budget's, which a per-pixel radius scales).
+    pub fn merge_area(&self) -> f64 {
+        self.scale.budget.merge_area
+    }
+
     /// The same weigher with `corrected-balance`'s factor c on BDD=1's density for this pixel
     /// (dimensionless; NaN or negative read as 0, i.e. BDD=0 only). Only
     /// [`Heuristic::CorrectedBalance`] reads it.

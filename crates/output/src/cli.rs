@@ -181,9 +181,9 @@ pub fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> CliResul
             Setting::CacheBins => "--cache-bins".into(),
             Setting::PixelTableRays => "--pixel-table-rays".into(),
             Setting::DirectBoost => "--direct-boost".into(),
+            Setting::AdaptiveRadius => "--adaptive-radius".into(),
             // A clash of two settings, either of which a flag may have set: name both.
             Setting::LightTracing => "--light-tracing / --no-jitter".into(),
-            Setting::AdaptiveRadius => "--adaptive-radius / --light-tracing".into(),
             // No flag sets it; only a scene file's value reaches here.
             Setting::ThresholdRadius => format!("render.{}", Setting::ThresholdRadius.key()),
         };
@@ -575,15 +575,6 @@ mod tests {
             ..Default::default()
         });
         assert!(e.starts_with("--mode: unknown mode 'fast'; expected one of path, light"));
-        let e = error(Overrides {
-            adaptive_radius: Some(true),
-            light_tracing: Some(true),
-            ..Default::default()
-        });
-        assert!(
-            e.starts_with("--adaptive-radius / --light-tracing: an adaptive radius"),
-            "{e}"
-        );
         let e = error(Overrides {
             light_tracing: Some(true),
             no_jitter: true,

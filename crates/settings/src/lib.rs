@@ -316,7 +316,7 @@ pub struct RenderSettings {
     /// carries under 30 % of it, the radius from 30 to 60 %, and 1.4 × the radius above
     /// (docs/results.md, "A sharper glossy reference"): where the exact direct light makes the
     /// image a larger disk buys little, where BDD=1's merges do it buys much. The mixing modes
-    /// without light tracing. Serialised only when set, so that the settings hash of every
+    /// (with light tracing, a splat weighs with the radius of the pixel it lands in). Serialised only when set, so that the settings hash of every
     /// render without it (and so its accumulation files) stays what it was.
     #[cfg_attr(
         feature = "serde",
@@ -535,11 +535,6 @@ pub enum SettingsError {
         "light tracing estimates a pixel's average over its area, which a render without pixel jitter (pixel_jitter = false) does not: turn one of them off"
     )]
     LightTracingWithoutJitter,
-    /// `adaptive_radius` with light tracing, whose splats weigh with one radius for the image.
-    #[error(
-        "an adaptive radius (adaptive_radius = true) sets a merge radius per block of pixels, and light tracing (light_tracing = true) weighs its connections with one radius for the image: turn one of them off"
-    )]
-    AdaptiveRadiusWithLightTracing,
 }
 
 impl SettingsError {
@@ -553,7 +548,6 @@ impl SettingsError {
             SettingsError::ThresholdRadius(_) => Setting::ThresholdRadius,
             SettingsError::ResolutionCount(_) => Setting::Resolution,
             SettingsError::LightTracingWithoutJitter => Setting::LightTracing,
-            SettingsError::AdaptiveRadiusWithLightTracing => Setting::AdaptiveRadius,
             SettingsError::Length { setting, .. } | SettingsError::UnknownName { setting, .. } => {
                 *setting
             }
@@ -661,9 +655,6 @@ impl RenderSettings {
         }
         if self.light_tracing && !self.pixel_jitter {
             return Err(SettingsError::LightTracingWithoutJitter);
-        }
-        if self.adaptive_radius && self.light_tracing {
-            return Err(SettingsError::AdaptiveRadiusWithLightTracing);
         }
         range(
             Setting::DirectBoost,

@@ -40,24 +40,13 @@ fn light_tracing_needs_jittered_pixels() {
 }
 
 #[test]
-fn adaptive_radius_refuses_light_tracing() {
+fn adaptive_radius_goes_with_light_tracing() {
     let s = RenderSettings {
         adaptive_radius: true,
+        light_tracing: true,
         ..RenderSettings::default()
     };
     assert_eq!(s.validate(), Ok(()));
-    let s = RenderSettings {
-        light_tracing: true,
-        ..s
-    };
-    assert_eq!(
-        s.validate(),
-        Err(SettingsError::AdaptiveRadiusWithLightTracing)
-    );
-    assert_eq!(
-        SettingsError::AdaptiveRadiusWithLightTracing.setting(),
-        Setting::AdaptiveRadius
-    );
 }
 
 #[test]
