@@ -316,8 +316,9 @@ pub struct RenderSettings {
     /// carries under 30 % of it, the radius from 30 to 60 %, and 1.4 × the radius above
     /// (docs/results.md, "A sharper glossy reference"): where the exact direct light makes the
     /// image a larger disk buys little, where BDD=1's merges do it buys much. The mixing modes
-    /// (with light tracing, a splat weighs with the radius of the pixel it lands in). Serialised only when set, so that the settings hash of every
-    /// render without it (and so its accumulation files) stays what it was.
+    /// (with light tracing, a splat weighs with the radius of the pixel it lands in).
+    /// Serialised only when set, so that the settings hash of every render without it (and so
+    /// its accumulation files) stays what it was.
     #[cfg_attr(
         feature = "serde",
         serde(default, skip_serializing_if = "std::ops::Not::not")
