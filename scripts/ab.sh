@@ -10,8 +10,10 @@
 # scenes/cornell-glossy.toml sets adaptive_radius (docs/results.md, "A one-pass pilot…"): a binary
 # older than ff11630 cannot read it, and the figures of docs/performance.md before that ran it
 # with one radius; give "preprint/cornell-glossy" to time a file every binary reads.
+# EXTRA="--light-tracing true" adds flags to every render.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+read -r -a extra <<< "${EXTRA:-}"
 n=$1; scene=$2; mode=$3; res=$4; passes=$5; threads=$6; shift 6
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
@@ -21,7 +23,7 @@ for i in $(seq "$n"); do
     bin=${b%@*}; m=$mode
     [[ "$b" == *@* ]] && m=${b##*@}
     "$bin" render "scenes/$scene.toml" --mode "$m" --resolution "$res" --passes "$passes" \
-      --threads "$threads" -o "$tmp/run.exr" --quiet > /dev/null
+      --threads "$threads" "${extra[@]}" -o "$tmp/run.exr" --quiet > /dev/null
     python3 - "$tmp/run.json" >> "$tmp/$key.txt" <<'PY'
 import json, sys
 d = json.load(open(sys.argv[1])); t = d["timing"]
