@@ -223,6 +223,19 @@ impl<'a> Mix<'a> {
         (acceptance_area(d2.sqrt()), density)
     }
 
+    /// The mix's budget for one pixel: its N_B (N_eff where given, else the mix's) and its
+    /// merge area, scale²·S for a radius of `scale` × r (exactly S at a scale of 1).
+    pub(crate) fn pixel_budget(&self, camera_samples: Option<f64>, scale: f32) -> Budget {
+        let mut budget = Budget {
+            camera_samples: camera_samples.unwrap_or(self.budget.camera_samples),
+            ..self.budget
+        };
+        if scale != 1.0 {
+            budget.merge_area *= f64::from(scale) * f64::from(scale);
+        }
+        budget
+    }
+
     /// Pixel (x, y)'s scale of the merge radius: 1 without a map. Exactly 1 keeps every
     /// kernel, gather and weight input bit for bit what it is without one.
     #[inline]
@@ -250,16 +263,7 @@ impl<'a> Mix<'a> {
         correction: f64,
         scale: f32,
     ) -> Weigher {
-        let mut budget = match pixel {
-            Some(p) => Budget {
-                camera_samples: p.camera_samples,
-                ..self.budget
-            },
-            None => self.budget,
-        };
-        if scale != 1.0 {
-            budget.merge_area *= f64::from(scale) * f64::from(scale);
-        }
+        let budget = self.pixel_budget(pixel.map(|p| p.camera_samples), scale);
         Weigher::new(self.heuristic, &budget, pixel.map(|p| &p.terms)).with_correction(correction)
     }
 
@@ -325,16 +329,17 @@ impl<'a> Mix<'a> {
         for (job, slot) in jobs.iter_mut().zip(slots.iter()) {
             let Some(x0) = &slot.x0 else { continue };
             let camera_w1 = slot.second.as_ref().map(|s| s.w_const);
+            // The kernel 1/S of the sample's pixel, for both of its merges.
+            let k = self.inv_area / (job.scale * job.scale);
             if let Some(second) = &slot.second {
                 let out = (&mut job.out, &mut job.pilot);
-                let k = self.inv_area / (job.scale * job.scale);
                 self.merge_at_x1(x0, (map, k), second, &slot.query1, weigher, stats, out);
             }
             if self.merges_at_x0() {
                 let photons = (map, prev_inputs);
                 self.merge_at_x0(
                     x0,
-                    (photons, self.inv_area / (job.scale * job.scale)),
+                    (photons, k),
                     &slot.query0,
                     weigher,
                     camera_w1,

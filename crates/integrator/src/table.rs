@@ -185,13 +185,7 @@ pub(crate) fn pixel_weights(
         1.0
     };
     let camera_samples = effective_samples(n_b, overlap);
-    let mut budget = Budget {
-        camera_samples,
-        ..mix.budget
-    };
-    if scale != 1.0 {
-        budget.merge_area *= f64::from(scale) * f64::from(scale);
-    }
+    let budget = mix.pixel_budget(Some(camera_samples), scale);
     let terms = spec.rays.map_or(PixelTerms::default(), |rays| {
         pixel_terms(mix, &budget, x0, rays, spec.seed, key)
     });

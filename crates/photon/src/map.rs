@@ -280,9 +280,15 @@ impl PhotonMap {
         self.restart_query_within(q, x, self.radius);
     }
 
-    /// [`Self::restart_query`] with a gather radius of its own, at most the grid's (scratch).
+    /// [`Self::restart_query`] with a gather radius of its own, at most the grid's: build the
+    /// map for the largest radius a query will use (a larger one is cut to the grid's, which
+    /// would bias a kernel normalised for it).
     #[inline]
     pub fn restart_query_within(&self, q: &mut PhotonQuery, x: Vec3, radius: f32) {
+        debug_assert!(
+            radius <= self.radius,
+            "gather radius {radius} beyond the grid's"
+        );
         let radius = radius.min(self.radius);
         q.x = x;
         q.n_found = 0;
