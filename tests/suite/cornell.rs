@@ -8,10 +8,9 @@
 use std::sync::OnceLock;
 
 use bdpm_integrator::RenderSettings;
-use bdpm_integrator::{Film, Renderer, Techniques};
+use bdpm_integrator::{Film, Renderer};
 use bdpm_scene::Scene;
-use bdpm_suite::{films_agree, load, lum, render, render_with, with_mode};
-use glam::DVec3;
+use bdpm_suite::{block_map, films_agree, load, lum, render, render_with, with_mode};
 
 const RES: u32 = 16;
 /// Merge radius for the tests, m: large enough for ~1 photon per gather at 10⁵ photons per
@@ -243,7 +242,7 @@ fn light_traced_glossy_mixes_agree_with_the_path_reference() {
         s.light_tracing = true;
         let mut renderer = Renderer::new(scene, &s).unwrap();
         if per_block {
-            renderer = renderer.with_radius_map(block_map(&[0.1, 0.45, 0.9, 0.9]));
+            renderer = renderer.with_radius_map(block_map(RES, &[0.1, 0.45, 0.9, 0.9]));
             let blocks = renderer.radius_map().expect("a radius map").blocks();
             assert_eq!(blocks, [1, 1, 2], "blocks at 1/2 r, r, 1.4 r");
         }
@@ -257,24 +256,6 @@ fn light_traced_glossy_mixes_agree_with_the_path_reference() {
         }
     }
     assert!(failures.is_empty(), "{failures:#?}");
-}
-
-/// The radius map of the RES × RES image whose 8 × 8 blocks, in row order, have BDD=1 carrying
-/// `shares` of their image (`RadiusMap::from_techniques`' rule picks each block's scale).
-fn block_map(shares: &[f64]) -> bdpm_integrator::RadiusMap {
-    let blocks_per_row = RES.div_ceil(8);
-    let techniques: Vec<Techniques> = (0..RES * RES)
-        .map(|i| {
-            let (x, y) = (i % RES, i / RES);
-            let share = shares[((y / 8) * blocks_per_row + x / 8) as usize];
-            Techniques {
-                direct: DVec3::splat(1.0 - share),
-                x1_weighted: DVec3::splat(share),
-                ..Techniques::default()
-            }
-        })
-        .collect();
-    bdpm_integrator::RadiusMap::from_techniques(RES, RES, &techniques)
 }
 
 /// `direct_boost` (the integrator's `direct` module): the pixel that holds the ceiling spot

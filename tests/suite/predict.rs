@@ -5,13 +5,23 @@
 //! uniform indirect irradiance: T0 has a closed form, and the measured V must agree with it.
 
 use bdpm_integrator::{RenderSettings, Renderer, Stage};
-use bdpm_suite::{Furnace, load, with_mode};
+use bdpm_suite::{Furnace, block_map, load, with_mode};
 use glam::DVec3;
 
 /// Image-mean measured per-pass variance (luminance) and its standard error, from the spread
 /// of the per-pass image means of the squared deviations: pixels share photons, so their
 /// variance estimates are correlated and a per-pixel formula would understate the error.
 fn measured_mean_variance(renderer: &Renderer<'_>) -> (f64, f64) {
+    let pixels = renderer.settings().width as usize * renderer.settings().height as usize;
+    measured_group_variances(renderer, &vec![0; pixels], 1)[0]
+}
+
+/// [`measured_mean_variance`] over each group of pixels: `group[i]` is pixel i's, of `groups`.
+fn measured_group_variances(
+    renderer: &Renderer<'_>,
+    group: &[usize],
+    groups: usize,
+) -> Vec<(f64, f64)> {
     let s = renderer.settings();
     let passes: Vec<Vec<f64>> = (0..s.passes)
         .map(|p| {
@@ -21,26 +31,32 @@ fn measured_mean_variance(renderer: &Renderer<'_>) -> (f64, f64) {
         .collect();
     let k = passes.len() as f64;
     let n = passes[0].len();
+    assert_eq!(group.len(), n);
     let mean: Vec<f64> = (0..n)
         .map(|i| passes.iter().map(|p| p[i]).sum::<f64>() / k)
         .collect();
-    // m_k: the image mean of pass k's squared deviation, scaled so that mean_k m_k is the
-    // image mean of the unbiased per-pixel variances.
-    let m: Vec<f64> = passes
-        .iter()
-        .map(|p| {
-            p.iter()
-                .zip(&mean)
-                .map(|(x, m)| (x - m).powi(2))
-                .sum::<f64>()
-                / n as f64
-                * k
-                / (k - 1.0)
+    (0..groups)
+        .map(|g| {
+            let count = group.iter().filter(|&&x| x == g).count() as f64;
+            // m_k: the group mean of pass k's squared deviation, scaled so that mean_k m_k is
+            // the group mean of the unbiased per-pixel variances.
+            let m: Vec<f64> = passes
+                .iter()
+                .map(|p| {
+                    (0..n)
+                        .filter(|&i| group[i] == g)
+                        .map(|i| (p[i] - mean[i]).powi(2))
+                        .sum::<f64>()
+                        / count
+                        * k
+                        / (k - 1.0)
+                })
+                .collect();
+            let v = m.iter().sum::<f64>() / k;
+            let var_m = m.iter().map(|x| (x - v).powi(2)).sum::<f64>() / (k - 1.0);
+            (v, (var_m / k).sqrt())
         })
-        .collect();
-    let v = m.iter().sum::<f64>() / k;
-    let var_m = m.iter().map(|x| (x - v).powi(2)).sum::<f64>() / (k - 1.0);
-    (v, (var_m / k).sqrt())
+        .collect()
 }
 
 fn lum(c: DVec3) -> f64 {
@@ -127,6 +143,73 @@ fn bdd0_furnace_prediction_matches_without_jitter() {
 #[test]
 fn bdd0_furnace_prediction_matches_with_one_jittered_sample() {
     check(1, true);
+}
+
+/// A radius per block of pixels (`adaptive_radius`; here a fixed map with blocks at ½ r, r and
+/// 1.4 r): each pixel's T0 is the closed form with its own S, α/scale², and the measured V of
+/// each group of blocks agrees with it. Same tolerance as [`check`]; a model that ignored the
+/// map would be off by 4× on the ½ r blocks and 2× on the 1.4 r ones.
+#[test]
+fn bdd0_furnace_prediction_follows_a_radius_per_block() {
+    let (scene, settings) = furnace_settings(4, false);
+    // 32 × 32: 4 × 4 blocks, BDD=1 shares giving each scale on several blocks.
+    let shares = [
+        0.1, 0.45, 0.9, 0.1, //
+        0.9, 0.1, 0.45, 0.9, //
+        0.45, 0.9, 0.1, 0.45, //
+        0.1, 0.45, 0.9, 0.1,
+    ];
+    let map = block_map(32, &shares);
+    assert_eq!(map.blocks(), [6, 5, 5]);
+    let scales: Vec<f32> = (0..32 * 32).map(|i| map.scale(i % 32, i / 32)).collect();
+    let renderer = Renderer::new(&scene, &settings)
+        .expect("valid settings")
+        .with_radius_map(map)
+        .with_model_inputs();
+    let p = renderer.predict_variance().expect("bdd0 has a noise model");
+
+    let furnace = Furnace::of(&scene);
+    let k = furnace.albedo;
+    let s_area = std::f64::consts::PI * 0.05f64.powi(2);
+    let alpha = furnace.flux / (settings.photons as f64 * s_area);
+    let exact_t0 = alpha * (k / std::f64::consts::PI).powi(2) * furnace.indirect_irradiance();
+    let group: Vec<usize> = scales
+        .iter()
+        .map(|&s| {
+            [0.5, 1.0, 1.4]
+                .iter()
+                .position(|&c| c == s)
+                .expect("a class scale")
+        })
+        .collect();
+    let measured = measured_group_variances(&renderer, &group, 3);
+    for (g, scale) in [0.5f64, 1.0, 1.4].into_iter().enumerate() {
+        let mean = |v: &[f64]| {
+            let (sum, n) = v
+                .iter()
+                .zip(&group)
+                .filter(|(_, gi)| **gi == g)
+                .fold((0.0, 0.0), |(s, n), (x, _)| (s + x, n + 1.0));
+            sum / n
+        };
+        let (t0, total) = (mean(&p.t0), mean(&p.total));
+        let expected = exact_t0 / (scale * scale);
+        let (v, se) = measured[g];
+        eprintln!(
+            "furnace bdd0, blocks at {scale} r: T0 {t0:.4e} (closed form {expected:.4e}), \
+             predicted {total:.4e}, measured {v:.4e} ± {se:.2e} (ratio {:.3})",
+            total / v
+        );
+        assert!(
+            (t0 / expected - 1.0).abs() < 0.03,
+            "{scale} r: T0 {t0} against the closed form {expected}"
+        );
+        assert!(se < 0.05 * v, "{scale} r: too noisy to test: {se} of {v}");
+        assert!(
+            (total - v).abs() < 4.0 * se + 0.03 * total,
+            "{scale} r: predicted {total} against measured {v} ± {se}"
+        );
+    }
 }
 
 /// Building the cache for the model does not change what a render computes (the mix reads

@@ -272,3 +272,22 @@ pub fn with_kernel(geometry: &Geometry, kernel: Kernel) -> Geometry {
     }
     Geometry::with_kernel(mesh, kernel).expect("valid mesh")
 }
+
+/// The radius map of a `side` × `side` image whose 8 × 8 blocks, in row order, have BDD=1
+/// carrying `shares` of their image (`RadiusMap::from_techniques`' rule picks each block's
+/// scale: under 0.3 → ½ r, up to 0.6 → r, above → 1.4 r).
+pub fn block_map(side: u32, shares: &[f64]) -> bdpm_integrator::RadiusMap {
+    let blocks_per_row = side.div_ceil(8);
+    let techniques: Vec<bdpm_integrator::Techniques> = (0..side * side)
+        .map(|i| {
+            let (x, y) = (i % side, i / side);
+            let share = shares[((y / 8) * blocks_per_row + x / 8) as usize];
+            bdpm_integrator::Techniques {
+                direct: DVec3::splat(1.0 - share),
+                x1_weighted: DVec3::splat(share),
+                ..bdpm_integrator::Techniques::default()
+            }
+        })
+        .collect();
+    bdpm_integrator::RadiusMap::from_techniques(side, side, &techniques)
+}

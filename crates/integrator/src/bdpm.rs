@@ -250,14 +250,10 @@ impl<'a> Mix<'a> {
 
     /// The weigher of one pixel: the mode with the pixel's A, B and, where the table gives
     /// one, its N_eff in place of N_B (method.md §12; N_B itself under the pinhole model and
-    /// without jitter, so those weights keep their bits), and `corrected-balance`'s factor
-    /// `correction` for the pixel (1 for `balance`'s weights; the other modes ignore it).
-    pub(crate) fn weigher(&self, pixel: Option<&PixelWeights>, correction: f64) -> Weigher {
-        self.weigher_scaled(pixel, correction, 1.0)
-    }
-
-    /// [`Self::weigher`] for a pixel whose merge radius is `scale` × r: its S is scale²·S.
-    pub(crate) fn weigher_scaled(
+    /// without jitter, so those weights keep their bits), `corrected-balance`'s factor
+    /// `correction` for the pixel (1 for `balance`'s weights; the other modes ignore it), and
+    /// the pixel's merge area scale²·S for its radius of `scale` × r ([`Self::radius_scale`]).
+    pub(crate) fn weigher(
         &self,
         pixel: Option<&PixelWeights>,
         correction: f64,

@@ -137,9 +137,6 @@ impl Renderer<'_> {
         if self.light_traced() {
             return Err(RenderError::LightTracing(h.name()));
         }
-        if self.settings().adaptive_radius {
-            return Err(RenderError::AdaptiveRadius(h.name()));
-        }
         if h.needs().pixel_table && !self.pixel_table().is_some_and(|t| t.has_terms()) {
             return Err(RenderError::NoPixelTable {
                 weights: h.name(),
@@ -200,8 +197,11 @@ impl Renderer<'_> {
         let x0 = mix.first_vertex(&hit0, -dir)?;
 
         let n_b = s.spp as f64;
+        // The pixel's radius (`adaptive_radius`): its merges, S, N_eff and weights are its own.
+        let scale = mix.radius_scale(x, y);
         let overlap = if s.pixel_jitter {
-            footprint_overlap(scene, &x0.sh, centre, self.radius(), pixel_strata(s))
+            let radius = self.radius() * scale;
+            footprint_overlap(scene, &x0.sh, centre, radius, pixel_strata(s))
         } else {
             1.0
         };
@@ -209,7 +209,7 @@ impl Renderer<'_> {
         // The weights' inputs exactly as the renderer passes them.
         let table = self.pixel_table().map(|t| t.get(x, y));
         let factor = self.correction().map_or(1.0, |c| c.get(x, y));
-        let weigher = mix.weigher(table, factor);
+        let weigher = mix.weigher(table, factor, scale);
 
         // The model's own directions: as many as the preprint's A/B rays unless given, so that
         // a prediction does not get noisier where the table takes fewer.
@@ -243,8 +243,8 @@ impl Renderer<'_> {
             previous = d.value;
         }
         let n = rays as f64;
-        let b = &mix.budget;
-        // α = Φ/(N_F·S), W·m⁻².
+        let b = mix.pixel_budget(None, scale);
+        // α = Φ/(N_F·S), W·m⁻², S the pixel's.
         let alpha = b.flux / (b.photons * b.merge_area);
         // The variance of one sample's BDD=1 value: the sample variance (unbiased, divisor
         // N − 1) for independent directions; for stratified ones the mean variance within a

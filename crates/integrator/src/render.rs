@@ -94,9 +94,10 @@ pub enum RenderError {
         "light_tracing = true: mode '{0}' then samples BDD=0 by light tracing, which the noise model and the weight maps (both of the merge at x0) do not describe; set light_tracing = false (--light-tracing false)"
     )]
     LightTracing(&'static str),
-    /// The noise model or a weight map asked of a render with a radius per block of pixels.
+    /// A weight map asked of a render with a radius per block of pixels: a map over x₁ has
+    /// one S, and the weight of a path through x₁ would depend on its pixel's.
     #[error(
-        "adaptive_radius = true: mode '{0}' then merges with a radius per block of pixels, which the noise model and the weight maps (both of one radius) do not describe; set adaptive_radius = false (--adaptive-radius false)"
+        "adaptive_radius = true: mode '{0}' then merges with a radius per block of pixels, and its weights at x1 depend on each pixel's radius, which a weight map (of one radius) does not describe; set adaptive_radius = false (--adaptive-radius false)"
     )]
     AdaptiveRadius(&'static str),
     /// The weights asked for read the pixel table's A and B, which the mode did not build.
@@ -757,7 +758,7 @@ impl Renderer<'_> {
         };
         let weigher_at = |x: u32, y: u32| {
             let factor = correction.map_or(1.0, |c| c.get(x, y));
-            mix.weigher_scaled(table.map(|t| t.get(x, y)), factor, mix.radius_scale(x, y))
+            mix.weigher(table.map(|t| t.get(x, y)), factor, mix.radius_scale(x, y))
         };
         // Built for the largest pixel radius, which every gather's query may reach.
         let grid_radius = self.radius * mix.largest_radius_scale();

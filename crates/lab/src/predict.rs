@@ -457,16 +457,6 @@ impl Setup<'_> {
                 RenderError::LightTracing(h.name())
             ));
         }
-        if let Some(h) = renderer
-            .heuristic()
-            .filter(|_| renderer.settings().adaptive_radius)
-        {
-            return Err(format!(
-                "{}: {}",
-                args.scene.display(),
-                RenderError::AdaptiveRadius(h.name())
-            ));
-        }
         let renderer = pool.install(|| renderer.with_model_inputs());
         check_settings(&self.measured, settings, &renderer, &args.measured)?;
         // Every other setting (depth, cache, table, clamp, …), which the header lists no

@@ -567,7 +567,8 @@ fn compare_tells_identical_from_merely_equivalent_renders() {
 /// blocks the median predicted/measured V lies within a factor of 2. The merge radius is
 /// raised to 1 cm so that each gather finds photons at 30000 per pass: with the default
 /// 1.75 mm most gathers are empty and a pixel's measured V hinges on a handful of photons.
-/// A render with other settings, or of another size, is refused with one line.
+/// A render with other settings, or of another size, is refused with one line. With a radius
+/// per block of pixels (`--adaptive-radius true`) the model follows each pixel's radius.
 #[test]
 fn predict_compares_the_noise_model_with_a_render() {
     let dir = TempDir::new("predict");
@@ -680,29 +681,56 @@ fn predict_compares_the_noise_model_with_a_render() {
             .arg(dir.path("q.exr")));
         assert_one_line_error(&out, needles);
     }
-    // The model is of the merge at x₀ with one radius: light tracing in its place, or a
-    // radius per block of pixels, is refused, naming the flag that turns it off.
-    for (flag, key) in [
-        ("--light-tracing", "light_tracing"),
-        ("--adaptive-radius", "adaptive_radius"),
-    ] {
-        let out = run(bdpm()
-            .arg("predict")
-            .arg(scene("preprint/cornell-lambert.toml"))
-            .args(settings)
-            .args([flag, "true", "--measured"])
-            .arg(&rendered)
-            .arg("-o")
-            .arg(dir.path("q.exr")));
-        assert_one_line_error(
-            &out,
-            &[
-                "cornell-lambert.toml",
-                &format!("{key} = true"),
-                &format!("{flag} false"),
-            ],
-        );
-    }
+    // The model is of the merge at x₀: light tracing in its place is refused, naming the flag
+    // that turns it off.
+    let out = run(bdpm()
+        .arg("predict")
+        .arg(scene("preprint/cornell-lambert.toml"))
+        .args(settings)
+        .args(["--light-tracing", "true", "--measured"])
+        .arg(&rendered)
+        .arg("-o")
+        .arg(dir.path("q.exr")));
+    assert_one_line_error(
+        &out,
+        &[
+            "cornell-lambert.toml",
+            "light_tracing = true",
+            "--light-tracing false",
+        ],
+    );
+
+    // A radius per block of pixels: bdd0's pilot has no BDD=1 share, so every block merges at
+    // ½ r (here 1 cm again). Without jitter V is T0 alone, and a model that kept r everywhere
+    // would predict a quarter of the measured V.
+    let mut adaptive = settings.to_vec();
+    adaptive[9] = "0.02";
+    adaptive.extend(["--adaptive-radius", "true", "--no-jitter"]);
+    let out = run(bdpm()
+        .arg("render")
+        .arg(scene("preprint/cornell-lambert.toml"))
+        .args(&adaptive)
+        .args(["--passes", "8", "--quiet", "-o"])
+        .arg(dir.path("a.exr")));
+    assert_success(&out);
+    let out = run(bdpm()
+        .arg("predict")
+        .arg(scene("preprint/cornell-lambert.toml"))
+        .args(&adaptive)
+        .arg("--measured")
+        .arg(dir.path("a.exr"))
+        .arg("-o")
+        .arg(dir.path("pa.exr")));
+    assert_success(&out);
+    let json = read_json(&dir.path("pa.json"));
+    let median = json
+        .pointer("/blocks/ratio_median")
+        .and_then(|v| v.as_f64())
+        .expect("a block median");
+    assert!(
+        (0.5..=2.0).contains(&median),
+        "block median ratio {median} with a radius per block"
+    );
 }
 
 /// A quiet render of the Cornell scene with the arguments `args` to `out`, its standard
