@@ -4,7 +4,7 @@
 //! survival q = k), and a gather's variance is α·(k/π)²·E_ind with α = Φ/(N_F·S), E_ind the
 //! uniform indirect irradiance: T0 has a closed form, and the measured V must agree with it.
 
-use bdpm_integrator::{RenderSettings, Renderer, Stage};
+use bdpm_integrator::{RenderSettings, Renderer, Stage, model_cache_settings};
 use bdpm_suite::{Furnace, block_map, load, with_mode};
 use glam::DVec3;
 
@@ -59,6 +59,11 @@ fn measured_group_variances(
         .collect()
 }
 
+/// Photons of the noise model's cache in these tests (`bdpm predict` takes
+/// `MODEL_CACHE_PHOTONS`, made for 256² renders of the Cornell box): enough for the furnace's
+/// closed form within its 3 % and for the small images here, in a fraction of the time.
+const MODEL_PHOTONS: u64 = 1_000_000;
+
 fn lum(c: DVec3) -> f64 {
     0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
 }
@@ -97,7 +102,7 @@ fn check(spp: u32, jitter: bool) {
     let (scene, settings) = furnace_settings(spp, jitter);
     let renderer = Renderer::new(&scene, &settings)
         .expect("valid settings")
-        .with_model_inputs();
+        .with_model_cache(MODEL_PHOTONS);
     let (total, t0, t_jitter) = predicted_means(&renderer);
 
     let furnace = Furnace::of(&scene);
@@ -165,7 +170,7 @@ fn bdd0_furnace_prediction_follows_a_radius_per_block() {
     let renderer = Renderer::new(&scene, &settings)
         .expect("valid settings")
         .with_radius_map(map)
-        .with_model_inputs();
+        .with_model_cache(MODEL_PHOTONS);
     let p = renderer.predict_variance().expect("bdd0 has a noise model");
 
     let furnace = Furnace::of(&scene);
@@ -212,26 +217,61 @@ fn bdd0_furnace_prediction_follows_a_radius_per_block() {
     }
 }
 
-/// Building the cache for the model does not change what a render computes (the mix reads
-/// the cache only when its mode needs it): the same image bits with and without it.
+/// The noise model's cache does not change what a render computes (the mix reads the
+/// weights' cache, and only when its mode needs one): the same image bits with and without
+/// it, for modes without a cache and for the glossy file's `optimal-path`, whose weights read
+/// a one-bin cache while the model gets its own of `MODEL_CACHE_BINS` bins. A renderer whose
+/// settings are `model_cache_settings` weighs with the model's cache and builds no second one.
 #[test]
 fn model_inputs_keep_the_image_bits() {
-    let (scene, settings) = load("preprint/cornell-lambert.toml", 16, 16);
-    for mode in ["bdd0", "bdd1", "balance"] {
-        let s = with_mode(&settings, mode, 1, 2, 5_000);
-        let plain = Renderer::new(&scene, &s).expect("valid settings");
-        let with_cache = Renderer::new(&scene, &s)
+    let stages = |r: &Renderer<'_>| -> Vec<String> {
+        r.stages()
+            .iter()
+            .filter(|st| st.stage == Stage::RadianceCache)
+            .map(|st| st.detail.clone())
+            .collect()
+    };
+    let lambert = load("preprint/cornell-lambert.toml", 16, 16);
+    let glossy = load("cornell-glossy.toml", 16, 16);
+    let cases = [
+        (&lambert, "bdd0"),
+        (&lambert, "bdd1"),
+        (&lambert, "balance"),
+        (&glossy, "optimal-path"),
+    ];
+    for ((scene, settings), mode) in cases {
+        let mut s = with_mode(settings, mode, 1, 2, 5_000);
+        s.adaptive_radius = false;
+        let plain = Renderer::new(scene, &s).expect("valid settings");
+        let with_cache = Renderer::new(scene, &s)
             .expect("valid settings")
-            .with_model_inputs();
+            .with_model_cache(MODEL_PHOTONS);
+        let built = stages(&with_cache);
+        let model = built
+            .iter()
+            .find(|d| d.starts_with("noise model's"))
+            .unwrap_or_else(|| panic!("{mode}: no model cache in {built:?}"));
         assert!(
-            with_cache
-                .stages()
-                .iter()
-                .any(|st| st.stage == Stage::RadianceCache)
+            model.contains(&format!("{MODEL_PHOTONS} photons")),
+            "{model}"
         );
+        if mode == "optimal-path" {
+            assert_eq!(s.cache_bins, 1, "the glossy file's weights read one bin");
+            assert_eq!(built.len(), 2, "{built:?}");
+            assert!(model.contains("100 bin(s)"), "{model}");
+        }
         let a = plain.render_pass(0, &|_| {}).estimates;
         let b = with_cache.render_pass(0, &|_| {}).estimates;
         assert_eq!(a, b, "{mode}");
+
+        let own = Renderer::new(scene, &model_cache_settings(&s, MODEL_PHOTONS))
+            .expect("valid settings")
+            .with_model_cache(MODEL_PHOTONS);
+        let built = stages(&own);
+        if mode == "optimal-path" {
+            assert_eq!(built.len(), 1, "{mode}: {built:?}");
+            assert!(!built[0].starts_with("noise model's"), "{built:?}");
+        }
     }
 }
 
@@ -259,18 +299,22 @@ fn no_mode_predicts_less_than_the_floor() {
     };
     let mut gaps = Vec::new();
     for jitter in [true, false] {
-        let mut base = with_mode(&settings, "optimal-split", 1, 8, 50_000);
+        // The floor weighs with the cache the model reads (as `bdpm predict --headroom`'s).
+        let mut base = model_cache_settings(
+            &with_mode(&settings, "optimal-split", 1, 8, 50_000),
+            MODEL_PHOTONS,
+        );
         base.pixel_jitter = jitter;
         let floor_r = Renderer::new(&scene, &base)
             .expect("valid settings")
-            .with_model_inputs();
+            .with_model_cache(MODEL_PHOTONS);
         let floor = floor_r.predict_variance_for(floor_h).expect("floor");
         for mode in ["bdd0", "bdd1", "optimal", "balance", "optimal-path"] {
             let mut s = with_mode(&settings, mode, 1, 8, 50_000);
             s.pixel_jitter = jitter;
             let r = Renderer::new(&scene, &s)
                 .expect("valid settings")
-                .with_model_inputs();
+                .with_model_cache(MODEL_PHOTONS);
             let p = r.predict_variance().expect("a BDPM mode");
             let (v, f) = total_over(&p, &floor);
             let ratio = v / f;
@@ -315,7 +359,7 @@ fn direct_boost_lowers_the_predicted_jitter_where_it_samples_more() {
         };
         let renderer = Renderer::new(&scene, &s)
             .expect("valid settings")
-            .with_model_inputs();
+            .with_model_cache(MODEL_PHOTONS);
         let p = renderer
             .predict_variance()
             .expect("balance has a noise model");

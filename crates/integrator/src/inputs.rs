@@ -390,6 +390,20 @@ impl<'a> Mix<'a> {
         (ld, b)
     }
 
+    /// (L_d, b) of `cache` (the noise model's) at the vertex `x1` towards `wo`, luminances,
+    /// read as [`Self::pair`] reads the weights' cache.
+    pub(crate) fn model_lookup(
+        &self,
+        cache: &RadianceCache,
+        x1: &WeightVertex,
+        wo: Vec3,
+    ) -> (f64, f64) {
+        cache.slot(x1.prim, x1.p, wo).map_or((0.0, 0.0), |s| {
+            let (ld, b) = self.cache_read(cache, s, x1);
+            (ld as f64, b as f64)
+        })
+    }
+
     /// The radiance cache, when the mode's weights read it.
     fn cache_needed(&self) -> Option<&'a RadianceCache> {
         self.cache.filter(|_| self.needs.radiance_cache)

@@ -36,8 +36,9 @@ pub use memory::{MemoryEstimate, MemoryItem, PILOT_PHOTONS, estimate_memory, hum
 pub use predict::{JITTER_RAYS, Prediction};
 pub use radius::RadiusMap;
 pub use render::{
-    FirstHitLayers, LARGE_RADIUS_FRACTION, PassOutput, RenderError, Renderer, StageProbe,
-    StageReport, TargetError, first_hit_layers, render_path_pass, resolve_radius,
+    FirstHitLayers, LARGE_RADIUS_FRACTION, MODEL_CACHE_BINS, MODEL_CACHE_PHOTONS, PassOutput,
+    RenderError, Renderer, StageProbe, StageReport, TargetError, first_hit_layers,
+    model_cache_settings, render_path_pass, resolve_radius,
 };
 // The settings are `bdpm-settings`'; re-exported so that a user of the integrator needs one
 // dependency.

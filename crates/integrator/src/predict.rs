@@ -48,6 +48,7 @@
 //!
 //! Units: every term is a variance of a radiance, W²·m⁻⁴·sr⁻².
 use bdpm_bdf::luminance;
+use bdpm_cache::RadianceCache;
 use bdpm_geometry::{Domain, Rng};
 use bdpm_mis::{Heuristic, Weigher, effective_samples};
 
@@ -149,20 +150,20 @@ impl Renderer<'_> {
                 mode: self.settings().mode,
             });
         }
-        let mut mix = self.mix(h);
-        if mix.cache.is_none() {
+        let Some(cache) = self.model_cache() else {
             return Err(RenderError::NoCache);
-        }
-        // The model needs L₀ and L_d at x₁ for every mode; these needs change only what the
-        // pair carries, not the weights (a mode reads only the fields it needs).
+        };
+        let mut mix = self.mix(h);
+        // The model needs L₀ at x₁ for every mode; this changes only what the pair carries,
+        // not the weights (a mode reads only the fields it needs). Its L_d and b come from
+        // `cache`, the weights' from theirs, as in the render.
         mix.needs.direct_at_x1 = true;
-        mix.needs.radiance_cache = true;
         let s = self.settings();
         let (w, hgt) = (s.width as usize, s.height as usize);
         let mut terms = vec![None; w * hgt];
         terms.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
             for (x, out) in row.iter_mut().enumerate() {
-                *out = self.pixel_terms(&mix, x as u32, y as u32);
+                *out = self.pixel_terms(&mix, cache, x as u32, y as u32);
             }
         });
         let pick = |f: fn(&Terms) -> f64| -> Vec<f64> {
@@ -184,7 +185,7 @@ impl Renderer<'_> {
     }
 
     /// The terms of pixel (x, y), or None if its centre sees no surface facing the camera.
-    fn pixel_terms(&self, mix: &Mix<'_>, x: u32, y: u32) -> Option<Terms> {
+    fn pixel_terms(&self, mix: &Mix<'_>, cache: &RadianceCache, x: u32, y: u32) -> Option<Terms> {
         let scene = self.scene();
         let s = self.settings();
         let cam = &scene.camera();
@@ -232,7 +233,7 @@ impl Renderer<'_> {
                 let [a, b] = in_cell(cell, grid, [u[1], u[2]]);
                 u = [u[0], a, b];
             }
-            let d = direction(mix, &weigher, &x0, u).unwrap_or_default();
+            let d = direction(mix, cache, &weigher, &x0, u).unwrap_or_default();
             sum += d.value;
             sum_sq += d.value * d.value;
             photons_x0 += d.photons_x0;
@@ -254,7 +255,7 @@ impl Renderer<'_> {
             None => ((sum_sq - sum * sum / n) / (n - 1.0)).max(0.0),
         };
         let jitter = if s.pixel_jitter {
-            self.jitter_variance(mix, &x0, x, y, pixel) / n_b
+            self.jitter_variance(cache, &x0, (x, y)) / n_b
         } else {
             0.0
         };
@@ -279,20 +280,16 @@ impl Renderer<'_> {
     /// an edge to another surface, its change is real and the cache's value there is used.
     fn jitter_variance(
         &self,
-        mix: &Mix<'_>,
+        cache: &RadianceCache,
         centre: &FirstVertex<'_>,
-        x: u32,
-        y: u32,
-        pixel: u64,
+        (x, y): (u32, u32),
     ) -> f64 {
         let scene = self.scene();
         let cam = &scene.camera();
         let seed = self.settings().seed;
-        let cache = mix.cache;
+        let pixel = y as u64 * self.settings().width as u64 + x as u64;
         let n0 = centre.sh.ng;
-        let ld_centre = cache.map_or(0.0, |c| {
-            c.lookup(centre.sh.prim, centre.sh.p, centre.u).0 as f64
-        });
+        let ld_centre = cache.lookup(centre.sh.prim, centre.sh.p, centre.u).0 as f64;
         let strata = pixel_strata(self.settings());
         // Sums over the rays of (L₀, L_d) and of their products, and the same over the pairs'
         // half squared differences: the pixel's `direct_boost` M divides L₀'s share.
@@ -321,11 +318,10 @@ impl Renderer<'_> {
                     let faces = sh.frame.to_local(u).z > 0.0;
                     let same_plane = sh.ng.dot(n0) > SAME_PLANE_COS
                         && (n0.dot(sh.p - centre.sh.p)).abs() < self.radius();
-                    let ld = match cache {
+                    let ld = match () {
                         _ if !faces => 0.0,
                         _ if same_plane => ld_centre,
-                        Some(c) => c.lookup(hit.prim, hit.p, u).0 as f64,
-                        None => 0.0,
+                        _ => cache.lookup(hit.prim, hit.p, u).0 as f64,
                     };
                     [direct, ld]
                 });
@@ -369,6 +365,7 @@ impl Renderer<'_> {
 /// when the sample finds no x₁ (it then contributes zero, as in the renderer).
 fn direction(
     mix: &Mix<'_>,
+    cache: &RadianceCache,
     weigher: &Weigher,
     x0: &FirstVertex<'_>,
     u: [f32; 3],
@@ -419,7 +416,8 @@ fn direction(
         l0_w += c * w;
         l0_w0_sq += c * (1.0 - w) * (1.0 - w);
     }
-    let ld = pair.x1.indirect;
+    // The model's L_d and b at x₁ towards x₀ (the weights read theirs, in `pair`).
+    let (ld, b) = mix.model_lookup(cache, &x1, wo1);
     let f = luminance(s.f) as f64;
     let cos = s.wi.z as f64;
     let pdf = s.pdf as f64;
@@ -428,6 +426,6 @@ fn direction(
     Some(Direction {
         value: e * (l0_w + ld * w_merge),
         photons_x0: (l0_w0_sq + ld * (1.0 - w_merge).powi(2)) * f * f * cos / pdf,
-        photons_x1: w_merge * w_merge * e * e * pair.x1.b,
+        photons_x1: w_merge * w_merge * e * e * b,
     })
 }

@@ -87,6 +87,11 @@ impl RadiusMap {
         }
     }
 
+    /// Whether the map is of a `width` × `height` image.
+    pub fn fits(&self, width: u32, height: u32) -> bool {
+        self.width == width && self.scales.len() == width as usize * height as usize
+    }
+
     /// The radius scale of pixel (x, y).
     #[inline]
     pub fn scale(&self, x: u32, y: u32) -> f32 {

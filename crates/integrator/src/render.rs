@@ -26,6 +26,35 @@ use bdpm_settings::{
 /// far larger than the merge radius, as method.md §5 asks.
 const CACHE_CELLS_PER_EXTENT: f32 = 32.0;
 
+/// Photons of the noise model's radiance cache ([`Renderer::with_model_inputs`]) at least.
+/// The model reads L_d and b at x₁ as the values of a BDD=1 sample and of its photon noise:
+/// the cache's noise from cell to cell reads as variation over directions (T1), and a coarse
+/// cache's b as the photon noise (T2). A render's cache is chosen for its weights per second
+/// (the glossy file's 2.5·10⁵ photons in one bin); the model's is for the truth
+/// (docs/results.md, "The noise model's own cache").
+pub const MODEL_CACHE_PHOTONS: u64 = 8_000_000;
+
+/// Bins per cell side of the noise model's radiance cache at least (method.md's M ≈ 100;
+/// a Lambert-only scene's cache keeps one, which is exact there).
+pub const MODEL_CACHE_BINS: u32 = 100;
+
+/// `settings` with the weights' radiance cache made the noise model's
+/// ([`Renderer::with_model_cache`] of `photons`): at least `photons` photons and
+/// [`MODEL_CACHE_BINS`] bins. A renderer with these settings weighs with the very cache the
+/// model reads: `bdpm predict --headroom`'s floor, the minimiser of the model's functional,
+/// is one.
+pub fn model_cache_settings(settings: &RenderSettings, photons: u64) -> RenderSettings {
+    let mut s = settings.clone();
+    s.cache_photons = Some(
+        settings
+            .cache_photons
+            .unwrap_or(settings.photons)
+            .max(photons),
+    );
+    s.cache_bins = settings.cache_bins.max(MODEL_CACHE_BINS);
+    s
+}
+
 /// A merge radius above this fraction of the scene's largest extent draws a warning
 /// ([`Renderer::warnings`]): the density estimate then averages photons over a large part of
 /// the scene.
@@ -180,6 +209,10 @@ pub struct Renderer<'a> {
     #[cfg(feature = "test-hooks")]
     two_way_splat_weights: bool,
     cache: Option<RadianceCache>,
+    /// The noise model's own cache, where the weights' is coarser ([`Self::with_model_inputs`]).
+    model_cache: Option<RadianceCache>,
+    /// The noise model reads the weights' cache (as fine as its own would be).
+    model_reads_weights_cache: bool,
     table: Option<PixelTable>,
     /// `corrected-balance`'s per-pixel factors.
     correction: Option<Correction>,
@@ -225,6 +258,8 @@ impl<'a> Renderer<'a> {
             #[cfg(feature = "test-hooks")]
             two_way_splat_weights: false,
             cache: None,
+            model_cache: None,
+            model_reads_weights_cache: false,
             table: None,
             correction: None,
             direct: None,
@@ -437,13 +472,20 @@ impl<'a> Renderer<'a> {
     /// Builds the radiance cache of method.md §5 from its own photon stream.
     fn build_cache(&mut self) {
         let s = &self.settings;
+        let cache = self.radiance_cache(s.cache_photons.unwrap_or(s.photons), s.cache_bins, "");
+        self.cache = Some(cache);
+    }
+
+    /// A radiance cache of `photons` photons and `bins` bins per cell side on the render's
+    /// seed, reported as a stage (`purpose` prefixes its detail).
+    fn radiance_cache(&mut self, photons: u64, bins: u32, purpose: &str) -> RadianceCache {
         let start = std::time::Instant::now();
         let (lo, hi) = self.scene.geometry().bounds();
         let settings = CacheSettings {
-            bins: s.cache_bins,
+            bins,
             cell_size: (hi - lo).max_element() / CACHE_CELLS_PER_EXTENT,
-            photons: s.cache_photons.unwrap_or(s.photons),
-            seed: s.seed,
+            photons,
+            seed: self.settings.seed,
         };
         let cache = RadianceCache::build(self.scene, &settings);
         let st = cache.stats();
@@ -452,7 +494,7 @@ impl<'a> Renderer<'a> {
             seconds: start.elapsed().as_secs_f64(),
             bytes: st.bytes,
             detail: format!(
-                "{} cells x 2 sides, {} bin(s) per side, b {}, {} photons emitted, {} arrivals, {:.1}% of cell sides hit",
+                "{purpose}{} cells x 2 sides, {} bin(s) per side, b {}, {} photons emitted, {} arrivals, {:.1}% of cell sides hit",
                 st.cells,
                 st.bins,
                 if st.stores_b { "stored" } else { "derived (Lambert-only scene)" },
@@ -461,17 +503,42 @@ impl<'a> Renderer<'a> {
                 100.0 * st.filled_fraction
             ),
         });
-        self.cache = Some(cache);
+        cache
     }
 
-    /// Also builds the radiance cache when the mode does not need it, for the noise model of
-    /// [`Renderer::predict_variance`], which needs L_d and b for every mode. Rendering is
-    /// unchanged: the mix reads the cache only when its mode needs it.
-    pub fn with_model_inputs(mut self) -> Self {
-        if self.cache.is_none() {
-            self.build_cache();
+    /// Builds the noise model's radiance cache for [`Renderer::predict_variance`], which reads
+    /// L_d and b for every mode: [`Self::with_model_cache`] of [`MODEL_CACHE_PHOTONS`].
+    pub fn with_model_inputs(self) -> Self {
+        self.with_model_cache(MODEL_CACHE_PHOTONS)
+    }
+
+    /// [`Self::with_model_inputs`] with a cache of at least `photons` photons (and
+    /// [`MODEL_CACHE_BINS`] bins), or the weights' own cache where that is as fine. The weights
+    /// keep reading theirs, so rendering is unchanged and the model weighs exactly as the
+    /// render does; the cache is that of [`model_cache_settings`] with the same `photons`.
+    pub fn with_model_cache(mut self, photons: u64) -> Self {
+        let s = &self.settings;
+        let model = model_cache_settings(s, photons);
+        let own = self.cache.as_ref().is_some_and(|c| {
+            s.cache_photons.unwrap_or(s.photons) == model.cache_photons.unwrap_or(model.photons)
+                && (s.cache_bins == model.cache_bins || !c.stats().stores_b)
+        });
+        self.model_reads_weights_cache = own;
+        if !own && self.model_cache.is_none() {
+            let photons = model.cache_photons.unwrap_or(model.photons);
+            let cache = self.radiance_cache(photons, model.cache_bins, "noise model's: ");
+            self.model_cache = Some(cache);
         }
         self
+    }
+
+    /// The radiance cache the noise model reads: its own, or the weights' where that is as
+    /// fine ([`Self::with_model_inputs`]); None before that.
+    pub(crate) fn model_cache(&self) -> Option<&RadianceCache> {
+        self.model_cache.as_ref().or(self
+            .cache
+            .as_ref()
+            .filter(|_| self.model_reads_weights_cache))
     }
 
     /// Whether the weights use per-pixel N_eff from footprints (method.md §12): the footprint
@@ -544,12 +611,17 @@ impl<'a> Renderer<'a> {
         self
     }
 
-    /// Test-only: merge with `map`'s radius per pixel instead of the pilot's (or of one
-    /// radius), the pixel table built again for it; lets a test put blocks at every scale
-    /// where the pilot would not. Only with the feature `test-hooks`.
-    #[cfg(feature = "test-hooks")]
-    #[doc(hidden)]
+    /// Merges with `map`'s radius per pixel instead of the pilot's (or of one radius), the
+    /// pixel table built again for it: e.g. other weights on a render's own map (`bdpm predict
+    /// --headroom`'s floor, whose own pilot, of other weights, would draw another), or blocks
+    /// at every scale where the pilot would not put them (tests). `map` must be of this
+    /// renderer's image size.
     pub fn with_radius_map(mut self, map: RadiusMap) -> Self {
+        let (w, h) = (self.settings.width, self.settings.height);
+        assert!(
+            map.fits(w, h),
+            "a radius map of another image size than {w}x{h}"
+        );
         self.radius_map = Some(map);
         if let (Some(h), Some(_)) = (self.heuristic, &self.table) {
             self.prepare_table(h);

@@ -16,7 +16,10 @@
 //! weight could gain there (OUT.exr layers `floor_V` and `headroom`, OUT-headroom.png).
 use std::path::{Path, PathBuf};
 
-use bdpm_integrator::{Mode, Prediction, RenderError, RenderSettings, Renderer};
+use bdpm_integrator::{
+    MODEL_CACHE_PHOTONS, Mode, Prediction, RenderError, RenderSettings, Renderer,
+    model_cache_settings,
+};
 use bdpm_mis::Heuristic;
 use clap::Args;
 use serde::Serialize;
@@ -59,6 +62,10 @@ pub struct PredictArgs {
     /// such weight could gain, by the model.
     #[arg(long)]
     headroom: bool,
+    /// Photons of the model's own radiance cache, at least (default 8000000, with 100 bins per
+    /// cell side): the model reads L_d and b at x₁ from it, the weights from the render's.
+    #[arg(long, default_value_t = MODEL_CACHE_PHOTONS, value_parser = clap::value_parser!(u64).range(1..))]
+    model_cache_photons: u64,
 }
 
 /// The measured render: √V per pixel (RGB) and its `bdpm.*` header attributes.
@@ -211,6 +218,8 @@ struct Report<'a> {
     per_pixel: Agreement,
     block_size: u32,
     blocks: Agreement,
+    /// The renderer's preparatory stages, the model's own cache among them.
+    preparation: Vec<Preparation>,
     /// With `--headroom`: the mode's predicted V against the model's floor.
     #[serde(skip_serializing_if = "Option::is_none")]
     headroom: Option<Headroom>,
@@ -347,6 +356,16 @@ struct Predicted {
     prediction: Prediction,
     floor: Option<Prediction>,
     radius: f32,
+    preparation: Vec<Preparation>,
+}
+
+/// One preparatory stage of the mode's renderer, as the report lists it.
+#[derive(Serialize, Clone)]
+struct Preparation {
+    stage: &'static str,
+    /// Wall time, seconds.
+    seconds: f64,
+    detail: String,
 }
 
 /// The prediction set against the measurement: the report and the per-pixel maps written.
@@ -457,7 +476,8 @@ impl Setup<'_> {
                 RenderError::LightTracing(h.name())
             ));
         }
-        let renderer = pool.install(|| renderer.with_model_inputs());
+        let photons = args.model_cache_photons;
+        let renderer = pool.install(|| renderer.with_model_cache(photons));
         check_settings(&self.measured, settings, &renderer, &args.measured)?;
         // Every other setting (depth, cache, table, clamp, …), which the header lists no
         // field of.
@@ -477,14 +497,26 @@ impl Setup<'_> {
             .map_err(|e| e.to_string())?;
         let floor = if args.headroom {
             // The unclamped `optimal-split` reads its own A and B, so its renderer must build
-            // the pixel table.
+            // the pixel table; its weights read the cache the model reads, so that it is the
+            // functional's minimiser.
             let floor = Heuristic::OptimalSplit {
                 clamp_weights: false,
             };
-            let mut s = settings.clone();
+            let mut s = model_cache_settings(settings, photons);
             s.mode = Mode::Bdpm(floor.kind());
+            // With a radius per block, the mode's map: the floor's own pilot would draw another.
+            s.adaptive_radius = false;
+            let map = renderer.radius_map().cloned();
             let r = pool
-                .install(|| Renderer::new(scene, &s).map(Renderer::with_model_inputs))
+                .install(|| {
+                    Renderer::new(scene, &s).map(|r| {
+                        let r = match map {
+                            Some(m) => r.with_radius_map(m),
+                            None => r,
+                        };
+                        r.with_model_cache(photons)
+                    })
+                })
                 .map_err(|e| format!("{}: {e}", args.scene.display()))?;
             Some(
                 pool.install(|| r.predict_variance_for(floor))
@@ -493,10 +525,20 @@ impl Setup<'_> {
         } else {
             None
         };
+        let preparation = renderer
+            .stages()
+            .iter()
+            .map(|st| Preparation {
+                stage: st.stage.name(),
+                seconds: st.seconds,
+                detail: st.detail.clone(),
+            })
+            .collect();
         Ok(Predicted {
             prediction,
             floor,
             radius: renderer.radius(),
+            preparation,
         })
     }
 
@@ -587,6 +629,7 @@ impl Setup<'_> {
             per_pixel: agreement(&pairs),
             block_size: BLOCK,
             blocks: agreement(&blocks),
+            preparation: predicted.preparation.clone(),
             headroom,
         };
         Comparison {
@@ -708,6 +751,9 @@ fn print_summary(r: &Report<'_>) {
         r.passes,
         r.measured_relative_se_per_pixel
     );
+    for p in &r.preparation {
+        say!("  {} ({:.2} s): {}", p.stage, p.seconds, p.detail);
+    }
     say!(
         "image mean V: predicted {:.4e}, measured {:.4e} (ratio {:.3}); {} pixels without a surface, {} without measured noise",
         r.image_mean_predicted_v,

@@ -604,6 +604,12 @@ fn predict_compares_the_noise_model_with_a_render() {
     assert_success(&out);
     assert!(text(&out.stdout).contains("8x8 blocks"));
     assert!(text(&out.stdout).contains("headroom over the floor"));
+    // The model's own cache (bdd0's weights read none) is reported with the other stages.
+    assert!(
+        text(&out.stdout).contains("radiance cache") && text(&out.stdout).contains("noise model's"),
+        "{}",
+        text(&out.stdout)
+    );
     assert!(dir.path("p.png").is_file());
     assert!(dir.path("p-headroom.png").is_file());
     let exr = Exr::read(&dir.path("p.exr"));
@@ -730,6 +736,42 @@ fn predict_compares_the_noise_model_with_a_render() {
     assert!(
         (0.5..=2.0).contains(&median),
         "block median ratio {median} with a radius per block"
+    );
+}
+
+/// `bdpm predict --headroom` on the glossy file, whose radius is per block: the floor weighs
+/// on the mode's own map (its own pilot, of other weights, draws another at 64², seed 2, and
+/// 10 % of the pixels then sat below the floor: 0.84), with the model's cache
+/// (`--model-cache-photons`), so no pixel of the mode is meaningfully below it.
+#[test]
+fn predict_headroom_keeps_the_modes_radius_map() {
+    let dir = TempDir::new("headroom-map");
+    let settings = ["--resolution", "64x64", "--seed", "2"];
+    let rendered = dir.path("g.exr");
+    let out = run(bdpm()
+        .arg("render")
+        .arg(scene("cornell-glossy.toml"))
+        .args(settings)
+        .args(["--passes", "2", "--quiet", "-o"])
+        .arg(&rendered));
+    assert_success(&out);
+    let out = run(bdpm()
+        .arg("predict")
+        .arg(scene("cornell-glossy.toml"))
+        .args(settings)
+        .arg("--measured")
+        .arg(&rendered)
+        .args(["--headroom", "--model-cache-photons", "1000000", "-o"])
+        .arg(dir.path("p.exr")));
+    assert_success(&out);
+    let json = read_json(&dir.path("p.json"));
+    let q10 = json
+        .pointer("/headroom/per_pixel/ratio_q10")
+        .and_then(|v| v.as_f64())
+        .expect("a headroom quantile");
+    assert!(
+        q10 > 0.98,
+        "10 % of the pixels at {q10} of the floor or less"
     );
 }
 
