@@ -17,3 +17,4 @@ mod stages;
 mod stiff;
 mod textures;
 mod weight_inputs;
+mod weight_map;

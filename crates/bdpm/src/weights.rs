@@ -107,7 +107,7 @@ pub(crate) fn run(args: WeightsArgs) -> CliResult<()> {
     // Checked before building anything (a mode's preparation can take a pass), and the
     // message says where the mode, or light tracing, came from.
     let refused = |e: RenderError| match e {
-        RenderError::LightTracing(_) | RenderError::AdaptiveRadius(_) => {
+        RenderError::LightTracing(_) => {
             format!("{}: {e}", args.scene.display())
         }
         _ => format!("{mode_source}: {e}"),

@@ -123,12 +123,6 @@ pub enum RenderError {
         "light_tracing = true: mode '{0}' then samples BDD=0 by light tracing, which the noise model and the weight maps (both of the merge at x0) do not describe; set light_tracing = false (--light-tracing false)"
     )]
     LightTracing(&'static str),
-    /// A weight map asked of a render with a radius per block of pixels: a map over x₁ has
-    /// one S, and the weight of a path through x₁ would depend on its pixel's.
-    #[error(
-        "adaptive_radius = true: mode '{0}' then merges with a radius per block of pixels, and its weights at x1 depend on each pixel's radius, which a weight map (of one radius) does not describe; set adaptive_radius = false (--adaptive-radius false)"
-    )]
-    AdaptiveRadius(&'static str),
     /// The weights asked for read the pixel table's A and B, which the mode did not build.
     #[error(
         "the weights '{weights}' need the pixel table's A and B, which mode '{mode}' does not build"

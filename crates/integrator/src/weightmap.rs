@@ -38,7 +38,8 @@ pub struct WeightMap {
 /// settings alone: a caller can refuse before a renderer prepares anything (the pilot of
 /// `corrected-balance`, the radiance cache). `path` and `light` have no weights; a mode that
 /// weighs each light path by its incoming direction at x₁ has no map over x₁ alone; the map
-/// is of the merge at x₀, not of light tracing in its place.
+/// is of the merge at x₀, not of light tracing in its place. With a radius per block
+/// (`adaptive_radius`) the map is of x₀'s pixel, with its radius.
 pub fn weight_map_heuristic(settings: &RenderSettings) -> Result<Heuristic, RenderError> {
     let Some(h) = settings.heuristic() else {
         return Err(RenderError::NoWeights(settings.mode));
@@ -48,9 +49,6 @@ pub fn weight_map_heuristic(settings: &RenderSettings) -> Result<Heuristic, Rend
     }
     if settings.light_traced() {
         return Err(RenderError::LightTracing(h.name()));
-    }
-    if settings.adaptive_radius {
-        return Err(RenderError::AdaptiveRadius(h.name()));
     }
     Ok(h)
 }
@@ -96,6 +94,17 @@ impl Renderer<'_> {
         let s = self.settings();
         let needs = h.needs();
         let footprint = self.footprint_model() && needs.effective_samples;
+        // The image point that sees x₀: its footprint, and its radius with `adaptive_radius`.
+        let projected = cam.project(x0.sh.p);
+        let image_point =
+            projected.unwrap_or((cam.width() as f32 * 0.5, cam.height() as f32 * 0.5));
+        let x0_pixel = projected.map_or((0, 0), |(x, y)| {
+            (
+                (x as u32).min(cam.width() - 1),
+                (y as u32).min(cam.height() - 1),
+            )
+        });
+        let scale = mix.radius_scale(x0_pixel.0, x0_pixel.1);
         let pixel = if needs.pixel_table || footprint {
             let spec = TableSpec {
                 rays: needs.pixel_table.then_some(s.table_rays()),
@@ -104,18 +113,11 @@ impl Renderer<'_> {
                 radius: self.radius(),
                 seed: s.seed,
             };
-            // The footprint of the image point that sees x₀.
-            let image_point = cam
-                .project(x0.sh.p)
-                .unwrap_or((cam.width() as f32 * 0.5, cam.height() as f32 * 0.5));
             Some(pixel_weights(&mix, &x0, image_point, &spec, u64::MAX))
         } else {
             None
         };
-        let budget = pixel.map_or(mix.budget, |p| bdpm_mis::Budget {
-            camera_samples: p.camera_samples,
-            ..mix.budget
-        });
+        let budget = mix.pixel_budget(pixel.map(|p| p.camera_samples), scale);
         let (w, hgt) = (cam.width() as usize, cam.height() as usize);
         let mut w0 = vec![f64::NAN; w * hgt];
         w0.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
@@ -149,10 +151,6 @@ impl Renderer<'_> {
                     .w0();
             }
         });
-        let x0_pixel = cam
-            .project(x0.sh.p)
-            .map(|(x, y)| (x as u32, y as u32))
-            .unwrap_or((0, 0));
         Ok(WeightMap {
             width: cam.width(),
             height: cam.height(),

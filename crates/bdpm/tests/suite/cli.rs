@@ -502,19 +502,23 @@ fn weights_needs_a_mode_with_weights() {
         .args(["--pixel", "4,4", "--mode", "optimal", "--resolution", "8x8"])
         .args(["--light-tracing", "true"]));
     assert_one_line_error(&out, &["cornell-lambert.toml", "light_tracing = true"]);
+    // A radius per block is the pixel's (tests/suite/weight_map.rs checks the map itself).
+    let dir = TempDir::new("weights-adaptive");
     let out = run(bdpm()
         .arg("weights")
-        .arg(scene("preprint/cornell-lambert.toml"))
-        .args(["--pixel", "4,4", "--mode", "optimal", "--resolution", "8x8"])
-        .args(["--adaptive-radius", "true"]));
-    assert_one_line_error(
-        &out,
-        &[
-            "cornell-lambert.toml",
-            "adaptive_radius = true",
-            "--adaptive-radius false",
-        ],
-    );
+        .arg(scene("cornell-glossy.toml"))
+        .args([
+            "--pixel",
+            "4,4",
+            "--mode",
+            "optimal",
+            "--resolution",
+            "16x16",
+            "-o",
+        ])
+        .arg(dir.path("w.exr")));
+    assert_success(&out);
+    assert!(dir.path("w.exr").is_file());
 }
 
 /// `bdpm compare`: a render and its rerun with 1 thread are bit-identical (exit 0 with
