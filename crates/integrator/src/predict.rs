@@ -4,8 +4,9 @@
 //!
 //! For the pixel's centre x₀ (u towards the camera) and directions v drawn from the BDF's
 //! sampling pdf p(v) at x₀ (N = `pixel_table_rays`, 64 if not given; their own random stream), with x₁ the
-//! point v hits, L = L₀(x₁→x₀) + L_d(x₁→x₀) (shadow rays and the radiance cache), b from the
-//! cache, f = f(v, u; x₀) and cos = cos θ_v at x₀ (luminances), α = Φ/(N_F·S):
+//! point v hits, L = L₀(x₁→x₀) + L_d(x₁→x₀) (shadow rays and the model's own radiance cache,
+//! [`Renderer::with_model_cache`]; the weights read the render's), b from the same cache,
+//! f = f(v, u; x₀) and cos = cos θ_v at x₀ (luminances), α = Φ/(N_F·S):
 //!
 //! ```text
 //! T0 = α·N_eff/N_B · E_p[(1 − w)²·f²·L·cos/p]           ∫ (1 − w₁)² f² L cos dv
