@@ -32,7 +32,9 @@ pub use bdpm_mis::NoiseModel;
 pub use correction::{CANDIDATES, Correction, PILOT_PASSES, pilot_seed};
 pub use direct::DirectSamples;
 pub use film::{Film, PassSums, PassValue};
-pub use memory::{MemoryEstimate, MemoryItem, PILOT_PHOTONS, estimate_memory, human_bytes};
+pub use memory::{
+    MemoryEstimate, MemoryItem, PILOT_PHOTONS, estimate_memory, human_bytes, model_cache_item,
+};
 pub use predict::{JITTER_RAYS, Prediction};
 pub use radius::RadiusMap;
 pub use render::{

@@ -207,6 +207,20 @@ pub fn estimate_memory(
     }
 }
 
+/// The build of the noise model's radiance cache of `photons` photons
+/// ([`crate::Renderer::with_model_cache`]), which holds its arrivals until it sums them: an item
+/// for `estimate` (of the same scene and settings, whose pilot measured the photons stored per
+/// emitted photon) of `bdpm predict`.
+pub fn model_cache_item(estimate: &MemoryEstimate, photons: u64) -> MemoryItem {
+    // Arrivals include the first hit from the light, which is not stored.
+    let arrivals_per_emitted = estimate.stored_per_emitted + 1.0;
+    MemoryItem {
+        name: "noise model's radiance cache build",
+        bytes: (photons as f64 * arrivals_per_emitted * ARRIVAL_RECORD_BYTES) as u64,
+        lower: "--model-cache-photons",
+    }
+}
+
 /// `bytes` for people: `1.5 GiB`, `320 MiB`, `12 KiB`.
 pub fn human_bytes(bytes: u64) -> String {
     let b = bytes as f64;

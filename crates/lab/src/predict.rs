@@ -17,15 +17,17 @@
 use std::path::{Path, PathBuf};
 
 use bdpm_integrator::{
-    MODEL_CACHE_PHOTONS, Mode, Prediction, RenderError, RenderSettings, Renderer,
-    model_cache_settings,
+    MODEL_CACHE_PHOTONS, Mode, Prediction, RenderError, RenderSettings, Renderer, estimate_memory,
+    human_bytes, model_cache_item, model_cache_settings,
 };
 use bdpm_mis::Heuristic;
 use clap::Args;
 use serde::Serialize;
 
 use bdpm_output::accum::{check_scene_hash, estimator_hash, scene_hash};
-use bdpm_output::cli::{CliResult, Overrides, Prepared, prepare as cli_prepare, thread_pool};
+use bdpm_output::cli::{
+    CliResult, Overrides, Prepared, available_memory, prepare as cli_prepare, thread_pool,
+};
 use bdpm_output::colormap::{Canvas, ColourMap, Legend, compose, format_value};
 use bdpm_output::files::stem_of;
 use bdpm_output::{exr, files, say};
@@ -465,6 +467,7 @@ impl Setup<'_> {
             &self.loaded.settings,
             &self.pool,
         );
+        memory_gate(args, scene, settings, pool)?;
         let renderer = pool
             .install(|| Renderer::new(scene, settings))
             .map_err(|e| format!("{}: {e}", args.scene.display()))?;
@@ -740,6 +743,34 @@ fn headroom(
             width,
             height,
         )),
+    }
+}
+
+/// Refuses a prediction whose estimated peak memory (the mode's preparation as a render's
+/// estimate counts it, and the model's cache build) exceeds the available memory, naming what
+/// to lower, before anything large is allocated.
+fn memory_gate(
+    args: &PredictArgs,
+    scene: &bdpm_scene::Scene,
+    settings: &RenderSettings,
+    pool: &rayon::ThreadPool,
+) -> CliResult<()> {
+    let mut estimate = pool.install(|| estimate_memory(scene, settings, false));
+    estimate
+        .items
+        .push(model_cache_item(&estimate, args.model_cache_photons));
+    estimate.items.sort_by_key(|i| std::cmp::Reverse(i.bytes));
+    match available_memory() {
+        Some(limit) if estimate.total() > limit => Err(format!(
+            "{}: the prediction needs about {} ({} {}), more than the {} of available memory; lower {}",
+            args.scene.display(),
+            human_bytes(estimate.total()),
+            estimate.items[0].name,
+            human_bytes(estimate.items[0].bytes),
+            human_bytes(limit),
+            estimate.scalable_largest().lower
+        )),
+        _ => Ok(()),
     }
 }
 

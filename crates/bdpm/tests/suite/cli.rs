@@ -710,6 +710,24 @@ fn predict_compares_the_noise_model_with_a_render() {
         ],
     );
 
+    // A model cache beyond any machine's memory is refused before it is built, naming the flag.
+    let out = run(bdpm()
+        .arg("predict")
+        .arg(scene("preprint/cornell-lambert.toml"))
+        .args(settings)
+        .args(["--model-cache-photons", "1000000000000", "--measured"])
+        .arg(&rendered)
+        .arg("-o")
+        .arg(dir.path("q.exr")));
+    assert_one_line_error(
+        &out,
+        &[
+            "cornell-lambert.toml",
+            "the prediction needs about",
+            "lower --model-cache-photons",
+        ],
+    );
+
     // A radius per block of pixels: bdd0's pilot has no BDD=1 share, so every block merges at
     // ½ r (here 1 cm again). Without jitter V is T0 alone, and a model that kept r everywhere
     // would predict a quarter of the measured V.
