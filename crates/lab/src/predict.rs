@@ -13,7 +13,13 @@
 //! minimiser over weights w₁(x₀, x₁) that may differ between one-bounce and merge paths (the
 //! family in which the model evaluates every mode, `balance` included): the floor below which
 //! no weight of that family can bring V, by the model. The ratio of the mode's predicted V to that floor, per pixel, is the most any such
-//! weight could gain there (OUT.exr layers `floor_V` and `headroom`, OUT-headroom.png).
+//! weight could gain there (OUT.exr layers `floor_V` and `headroom`, OUT-headroom.png). The
+//! floor weighs with the model's own cache and on the mode's radius map, so that it minimises
+//! the very functional the mode is evaluated in.
+//!
+//! The model reads L_d and b from a radiance cache of its own (`--model-cache-photons`, 100
+//! bins), the weights from the render's; the run is refused up front when the memory it is
+//! estimated to need exceeds what is available.
 use std::path::{Path, PathBuf};
 
 use bdpm_integrator::{
