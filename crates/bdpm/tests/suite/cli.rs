@@ -588,23 +588,13 @@ fn predict_compares_the_noise_model_with_a_render() {
         "--radius",
         "0.01",
     ];
-    let rendered = dir.path("r.exr");
-    let out = run(bdpm()
-        .arg("render")
-        .arg(scene("preprint/cornell-lambert.toml"))
-        .args(settings)
-        .args(["--passes", "8", "--quiet", "-o"])
-        .arg(&rendered));
-    assert_success(&out);
-    let out = run(bdpm()
-        .arg("predict")
-        .arg(scene("preprint/cornell-lambert.toml"))
-        .args(settings)
-        .arg("--measured")
-        .arg(&rendered)
-        .arg("--headroom")
-        .arg("-o")
-        .arg(dir.path("p.exr")));
+    let (rendered, out) = render_then_predict(
+        &dir,
+        "preprint/cornell-lambert.toml",
+        (&settings, "8"),
+        &["--headroom"],
+        "r",
+    );
     assert_success(&out);
     assert!(text(&out.stdout).contains("8x8 blocks"));
     assert!(text(&out.stdout).contains("headroom over the floor"));
@@ -614,9 +604,9 @@ fn predict_compares_the_noise_model_with_a_render() {
         "{}",
         text(&out.stdout)
     );
-    assert!(dir.path("p.png").is_file());
-    assert!(dir.path("p-headroom.png").is_file());
-    let exr = Exr::read(&dir.path("p.exr"));
+    assert!(dir.path("p-r.png").is_file());
+    assert!(dir.path("p-r-headroom.png").is_file());
+    let exr = Exr::read(&dir.path("p-r.exr"));
     assert_eq!((exr.width, exr.height), (32, 32));
     for c in [
         "predicted_V",
@@ -631,7 +621,7 @@ fn predict_compares_the_noise_model_with_a_render() {
     ] {
         assert_eq!(exr.channel(c).len(), 32 * 32);
     }
-    let json = read_json(&dir.path("p.json"));
+    let json = read_json(&dir.path("p-r.json"));
     eprintln!("{json:#}");
     let number = |path: &str| -> f64 {
         json.pointer(path)
@@ -734,23 +724,10 @@ fn predict_compares_the_noise_model_with_a_render() {
     let mut adaptive = settings.to_vec();
     adaptive[9] = "0.02";
     adaptive.extend(["--adaptive-radius", "true", "--no-jitter"]);
-    let out = run(bdpm()
-        .arg("render")
-        .arg(scene("preprint/cornell-lambert.toml"))
-        .args(&adaptive)
-        .args(["--passes", "8", "--quiet", "-o"])
-        .arg(dir.path("a.exr")));
+    let scene_name = "preprint/cornell-lambert.toml";
+    let (_, out) = render_then_predict(&dir, scene_name, (&adaptive, "8"), &[], "a");
     assert_success(&out);
-    let out = run(bdpm()
-        .arg("predict")
-        .arg(scene("preprint/cornell-lambert.toml"))
-        .args(&adaptive)
-        .arg("--measured")
-        .arg(dir.path("a.exr"))
-        .arg("-o")
-        .arg(dir.path("pa.exr")));
-    assert_success(&out);
-    let json = read_json(&dir.path("pa.json"));
+    let json = read_json(&dir.path("p-a.json"));
     let median = json
         .pointer("/blocks/ratio_median")
         .and_then(|v| v.as_f64())
@@ -769,24 +746,11 @@ fn predict_compares_the_noise_model_with_a_render() {
 fn predict_headroom_keeps_the_modes_radius_map() {
     let dir = TempDir::new("headroom-map");
     let settings = ["--resolution", "64x64", "--seed", "2"];
-    let rendered = dir.path("g.exr");
-    let out = run(bdpm()
-        .arg("render")
-        .arg(scene("cornell-glossy.toml"))
-        .args(settings)
-        .args(["--passes", "2", "--quiet", "-o"])
-        .arg(&rendered));
+    let predict = ["--headroom", "--model-cache-photons", "1000000"];
+    let (_, out) =
+        render_then_predict(&dir, "cornell-glossy.toml", (&settings, "2"), &predict, "g");
     assert_success(&out);
-    let out = run(bdpm()
-        .arg("predict")
-        .arg(scene("cornell-glossy.toml"))
-        .args(settings)
-        .arg("--measured")
-        .arg(&rendered)
-        .args(["--headroom", "--model-cache-photons", "1000000", "-o"])
-        .arg(dir.path("p.exr")));
-    assert_success(&out);
-    let json = read_json(&dir.path("p.json"));
+    let json = read_json(&dir.path("p-g.json"));
     let q10 = json
         .pointer("/headroom/per_pixel/ratio_q10")
         .and_then(|v| v.as_f64())
@@ -795,6 +759,36 @@ fn predict_headroom_keeps_the_modes_radius_map() {
         q10 > 0.98,
         "10 % of the pixels at {q10} of the floor or less"
     );
+}
+
+/// Renders `scene_name` with `settings` and `passes` passes to DIR/NAME.exr (asserting success),
+/// then runs `bdpm predict` with the same settings and `predict_args` against it, writing
+/// DIR/p-NAME.*: the render's path and predict's output.
+fn render_then_predict(
+    dir: &TempDir,
+    scene_name: &str,
+    (settings, passes): (&[&str], &str),
+    predict_args: &[&str],
+    name: &str,
+) -> (PathBuf, std::process::Output) {
+    let rendered = dir.path(&format!("{name}.exr"));
+    let out = run(bdpm()
+        .arg("render")
+        .arg(scene(scene_name))
+        .args(settings)
+        .args(["--passes", passes, "--quiet", "-o"])
+        .arg(&rendered));
+    assert_success(&out);
+    let out = run(bdpm()
+        .arg("predict")
+        .arg(scene(scene_name))
+        .args(settings)
+        .arg("--measured")
+        .arg(&rendered)
+        .args(predict_args)
+        .arg("-o")
+        .arg(dir.path(&format!("p-{name}.exr"))));
+    (rendered, out)
 }
 
 /// A quiet render of the Cornell scene with the arguments `args` to `out`, its standard
