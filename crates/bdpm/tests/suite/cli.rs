@@ -681,42 +681,29 @@ fn predict_compares_the_noise_model_with_a_render() {
             .arg(dir.path("q.exr")));
         assert_one_line_error(&out, needles);
     }
-    // The model is of the merge at x₀: light tracing in its place is refused, naming the flag
-    // that turns it off.
-    let out = run(bdpm()
-        .arg("predict")
-        .arg(scene("preprint/cornell-lambert.toml"))
-        .args(settings)
-        .args(["--light-tracing", "true", "--measured"])
-        .arg(&rendered)
-        .arg("-o")
-        .arg(dir.path("q.exr")));
-    assert_one_line_error(
-        &out,
-        &[
-            "cornell-lambert.toml",
-            "light_tracing = true",
-            "--light-tracing false",
-        ],
-    );
-
-    // A model cache beyond any machine's memory is refused before it is built, naming the flag.
-    let out = run(bdpm()
-        .arg("predict")
-        .arg(scene("preprint/cornell-lambert.toml"))
-        .args(settings)
-        .args(["--model-cache-photons", "1000000000000", "--measured"])
-        .arg(&rendered)
-        .arg("-o")
-        .arg(dir.path("q.exr")));
-    assert_one_line_error(
-        &out,
-        &[
-            "cornell-lambert.toml",
-            "the prediction needs about",
-            "lower --model-cache-photons",
-        ],
-    );
+    // Refused with one line naming the flag: light tracing in place of the merge at x₀, which
+    // the model does not describe; a model cache beyond any machine's memory, before it is built.
+    for (extra, needles) in [
+        (
+            ["--light-tracing", "true"],
+            ["light_tracing = true", "--light-tracing false"],
+        ),
+        (
+            ["--model-cache-photons", "1000000000000"],
+            ["the prediction needs about", "lower --model-cache-photons"],
+        ),
+    ] {
+        let out = run(bdpm()
+            .arg("predict")
+            .arg(scene("preprint/cornell-lambert.toml"))
+            .args(settings)
+            .args(extra)
+            .arg("--measured")
+            .arg(&rendered)
+            .arg("-o")
+            .arg(dir.path("q.exr")));
+        assert_one_line_error(&out, &[&["cornell-lambert.toml"][..], &needles].concat());
+    }
 
     // A radius per block of pixels: bdd0's pilot has no BDD=1 share, so every block merges at
     // ½ r (here 1 cm again). Without jitter V is T0 alone, and a model that kept r everywhere
