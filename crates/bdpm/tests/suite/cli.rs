@@ -115,6 +115,13 @@ fn read_json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&s).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
+/// The number at JSON pointer `path` of a report; panics naming the path if there is none.
+fn json_number(json: &serde_json::Value, path: &str) -> f64 {
+    json.pointer(path)
+        .and_then(|v| v.as_f64())
+        .unwrap_or_else(|| panic!("{path} is not a number"))
+}
+
 fn rgb(prefix: &str) -> [String; 3] {
     ["R", "G", "B"].map(|c| {
         if prefix.is_empty() {
@@ -623,11 +630,7 @@ fn predict_compares_the_noise_model_with_a_render() {
     }
     let json = read_json(&dir.path("p-r.json"));
     eprintln!("{json:#}");
-    let number = |path: &str| -> f64 {
-        json.pointer(path)
-            .and_then(|v| v.as_f64())
-            .unwrap_or_else(|| panic!("{path} is not a number"))
-    };
+    let number = |path: &str| json_number(&json, path);
     for path in [
         "/image_mean_predicted_v",
         "/image_mean_measured_v",
@@ -715,10 +718,7 @@ fn predict_compares_the_noise_model_with_a_render() {
     let (_, out) = render_then_predict(&dir, scene_name, (&adaptive, "8"), &[], "a");
     assert_success(&out);
     let json = read_json(&dir.path("p-a.json"));
-    let median = json
-        .pointer("/blocks/ratio_median")
-        .and_then(|v| v.as_f64())
-        .expect("a block median");
+    let median = json_number(&json, "/blocks/ratio_median");
     assert!(
         (0.5..=2.0).contains(&median),
         "block median ratio {median} with a radius per block"
@@ -738,10 +738,7 @@ fn predict_headroom_keeps_the_modes_radius_map() {
         render_then_predict(&dir, "cornell-glossy.toml", (&settings, "2"), &predict, "g");
     assert_success(&out);
     let json = read_json(&dir.path("p-g.json"));
-    let q10 = json
-        .pointer("/headroom/per_pixel/ratio_q10")
-        .and_then(|v| v.as_f64())
-        .expect("a headroom quantile");
+    let q10 = json_number(&json, "/headroom/per_pixel/ratio_q10");
     assert!(
         q10 > 0.98,
         "10 % of the pixels at {q10} of the floor or less"
