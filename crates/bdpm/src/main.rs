@@ -82,10 +82,14 @@ fn usage_error(e: clap::Error) -> ExitCode {
         .trim_start_matches("error:")
         .trim()
         .to_string();
-    // "the following required arguments were not provided:" lists them on the next lines.
+    // The lines after the first until a blank one carry the rest of the message: "the
+    // following required arguments were not provided:" lists them there, an invalid value
+    // the accepted ones ("[possible values: true, false]"), an unknown flag a "tip: …".
+    let more: Vec<&str> = lines.map(str::trim).take_while(|l| !l.is_empty()).collect();
     if line.ends_with(':') {
-        let listed: Vec<&str> = lines.map(str::trim).take_while(|l| !l.is_empty()).collect();
-        line = format!("{line} {}", listed.join(", "));
+        line = format!("{line} {}", more.join(", "));
+    } else if !more.is_empty() {
+        line = format!("{line}; {}", more.join("; "));
     }
     bdpm_output::say_err!("bdpm: error: {line} (see bdpm --help)");
     ExitCode::FAILURE
