@@ -1,6 +1,7 @@
-//! Settings, flags and interruption (issue 43, round four): a flag that puts right a
-//! combination the scene file gets wrong, and one line naming the field and the bound for
-//! every bad value of the radius, a `[render]` key, a flag or a `--modes` entry.
+//! Settings, flags and interruption (issue 43, round four): bounds accepted exactly as
+//! documented, a flag that puts right a combination the scene file gets wrong, and one line
+//! naming the field and the bound for every bad value of the radius, a `[render]` key, a flag
+//! or a `--modes` entry.
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -85,6 +86,30 @@ fn assert_success(case: &str, out: &Output) {
         out.status,
         text(&out.stderr)
     );
+}
+
+/// The lobe width's documented bounds, 0.05 and 90 degrees, are accepted as written, and the
+/// nearest numbers outside refused. Before, 0.05 was refused as "0.05 is outside [0.05, 90]":
+/// the bound was an f32 widened to f64 (0.0500000007) and the value compared in f64.
+#[test]
+fn lobe_width_bounds_are_accepted_as_written() {
+    let dir = crate::temp_dir("r4-delta");
+    for delta in ["0.05", "90", "90.0"] {
+        let out = render(dir.path(), "ok.toml", &scene_text("", delta), &[]);
+        assert_success(&format!("delta = {delta}"), &out);
+    }
+    for delta in ["0.0499999", "90.00001", "0"] {
+        let out = render(dir.path(), "bad.toml", &scene_text("", delta), &[]);
+        assert_one_line_error(
+            &format!("delta = {delta}"),
+            &out,
+            &[
+                "bad.toml",
+                "material.lobe.delta",
+                &format!("{delta} is outside [0.05, 90]"),
+            ],
+        );
+    }
 }
 
 /// A flag puts right a combination that the scene file gets wrong: the combination is checked
