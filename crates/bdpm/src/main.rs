@@ -25,7 +25,8 @@ struct Cli {
 enum Command {
     /// Render a scene to OUT.exr, with OUT.png (preview), OUT-noise.png (noise map) and OUT.json
     /// (run report) beside it. An interrupt stops after the pass in flight, writes what was
-    /// rendered and exits with code 130; a second interrupt quits without writing.
+    /// rendered and exits with code 130 (during the preparation it stops at once and writes
+    /// nothing); a second interrupt quits without writing.
     Render(render::RenderArgs),
     /// Merge partial renders (their OUT.accum.exr files, from `render --first-pass`) into the
     /// outputs of one render of all their passes, bit for bit: same scene, settings and seed
