@@ -25,7 +25,8 @@ struct Cli {
 enum Command {
     /// Render a scene to OUT.exr, with OUT.png (preview), OUT-noise.png (noise map) and OUT.json
     /// (run report) beside it. An interrupt stops after the pass in flight, writes what was
-    /// rendered and exits with code 130; a second interrupt quits without writing.
+    /// rendered and exits with code 130 (during the preparation it stops at once and writes
+    /// nothing); a second interrupt quits without writing.
     Render(render::RenderArgs),
     /// Merge partial renders (their OUT.accum.exr files, from `render --first-pass`) into the
     /// outputs of one render of all their passes, bit for bit: same scene, settings and seed
@@ -82,10 +83,14 @@ fn usage_error(e: clap::Error) -> ExitCode {
         .trim_start_matches("error:")
         .trim()
         .to_string();
-    // "the following required arguments were not provided:" lists them on the next lines.
+    // The lines after the first until a blank one carry the rest of the message: "the
+    // following required arguments were not provided:" lists them there, an invalid value
+    // the accepted ones ("[possible values: true, false]"), an unknown flag a "tip: …".
+    let more: Vec<&str> = lines.map(str::trim).take_while(|l| !l.is_empty()).collect();
     if line.ends_with(':') {
-        let listed: Vec<&str> = lines.map(str::trim).take_while(|l| !l.is_empty()).collect();
-        line = format!("{line} {}", listed.join(", "));
+        line = format!("{line} {}", more.join(", "));
+    } else if !more.is_empty() {
+        line = format!("{line}; {}", more.join("; "));
     }
     bdpm_output::say_err!("bdpm: error: {line} (see bdpm --help)");
     ExitCode::FAILURE

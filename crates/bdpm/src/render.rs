@@ -224,11 +224,26 @@ pub(crate) fn merge(args: MergeArgs) -> CliResult<ExitCode> {
 }
 
 /// Runs a job through the session's steps and turns interrupts into exit codes: a merge
-/// interrupted writes nothing; a render interrupted before its first pass ends writes nothing;
-/// otherwise the outputs hold the passes done.
+/// interrupted writes nothing; a render interrupted during its preparation (radiance cache,
+/// pixel table, pilots) stops within a chunk of that work and writes nothing, nor does one
+/// interrupted before its first pass ends; otherwise the outputs hold the passes done.
 fn run_job(job: Job) -> CliResult<ExitCode> {
     let (prepared, held) = session::prepare(job)?;
-    let mut session = RenderSession::new(&prepared)?;
+    signal::set_preparing(true);
+    let started = RenderSession::new(&prepared, &signal::requested)?;
+    signal::set_preparing(false);
+    let mut session = match started {
+        Ok(session) => session,
+        Err(_) if prepared.is_merge() => return Ok(merge_interrupted()),
+        Err(stage) => {
+            // The held passes of a resume stay in their accumulation file, unchanged.
+            bdpm_output::say_err!(
+                "bdpm: interrupted during preparation ({stage}): nothing was rendered and nothing was written ({})",
+                prepared.scene_path().display()
+            );
+            return Ok(ExitCode::from(signal::EXIT_INTERRUPTED));
+        }
+    };
     session.replay(held);
     let stop = session.run(&signal::requested);
     if prepared.is_merge() && signal::requested() {

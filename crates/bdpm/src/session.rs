@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Instant, SystemTime};
 
 use bdpm_integrator::{
-    Film, MemoryEstimate, MemoryItem, Mode, Renderer, Stage, StageProbe, WeightStats,
+    Film, MemoryEstimate, MemoryItem, Mode, RenderError, Renderer, Stage, StageProbe, WeightStats,
     estimate_memory, first_hit_layers, human_bytes,
 };
 use bdpm_output::accum::{self, Identity, PassRecord};
@@ -304,17 +304,25 @@ pub(crate) struct RenderSession<'a> {
 
 impl<'a> RenderSession<'a> {
     /// The rest of step 1: builds the renderer (radiance cache, pixel table) and prints the
-    /// warnings of loading and preparation.
-    pub(crate) fn new(prep: &'a Prepared) -> CliResult<RenderSession<'a>> {
+    /// warnings of loading and preparation. The preparation asks `interrupted()` between
+    /// chunks of its work ([`Renderer::new_until`]) and gives up when it says so: `Ok(Err)`
+    /// with the stage it was in.
+    pub(crate) fn new(
+        prep: &'a Prepared,
+        interrupted: &(dyn Fn() -> bool + Sync),
+    ) -> CliResult<Result<RenderSession<'a>, Stage>> {
         let (job, settings) = (&prep.job, &prep.loaded.settings);
         let t_prepare = Instant::now();
         let probe = job.stage_memory.then_some(&prep.peaks as &dyn StageProbe);
         probe.inspect(|p| p.enter(Stage::Prepare));
-        let mut renderer = prep
+        let renderer = prep
             .pool
-            .install(|| Renderer::new(&prep.loaded.scene, settings))
-            .map_err(|e| format!("{}: {e}", job.scene.display()))?
-            .with_technique_layers(job.techniques);
+            .install(|| Renderer::new_until(&prep.loaded.scene, settings, interrupted));
+        let mut renderer = match renderer {
+            Err(RenderError::Interrupted(stage)) => return Ok(Err(stage)),
+            other => other.map_err(|e| format!("{}: {e}", job.scene.display()))?,
+        }
+        .with_technique_layers(job.techniques);
         if let Some(p) = probe {
             p.leave(Stage::Prepare);
             renderer.set_stage_probe(p);
@@ -332,7 +340,7 @@ impl<'a> RenderSession<'a> {
             "{spinner} [{elapsed_precise}] {bar:40} {percent:>3}% pass {msg} (eta {eta})",
         );
         let pixels = settings.width as usize * settings.height as usize;
-        Ok(RenderSession {
+        Ok(Ok(RenderSession {
             prep,
             renderer,
             prepare_seconds,
@@ -354,7 +362,7 @@ impl<'a> RenderSession<'a> {
             replayed: 0,
             rendered: 0,
             render_seconds: 0.0,
-        })
+        }))
     }
 
     /// Step 2: adds the held passes. They all precede the passes rendered now, so the film
@@ -727,7 +735,7 @@ mod tests {
         j.time_budget = Some(1e-9);
         let (prepared, held) = prepare(j).unwrap();
         assert!(held.is_empty());
-        let mut session = RenderSession::new(&prepared).unwrap();
+        let mut session = RenderSession::new(&prepared, &|| false).unwrap().unwrap();
         session.replay(held);
         assert_eq!(session.passes(), 0);
         // Every pass takes longer than the budget: `run` stops after its first one, which is
@@ -747,13 +755,52 @@ mod tests {
         std::fs::remove_dir_all(out).unwrap();
     }
 
+    /// The preparation asks `interrupted` as it goes and gives up when it says so, naming the
+    /// stage it was in: stopped at each ask in turn, it names its stages in the order they
+    /// run (the pixel table again after the adaptive radius's pilot), and it completes once
+    /// the answer comes after the last ask.
+    #[test]
+    fn an_interrupt_stops_the_preparation_in_its_stage() {
+        use std::sync::atomic::{AtomicU32, Ordering};
+        let (mut j, out) = job("prepare-interrupt", 1);
+        j.overrides.mode = Some("optimal".into());
+        j.overrides.adaptive_radius = Some(true);
+        let (prepared, _) = prepare(j).unwrap();
+        let mut stages: Vec<Stage> = Vec::new();
+        let mut completed = false;
+        for after in 0..10_000 {
+            let asked = AtomicU32::new(0);
+            let stop = || asked.fetch_add(1, Ordering::SeqCst) >= after;
+            match RenderSession::new(&prepared, &stop).unwrap() {
+                Ok(_) => {
+                    completed = true;
+                    break;
+                }
+                Err(stage) if stages.last() != Some(&stage) => stages.push(stage),
+                Err(_) => {}
+            }
+        }
+        assert!(completed, "still stopped after 10000 asks");
+        assert_eq!(
+            stages,
+            [
+                Stage::RadianceCache,
+                Stage::PixelTable,
+                Stage::RadiusMap,
+                Stage::PixelTable,
+                Stage::DirectSamples
+            ]
+        );
+        let _ = std::fs::remove_dir_all(out);
+    }
+
     /// An interrupt asked for before the second pass: one pass held, `interrupted` in the
     /// header and the report; with no interrupt all passes run and the reason is `completed`.
     #[test]
     fn interrupt_stops_before_the_next_pass() {
         let (j, out) = job("interrupt", 3);
         let (prepared, held) = prepare(j).unwrap();
-        let mut session = RenderSession::new(&prepared).unwrap();
+        let mut session = RenderSession::new(&prepared, &|| false).unwrap().unwrap();
         session.replay(held);
         let asked = Cell::new(0);
         let stop = session.run(&|| {
@@ -772,7 +819,7 @@ mod tests {
 
         let (j, out2) = job("complete", 2);
         let (prepared, held) = prepare(j).unwrap();
-        let mut session = RenderSession::new(&prepared).unwrap();
+        let mut session = RenderSession::new(&prepared, &|| false).unwrap().unwrap();
         session.replay(held);
         session.render_pass(0);
         session.render_pass(1);

@@ -1,6 +1,8 @@
 //! Interrupts (SIGINT, SIGTERM, SIGHUP) during a render: the first one asks the render loop to
-//! stop after the pass in flight and write what it has; a second one while the render is still
-//! running quits at once without writing anything. While the outputs are being written, further
+//! stop after the pass in flight and write what it has, or, while the renderer is being
+//! prepared (radiance cache, pixel table, pilots), the preparation to stop within a chunk of its
+//! work, writing nothing; a second one while the render is still running quits at once without
+//! writing anything. While the outputs are being written, further
 //! signals are only acknowledged, so that no file is left half-written.
 //!
 //! The handler cannot tell the signals apart (the `ctrlc` crate does not say which arrived), so
@@ -15,6 +17,9 @@ pub(crate) const EXIT_INTERRUPTED: u8 = 130;
 static SIGNALS: AtomicU32 = AtomicU32::new(0);
 /// Set once the render loop has ended and the outputs are being written.
 static WRITING: AtomicBool = AtomicBool::new(false);
+/// Set while the renderer is being prepared (radiance cache, pixel table, pilots), which an
+/// interrupt stops without writing anything.
+static PREPARING: AtomicBool = AtomicBool::new(false);
 
 /// What an interrupt does to the running command, for the handler's message.
 #[derive(Clone, Copy)]
@@ -36,6 +41,11 @@ pub(crate) fn install(stop: Stop) -> Result<(), String> {
         if WRITING.load(Ordering::SeqCst) {
             say_err!(
                 "\nbdpm: interrupt: the outputs are being written, they will be complete in a moment"
+            );
+        } else if n == 1 && PREPARING.load(Ordering::SeqCst) {
+            say_err!(
+                "\nbdpm: interrupt: stopping the preparation; nothing was rendered, so nothing will \
+                 be written (interrupt again to quit at once)"
             );
         } else if n == 1 {
             match stop {
@@ -64,4 +74,9 @@ pub(crate) fn requested() -> bool {
 /// Marks the start of writing outputs: from now on a signal no longer quits the process.
 pub(crate) fn begin_writing() {
     WRITING.store(true, Ordering::SeqCst);
+}
+
+/// Marks the start (`true`) or end of the renderer's preparation, for the handler's message.
+pub(crate) fn set_preparing(on: bool) {
+    PREPARING.store(on, Ordering::SeqCst);
 }

@@ -34,7 +34,7 @@
 use std::f32::consts::PI;
 
 use bdpm_core::{Domain, Frame, luminance};
-use bdpm_photon::{PhotonScene, TraceOptions, trace_photons};
+use bdpm_photon::{PhotonScene, TraceOptions, trace_photons_until};
 use glam::{Vec2, Vec3};
 
 /// How to build a cache.
@@ -283,6 +283,18 @@ impl RadianceCache {
         scene: &S,
         settings: &CacheSettings,
     ) -> RadianceCache {
+        Self::build_until(scene, settings, &|| false)
+            .expect("a build that is never stopped is complete")
+    }
+
+    /// [`Self::build`] that gives up when `stop()` returns true, asked before each chunk of
+    /// the cache's photons ([`bdpm_photon::trace_photons_until`]): `None` then. A `stop` that
+    /// never fires builds the same cache.
+    pub fn build_until<S: PhotonScene + CacheSurfaces + ?Sized>(
+        scene: &S,
+        settings: &CacheSettings,
+        stop: &(dyn Fn() -> bool + Sync),
+    ) -> Option<RadianceCache> {
         let mut cache = RadianceCache::empty(scene, settings.bins, settings.cell_size);
         let options = TraceOptions {
             photons: settings.photons.max(1),
@@ -295,25 +307,33 @@ impl RadianceCache {
         // Records are made in parallel and come back in photon order, so the sequential
         // accumulation in `fill` is bit-identical whatever the thread count.
         let this = &cache;
-        let records: Vec<(u32, f32, f32)> = trace_photons(scene, &options, |arrival, out| {
-            // Only light that has scattered at least once is secondary (L_d, method.md §5).
-            if arrival.vertex.depth == 0 {
-                return;
-            }
-            let Some(sc) = arrival.scatter else { return };
-            let vx = &arrival.vertex;
-            let record = this.record(&CacheArrival {
-                prim: vx.at.prim,
-                position: vx.at.p,
-                normal: vx.at.n,
-                direction: sc.direction,
-                energy: luminance(arrival.power * sc.weight),
-                f: luminance(sc.f),
-            });
-            out.extend(record);
-        });
+        let records: Vec<(u32, f32, f32)> = trace_photons_until(
+            scene,
+            &options,
+            |arrival, out| {
+                // Only light that has scattered at least once is secondary (L_d, method.md §5).
+                if arrival.vertex.depth == 0 {
+                    return;
+                }
+                let Some(sc) = arrival.scatter else { return };
+                let vx = &arrival.vertex;
+                let record = this.record(&CacheArrival {
+                    prim: vx.at.prim,
+                    position: vx.at.p,
+                    normal: vx.at.n,
+                    direction: sc.direction,
+                    energy: luminance(arrival.power * sc.weight),
+                    f: luminance(sc.f),
+                });
+                out.extend(record);
+            },
+            stop,
+        )?;
+        if stop() {
+            return None;
+        }
         cache.fill(&records);
-        cache
+        Some(cache)
     }
 
     /// A cache over `surfaces` filled from arrivals the caller traced itself (e.g. with its

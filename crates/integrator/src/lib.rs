@@ -47,7 +47,7 @@ pub use render::{
 pub use bdpm_settings::{
     FOOTPRINT_TABLE_RAYS, HeuristicKind, MIN_RADIUS, Mode, PINHOLE_TABLE_RAYS, PartialSettings,
     RadiusError, RadiusInput, RadiusSpec, RenderSettings, Sampler, Setting, SettingsError,
-    SettingsRecord, WeightClamp, check_radius, default_radius,
+    SettingsRecord, WeightClamp, Written, check_radius, default_radius,
 };
 pub use sampler::strata;
 pub use stage::Stage;

@@ -7,7 +7,7 @@ use rayon::prelude::*;
 
 use bdpm_bdf::luminance;
 use bdpm_cache::{CacheSettings, RadianceCache};
-use bdpm_mis::{Budget, Heuristic, NoiseModel};
+use bdpm_mis::{Budget, Heuristic, NoiseModel, Weigher};
 use bdpm_photon::{PhotonMap, TraceOptions};
 
 use crate::bdpm::{BATCH, Job, Mix, Slots, Techniques, WeightStats, scene_default_radius};
@@ -152,6 +152,9 @@ pub enum RenderError {
     /// The x₀ asked for cannot be used (outside the image, not visible, facing away).
     #[error("{0}")]
     Target(TargetError),
+    /// The preparation was stopped ([`Renderer::new_until`]) during this stage.
+    #[error("interrupted during preparation ({0})")]
+    Interrupted(Stage),
 }
 
 /// Why a weight map's x₀ cannot be used ([`RenderError::Target`]).
@@ -220,6 +223,20 @@ pub struct Renderer<'a> {
 impl<'a> Renderer<'a> {
     /// Checks `settings` against `scene` and prepares the mode's pre-passes.
     pub fn new(scene: &'a Scene, settings: &RenderSettings) -> Result<Renderer<'a>, RenderError> {
+        Self::new_until(scene, settings, &never)
+    }
+
+    /// [`Renderer::new`] whose preparation gives up when `stop()` returns true: it is asked
+    /// before each preparatory stage and within each between chunks of its work (4096 photons
+    /// of the radiance cache or of a pilot pass, a pixel of the pixel table, an image row of a
+    /// pilot's camera samples), so that an interrupt ends a long preparation within a chunk's
+    /// time, with [`RenderError::Interrupted`] naming the stage. A `stop` that never fires
+    /// prepares the same renderer as [`Renderer::new`].
+    pub fn new_until(
+        scene: &'a Scene,
+        settings: &RenderSettings,
+        stop: &(dyn Fn() -> bool + Sync),
+    ) -> Result<Renderer<'a>, RenderError> {
         let s = settings;
         s.validate()?;
         if (scene.camera().width(), scene.camera().height()) != (s.width, s.height) {
@@ -261,36 +278,53 @@ impl<'a> Renderer<'a> {
             probe: None,
         };
         if let Some(h) = renderer.heuristic {
-            renderer.prepare(h);
+            renderer.prepare(h, stop)?;
         }
         // The mix's camera samples and the `light` reference's direct term read it; `path`
         // takes its direct light by next-event estimation at every vertex and does not.
         if renderer.settings.mode != Mode::Path {
+            unless_stopped(stop, Stage::DirectSamples)?;
             renderer.allocate_direct();
         }
         Ok(renderer)
     }
 
-    /// Builds the radiance cache and the A/B table when (and only when) `h` needs them.
-    fn prepare(&mut self, h: Heuristic) {
+    /// Builds the radiance cache and the A/B table when (and only when) `h` needs them;
+    /// gives up when `stop()` says so ([`Renderer::new_until`]).
+    fn prepare(
+        &mut self,
+        h: Heuristic,
+        stop: &(dyn Fn() -> bool + Sync),
+    ) -> Result<(), RenderError> {
         let needs = h.needs();
         if needs.radiance_cache {
-            self.build_cache();
+            self.build_cache(stop)?;
         }
-        self.prepare_table(h);
+        self.prepare_table(h, stop)?;
         if needs.balance_correction {
-            self.build_correction();
+            self.build_correction(stop)?;
         }
         if self.settings.adaptive_radius {
-            self.build_radius_map(h);
+            self.build_radius_map(h, stop)?;
         }
+        Ok(())
     }
 
-    /// Builds the pixel table (ρ, N_eff, and A, B) when `h` needs it, with each pixel's radius.
-    fn prepare_table(&mut self, h: Heuristic) {
+    /// Builds the pixel table (ρ, N_eff, and A, B) when `h` needs it, with each pixel's radius;
+    /// gives up when `stop()` says so.
+    fn prepare_table(
+        &mut self,
+        h: Heuristic,
+        stop: &(dyn Fn() -> bool + Sync),
+    ) -> Result<(), RenderError> {
         let needs = h.needs();
         let s = &self.settings;
         let footprint = self.footprint_model() && needs.effective_samples;
+        let stage = if needs.pixel_table {
+            Stage::PixelTable
+        } else {
+            Stage::PixelFootprints
+        };
         if needs.pixel_table || footprint {
             let start = std::time::Instant::now();
             let spec = TableSpec {
@@ -300,7 +334,8 @@ impl<'a> Renderer<'a> {
                 radius: self.radius,
                 seed: s.seed,
             };
-            let table = table::build(&self.mix(h), s.width, s.height, &spec);
+            let table = table::build(&self.mix(h), s.width, s.height, &spec, stop)
+                .ok_or(RenderError::Interrupted(stage))?;
             let budget = self.budget();
             // c·B with each pixel's own c = (N_F − 1)·S/(Φ·N_eff).
             let clamped = table
@@ -336,24 +371,26 @@ impl<'a> Renderer<'a> {
                 format!("rho, N_eff for {}x{} pixels; {overlap}", s.width, s.height)
             };
             self.stages.push(StageReport {
-                stage: if needs.pixel_table {
-                    Stage::PixelTable
-                } else {
-                    Stage::PixelFootprints
-                },
+                stage,
                 seconds: start.elapsed().as_secs_f64(),
                 bytes: table.bytes(),
                 detail,
             });
             self.table = Some(table);
         }
+        Ok(())
     }
 
     /// `adaptive_radius`: [`ADAPTIVE_RADIUS_PILOT_PASSES`] passes of the mode at r on the
     /// pilot's own streams, split by technique, give each block its radius (crate::radius);
     /// then the pixel table, whose N_eff, A and B depend on the radius, is built again with
     /// each pixel's.
-    fn build_radius_map(&mut self, h: Heuristic) {
+    fn build_radius_map(
+        &mut self,
+        h: Heuristic,
+        stop: &(dyn Fn() -> bool + Sync),
+    ) -> Result<(), RenderError> {
+        unless_stopped(stop, Stage::RadiusMap)?;
         let start = std::time::Instant::now();
         let mut pilot = self.settings.clone();
         pilot.seed = radius_pilot_seed(self.settings.seed);
@@ -363,7 +400,10 @@ impl<'a> Renderer<'a> {
         {
             let mix = self.mix(h);
             for pass in 0..ADAPTIVE_RADIUS_PILOT_PASSES {
-                let (out, _) = self.bdpm_pass(&mix, &pilot, pass, &|_| {});
+                let Some((out, _)) = self.bdpm_pass(&mix, &pilot, pass, &|_| {}, stop) else {
+                    self.techniques = record;
+                    return Err(RenderError::Interrupted(Stage::RadiusMap));
+                };
                 for (s, t) in sums.iter_mut().zip(out.techniques.iter().flatten()) {
                     s.direct += t.direct;
                     s.x0_weighted += t.x0_weighted;
@@ -393,8 +433,9 @@ impl<'a> Renderer<'a> {
         self.radius_map = Some(map);
         // The first table (at r, for the pilot) stays in the report: it was paid for.
         if self.table.is_some() {
-            self.prepare_table(h);
+            self.prepare_table(h, stop)?;
         }
+        Ok(())
     }
 
     /// Fixes each pixel's direct-light samples per camera sample (crate::direct) when the
@@ -432,7 +473,8 @@ impl<'a> Renderer<'a> {
 
     /// Learns `corrected-balance`'s per-pixel factors from [`PILOT_PASSES`] passes of
     /// `balance` on the pilot's own streams (crate::correction).
-    fn build_correction(&mut self) {
+    fn build_correction(&mut self, stop: &(dyn Fn() -> bool + Sync)) -> Result<(), RenderError> {
+        unless_stopped(stop, Stage::BalanceCorrection)?;
         let start = std::time::Instant::now();
         let mut pilot = self.settings.clone();
         pilot.seed = pilot_seed(self.settings.seed);
@@ -443,7 +485,9 @@ impl<'a> Renderer<'a> {
         let pixels = self.settings.width as usize * self.settings.height as usize;
         let mut second = vec![CandidateSums::default(); pixels];
         for pass in 0..PILOT_PASSES {
-            let (_, estimates) = self.bdpm_pass(&mix, &pilot, pass, &|_| {});
+            let (_, estimates) = self
+                .bdpm_pass(&mix, &pilot, pass, &|_| {}, stop)
+                .ok_or(RenderError::Interrupted(Stage::BalanceCorrection))?;
             for (m, f) in second.iter_mut().zip(&estimates) {
                 m.add_squares(f, 1.0 / f64::from(PILOT_PASSES));
             }
@@ -456,6 +500,7 @@ impl<'a> Renderer<'a> {
             detail: correction.summary(),
         });
         self.correction = Some(correction);
+        Ok(())
     }
 
     /// `corrected-balance`'s per-pixel factors, when the mode uses them.
@@ -464,15 +509,25 @@ impl<'a> Renderer<'a> {
     }
 
     /// Builds the radiance cache of method.md §5 from its own photon stream.
-    fn build_cache(&mut self) {
+    fn build_cache(&mut self, stop: &(dyn Fn() -> bool + Sync)) -> Result<(), RenderError> {
+        unless_stopped(stop, Stage::RadianceCache)?;
         let s = &self.settings;
-        let cache = self.radiance_cache(s.cache_photons.unwrap_or(s.photons), s.cache_bins, "");
-        self.cache = Some(cache);
+        let photons = s.cache_photons.unwrap_or(s.photons);
+        let cache = self.radiance_cache(photons, s.cache_bins, "", stop);
+        self.cache = Some(cache.ok_or(RenderError::Interrupted(Stage::RadianceCache))?);
+        Ok(())
     }
 
     /// A radiance cache of `photons` photons and `bins` bins per cell side on the render's
-    /// seed, reported as a stage (`purpose` prefixes its detail).
-    fn radiance_cache(&mut self, photons: u64, bins: u32, purpose: &str) -> RadianceCache {
+    /// seed, reported as a stage (`purpose` prefixes its detail); `None` if `stop()` stopped
+    /// it.
+    fn radiance_cache(
+        &mut self,
+        photons: u64,
+        bins: u32,
+        purpose: &str,
+        stop: &(dyn Fn() -> bool + Sync),
+    ) -> Option<RadianceCache> {
         let start = std::time::Instant::now();
         let (lo, hi) = self.scene.geometry().bounds();
         let settings = CacheSettings {
@@ -481,7 +536,7 @@ impl<'a> Renderer<'a> {
             photons,
             seed: self.settings.seed,
         };
-        let cache = RadianceCache::build(self.scene, &settings);
+        let cache = RadianceCache::build_until(self.scene, &settings, stop)?;
         let st = cache.stats();
         self.stages.push(StageReport {
             stage: Stage::RadianceCache,
@@ -497,7 +552,7 @@ impl<'a> Renderer<'a> {
                 100.0 * st.filled_fraction
             ),
         });
-        cache
+        Some(cache)
     }
 
     /// Builds the noise model's radiance cache for [`Renderer::predict_variance`], which reads
@@ -520,8 +575,8 @@ impl<'a> Renderer<'a> {
         self.model_reads_weights_cache = own;
         if !own && self.model_cache.is_none() {
             let photons = model.cache_photons.unwrap_or(model.photons);
-            let cache = self.radiance_cache(photons, model.cache_bins, "noise model's: ");
-            self.model_cache = Some(cache);
+            self.model_cache =
+                self.radiance_cache(photons, model.cache_bins, "noise model's: ", &never);
         }
         self
     }
@@ -618,7 +673,9 @@ impl<'a> Renderer<'a> {
         );
         self.radius_map = Some(map);
         if let (Some(h), Some(_)) = (self.heuristic, &self.table) {
-            self.prepare_table(h);
+            // Never stopped, so never an error.
+            let built = self.prepare_table(h, &never);
+            debug_assert!(built.is_ok());
         }
         self
     }
@@ -791,7 +848,8 @@ impl Renderer<'_> {
         pass: u32,
         progress: &(dyn Fn(u64) + Sync),
     ) -> PassOutput {
-        self.bdpm_pass(&self.mix(heuristic), &self.settings, pass, progress)
+        self.bdpm_pass(&self.mix(heuristic), &self.settings, pass, progress, &never)
+            .expect("a pass that is never stopped is complete")
             .0
     }
 
@@ -799,24 +857,17 @@ impl Renderer<'_> {
     /// their own seed). With [`Mix::pilot`] it also returns each pixel's pass estimate under
     /// every candidate factor of `corrected-balance` (luminance), and reads neither the pixel
     /// table nor the factors (the pilot weighs with `balance`); otherwise that list is empty.
+    /// `None` when `stop()` stopped it (asked before each chunk of photons and each row).
     fn bdpm_pass(
         &self,
         mix: &Mix<'_>,
         s: &RenderSettings,
         pass: u32,
         progress: &(dyn Fn(u64) + Sync),
-    ) -> (PassOutput, Vec<CandidateSums>) {
-        let needs = mix.needs;
+        stop: &(dyn Fn() -> bool + Sync),
+    ) -> Option<(PassOutput, Vec<CandidateSums>)> {
         self.enter(Stage::Photons);
         let t_photons = std::time::Instant::now();
-        let options = TraceOptions {
-            photons: s.photons,
-            seed: s.seed,
-            domain: Domain::Photon,
-            pass,
-            light_visibility: needs.direct_at_x1,
-            max_depth: 1024,
-        };
         let (table, correction) = if mix.pilot {
             (None, None)
         } else {
@@ -826,113 +877,210 @@ impl Renderer<'_> {
             let factor = correction.map_or(1.0, |c| c.get(x, y));
             mix.weigher(table.map(|t| t.get(x, y)), factor, mix.radius_scale(x, y))
         };
-        // Built for the largest pixel radius, which every gather's query may reach.
-        let grid_radius = self.radius * mix.largest_radius_scale();
-        let (map, splats) = if mix.light_tracing {
-            PhotonMap::trace_visiting(
-                self.scene,
-                &options,
-                grid_radius,
-                |_| Splats::default(),
-                |acc, a, vertices| mix.splat(a, vertices, weigher_at, acc),
-            )
-        } else {
-            (
-                PhotonMap::trace(self.scene, &options, grid_radius),
-                Vec::new(),
-            )
-        };
+        let (map, splats) = self.pass_photons(mix, s, pass, &weigher_at, stop)?;
         let prev_inputs = mix.prev_inputs(&map);
         let photon_seconds = t_photons.elapsed().as_secs_f64();
         self.leave(Stage::Photons);
         self.enter(Stage::Camera);
         let t_camera = std::time::Instant::now();
-        let (w, h) = (s.width as usize, s.height as usize);
-        let record = self.techniques;
-        let direct = self.direct.as_ref();
-        let render_row = |y: usize| -> Row {
-            let mut row = Row::default();
-            let mut slots = Slots::default();
-            let mut layout = PixelSamples::new(s);
-            for x in 0..w {
-                let pixel = (y * w + x) as u64;
-                let mut sum = DVec3::ZERO;
-                let mut tsum = Techniques::default();
-                let mut csum = CandidateSums::default();
-                let weigher = weigher_at(x as u32, y as u32);
-                let direct_m = direct.map_or(1, |d| d.at(x as u32, y as u32));
-                layout.start(pass, pixel);
-                for first in (0..s.spp).step_by(BATCH) {
-                    let count = (s.spp - first).min(BATCH as u32);
-                    let mut jobs: [Job; BATCH] = std::array::from_fn(|i| {
-                        // Past N_B the slot is unused; sample 0's numbers fill it.
-                        let k = (first + i as u32).min(s.spp - 1);
-                        let c = layout.sample(k);
-                        let direct_extra = layout.direct_extra(k, (x as u32, y as u32), direct_m);
-                        Job {
-                            x: x as f32 + c.offset[0],
-                            y: y as f32 + c.offset[1],
-                            rng: c.rng,
-                            bdf: c.bdf,
-                            out: Techniques::default(),
-                            pilot: CandidateSums::default(),
-                            direct_extra,
-                            scale: mix.radius_scale(x as u32, y as u32),
+        let camera = CameraPass {
+            mix,
+            s,
+            pass,
+            map: &map,
+            prev_inputs: &prev_inputs,
+            weigher_at: &weigher_at,
+            direct: self.direct.as_ref(),
+            record: self.techniques,
+        };
+        let rows: Vec<Row> = (0..s.height as usize)
+            .into_par_iter()
+            .map(|y| {
+                if stop() {
+                    return None;
+                }
+                let row = camera.row(y);
+                progress(1);
+                Some(row)
+            })
+            .collect::<Option<_>>()?;
+        self.leave(Stage::Camera);
+        let pixels = s.width as usize * s.height as usize;
+        let sums = Gathered::new(rows, &splats, self.techniques, mix.pilot, pixels);
+        let out = PassOutput {
+            estimates: sums.estimates,
+            dropped: sums.dropped,
+            samples: pixels as u64 * s.spp as u64,
+            stage_seconds: vec![
+                (Stage::Photons, photon_seconds),
+                (Stage::Camera, t_camera.elapsed().as_secs_f64()),
+            ],
+            techniques: self.techniques.then_some(sums.techniques),
+            photons_stored: map.photons().len() as u64,
+            photon_map_bytes: map.memory_bytes(),
+            weights: sums.weights,
+        };
+        Some((out, sums.candidates))
+    }
+
+    /// The photon map of pass `pass` under `s`, and with light tracing the splats of its
+    /// arrivals (weighed with `weigher_at`); `None` when `stop()` stopped the tracing.
+    fn pass_photons<F: Fn(u32, u32) -> Weigher + Sync>(
+        &self,
+        mix: &Mix<'_>,
+        s: &RenderSettings,
+        pass: u32,
+        weigher_at: &F,
+        stop: &(dyn Fn() -> bool + Sync),
+    ) -> Option<(PhotonMap, Vec<Splats>)> {
+        let options = TraceOptions {
+            photons: s.photons,
+            seed: s.seed,
+            domain: Domain::Photon,
+            pass,
+            light_visibility: mix.needs.direct_at_x1,
+            max_depth: 1024,
+        };
+        // Built for the largest pixel radius, which every gather's query may reach.
+        let grid_radius = self.radius * mix.largest_radius_scale();
+        if mix.light_tracing {
+            PhotonMap::trace_visiting_until(
+                self.scene,
+                &options,
+                grid_radius,
+                |_| Splats::default(),
+                |acc, a, vertices| mix.splat(a, vertices, weigher_at, acc),
+                stop,
+            )
+        } else {
+            // `PhotonMap::trace` is this with nothing visited.
+            let no_visit = |_: &mut (), _: &_, _: &[_]| {};
+            let traced = PhotonMap::trace_visiting_until(
+                self.scene,
+                &options,
+                grid_radius,
+                |_| (),
+                no_visit,
+                stop,
+            )?;
+            Some((traced.0, Vec::new()))
+        }
+    }
+}
+
+/// The camera samples of one BDPM pass, row by row ([`CameraPass::row`]).
+struct CameraPass<'p, F> {
+    mix: &'p Mix<'p>,
+    s: &'p RenderSettings,
+    pass: u32,
+    map: &'p PhotonMap,
+    prev_inputs: &'p [[f32; 3]],
+    /// Each pixel's weigher.
+    weigher_at: &'p F,
+    direct: Option<&'p DirectSamples>,
+    /// Keep each pixel's estimate split by technique.
+    record: bool,
+}
+
+impl<F: Fn(u32, u32) -> Weigher + Sync> CameraPass<'_, F> {
+    /// Image row `y`: each pixel's N_B camera samples, in batches of [`BATCH`].
+    fn row(&self, y: usize) -> Row {
+        let (mix, s, pass, record) = (self.mix, self.s, self.pass, self.record);
+        let w = s.width as usize;
+        let mut row = Row::default();
+        let mut slots = Slots::default();
+        let mut layout = PixelSamples::new(s);
+        for x in 0..w {
+            let pixel = (y * w + x) as u64;
+            let mut sum = DVec3::ZERO;
+            let mut tsum = Techniques::default();
+            let mut csum = CandidateSums::default();
+            let weigher = (self.weigher_at)(x as u32, y as u32);
+            let direct_m = self.direct.map_or(1, |d| d.at(x as u32, y as u32));
+            layout.start(pass, pixel);
+            for first in (0..s.spp).step_by(BATCH) {
+                let count = (s.spp - first).min(BATCH as u32);
+                let mut jobs: [Job; BATCH] = std::array::from_fn(|i| {
+                    // Past N_B the slot is unused; sample 0's numbers fill it.
+                    let k = (first + i as u32).min(s.spp - 1);
+                    let c = layout.sample(k);
+                    let direct_extra = layout.direct_extra(k, (x as u32, y as u32), direct_m);
+                    Job {
+                        x: x as f32 + c.offset[0],
+                        y: y as f32 + c.offset[1],
+                        rng: c.rng,
+                        bdf: c.bdf,
+                        out: Techniques::default(),
+                        pilot: CandidateSums::default(),
+                        direct_extra,
+                        scale: mix.radius_scale(x as u32, y as u32),
+                    }
+                });
+                let jobs = &mut jobs[..count as usize];
+                mix.sample_batch(
+                    self.map,
+                    self.prev_inputs,
+                    jobs,
+                    &mut slots,
+                    &weigher,
+                    &mut row.stats,
+                );
+                // Summed in sample order, so the pixel does not depend on the batching.
+                for job in jobs.iter() {
+                    let t = &job.out;
+                    let value = t.total();
+                    if value.is_finite() {
+                        sum += value;
+                        if record {
+                            tsum.direct += t.direct;
+                            tsum.x0_raw += t.x0_raw;
+                            tsum.x0_weighted += t.x0_weighted;
+                            tsum.x1_raw += t.x1_raw;
+                            tsum.x1_weighted += t.x1_weighted;
                         }
-                    });
-                    let jobs = &mut jobs[..count as usize];
-                    mix.sample_batch(
-                        &map,
-                        &prev_inputs,
-                        jobs,
-                        &mut slots,
-                        &weigher,
-                        &mut row.stats,
-                    );
-                    // Summed in sample order, so the pixel does not depend on the batching.
-                    for job in jobs.iter() {
-                        let t = &job.out;
-                        let value = t.total();
-                        if value.is_finite() {
-                            sum += value;
-                            if record {
-                                tsum.direct += t.direct;
-                                tsum.x0_raw += t.x0_raw;
-                                tsum.x0_weighted += t.x0_weighted;
-                                tsum.x1_raw += t.x1_raw;
-                                tsum.x1_weighted += t.x1_weighted;
-                            }
-                            if mix.pilot {
-                                csum.add_sums(&job.pilot);
-                                csum.add_to_all(f64::from(luminance(t.direct.as_vec3())));
-                            }
-                        } else {
-                            row.dropped += 1;
+                        if mix.pilot {
+                            csum.add_sums(&job.pilot);
+                            csum.add_to_all(f64::from(luminance(t.direct.as_vec3())));
                         }
+                    } else {
+                        row.dropped += 1;
                     }
                 }
-                let n = s.spp as f64;
-                row.estimates.push(sum / n);
-                if record {
-                    row.techniques.push(Techniques {
-                        direct: tsum.direct / n,
-                        x0_raw: tsum.x0_raw / n,
-                        x0_weighted: tsum.x0_weighted / n,
-                        x1_raw: tsum.x1_raw / n,
-                        x1_weighted: tsum.x1_weighted / n,
-                    });
-                }
-                if mix.pilot {
-                    row.candidates.push(csum.scaled(1.0 / n));
-                }
             }
-            progress(1);
-            row
-        };
-        let rows: Vec<Row> = (0..h).into_par_iter().map(render_row).collect();
-        self.leave(Stage::Camera);
-        let mut estimates = Vec::with_capacity(w * h);
-        let mut techniques = Vec::with_capacity(if record { w * h } else { 0 });
+            let n = s.spp as f64;
+            row.estimates.push(sum / n);
+            if record {
+                row.techniques.push(Techniques {
+                    direct: tsum.direct / n,
+                    x0_raw: tsum.x0_raw / n,
+                    x0_weighted: tsum.x0_weighted / n,
+                    x1_raw: tsum.x1_raw / n,
+                    x1_weighted: tsum.x1_weighted / n,
+                });
+            }
+            if mix.pilot {
+                row.candidates.push(csum.scaled(1.0 / n));
+            }
+        }
+        row
+    }
+}
+
+/// A pass's rows put together, with light tracing's splats added.
+struct Gathered {
+    estimates: Vec<DVec3>,
+    techniques: Vec<Techniques>,
+    candidates: Vec<CandidateSums>,
+    dropped: u64,
+    weights: WeightStats,
+}
+
+impl Gathered {
+    /// The rows in row order, then the splats in photon order (so the sums do not depend on
+    /// the threads); `record` keeps the technique split, `pilot` the candidates.
+    fn new(rows: Vec<Row>, splats: &[Splats], record: bool, pilot: bool, pixels: usize) -> Self {
+        let mut estimates = Vec::with_capacity(pixels);
+        let mut techniques = Vec::with_capacity(if record { pixels } else { 0 });
         let mut candidates = Vec::new();
         let mut dropped = 0;
         let mut weights = WeightStats::default();
@@ -944,8 +1092,7 @@ impl Renderer<'_> {
             // Integer sums: the total does not depend on the order rows finish in.
             weights.add(&row.stats);
         }
-        // Light tracing's splats, in photon order (so the sums do not depend on the threads).
-        for chunk in &splats {
+        for chunk in splats {
             weights.add(&chunk.stats);
             for s in &chunk.list {
                 let p = s.pixel as usize;
@@ -959,25 +1106,32 @@ impl Renderer<'_> {
                     techniques[p].x0_raw += s.raw.as_dvec3();
                     techniques[p].x0_weighted += weighted.as_dvec3();
                 }
-                if mix.pilot {
+                if pilot {
                     candidates[p].add(f64::from(luminance(s.raw)), s.w1, false);
                 }
             }
         }
-        let out = PassOutput {
+        Gathered {
             estimates,
+            techniques,
+            candidates,
             dropped,
-            samples: (w * h) as u64 * s.spp as u64,
-            stage_seconds: vec![
-                (Stage::Photons, photon_seconds),
-                (Stage::Camera, t_camera.elapsed().as_secs_f64()),
-            ],
-            techniques: record.then_some(techniques),
-            photons_stored: map.photons().len() as u64,
-            photon_map_bytes: map.memory_bytes(),
             weights,
-        };
-        (out, candidates)
+        }
+    }
+}
+
+/// A stop that never fires ([`Renderer::new`]).
+fn never() -> bool {
+    false
+}
+
+/// `Err(Interrupted(stage))` when `stop()` says so.
+fn unless_stopped(stop: &(dyn Fn() -> bool + Sync), stage: Stage) -> Result<(), RenderError> {
+    if stop() {
+        Err(RenderError::Interrupted(stage))
+    } else {
+        Ok(())
     }
 }
 

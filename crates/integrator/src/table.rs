@@ -202,7 +202,14 @@ pub(crate) fn pixel_weights(
 /// L = L₀(x₁→x₀) + L_d(x₁→x₀), divided by `rays`. A pixel whose centre sees nothing gets ρ = 0
 /// under the footprint model (its samples that hit land on whatever lies behind the
 /// silhouette, spread out) and A = B = 0.
-pub(crate) fn build(mix: &Mix<'_>, width: u32, height: u32, spec: &TableSpec) -> PixelTable {
+/// `None` when `stop()`, asked before each pixel, stopped it.
+pub(crate) fn build(
+    mix: &Mix<'_>,
+    width: u32,
+    height: u32,
+    spec: &TableSpec,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Option<PixelTable> {
     let scene = mix.scene;
     let cam = &scene.camera();
     let n_b = mix.budget.camera_samples;
@@ -212,11 +219,17 @@ pub(crate) fn build(mix: &Mix<'_>, width: u32, height: u32, spec: &TableSpec) ->
         camera_samples: effective_samples(n_b, if spec.footprint { 0.0 } else { 1.0 }),
     };
     let mut pixels = vec![missed; width as usize * height as usize];
+    let stopped = std::sync::atomic::AtomicBool::new(false);
     pixels
         .par_chunks_mut(width as usize)
         .enumerate()
         .for_each(|(y, row)| {
             for (x, out) in row.iter_mut().enumerate() {
+                // Asked per pixel: a row of 256 pixels at 16384 rays each takes seconds.
+                if stop() {
+                    stopped.store(true, std::sync::atomic::Ordering::Relaxed);
+                    return;
+                }
                 let pixel = (y * width as usize + x) as u64;
                 let centre = (x as f32 + 0.5, y as f32 + 0.5);
                 let dir = cam.ray_direction(centre.0, centre.1);
@@ -232,11 +245,14 @@ pub(crate) fn build(mix: &Mix<'_>, width: u32, height: u32, spec: &TableSpec) ->
                 *out = pixel_weights(mix, &x0, centre, spec, pixel);
             }
         });
-    PixelTable {
+    if stopped.into_inner() {
+        return None;
+    }
+    Some(PixelTable {
         width,
         pixels,
         has_terms: spec.rays.is_some(),
-    }
+    })
 }
 
 /// Mean of ρ and of N_eff over all pixels, for the run report.

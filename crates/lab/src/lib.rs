@@ -10,7 +10,7 @@
 use std::path::Path;
 use std::process::ExitCode;
 
-use bdpm_integrator::{Mode, PartialSettings, RadiusInput, RenderSettings, Sampler};
+use bdpm_integrator::{Mode, PartialSettings, RenderSettings, Written};
 use bdpm_output::cli::CliResult;
 use bdpm_output::files::write_atomic;
 use clap::Subcommand;
@@ -101,66 +101,16 @@ impl Variant {
             let (key, value) = part
                 .split_once('=')
                 .ok_or_else(|| bad(&format!("expected KEY=VALUE ({})", KEYS.join(", "))))?;
-            match key {
-                "sampler" => {
-                    value.parse::<Sampler>().map_err(|e| bad(&e.to_string()))?;
-                    settings.sampler = Some(value.to_string());
-                }
-                "light_tracing" => {
-                    settings.light_tracing = Some(value.parse().map_err(|_| bad("true or false"))?)
-                }
-                "adaptive_radius" => {
-                    settings.adaptive_radius =
-                        Some(value.parse().map_err(|_| bad("true or false"))?)
-                }
-                "radius" => {
-                    let radius = RadiusInput::Text(value.to_string());
-                    radius.spec().map_err(|e| bad(&e.to_string()))?;
-                    settings.radius = Some(radius);
-                }
-                "spp" => {
-                    settings.spp = Some(
-                        value
-                            .parse()
-                            .map_err(|_| bad("a whole number of samples"))?,
-                    )
-                }
-                "photons" => {
-                    settings.photons = Some(
-                        value
-                            .parse()
-                            .map_err(|_| bad("a whole number of photons"))?,
-                    )
-                }
-                "cache_photons" => {
-                    settings.cache_photons = Some(
-                        value
-                            .parse()
-                            .map_err(|_| bad("a whole number of photons"))?,
-                    )
-                }
-                "cache_bins" => {
-                    settings.cache_bins =
-                        Some(value.parse().map_err(|_| bad("a whole number of bins"))?)
-                }
-                "pixel_table_rays" => {
-                    settings.pixel_table_rays =
-                        Some(value.parse().map_err(|_| bad("a whole number of rays"))?)
-                }
-                "direct_boost" => {
-                    settings.direct_boost = Some(
-                        value
-                            .parse()
-                            .map_err(|_| bad("a whole number of samples"))?,
-                    )
-                }
-                _ => {
-                    return Err(bad(&format!(
-                        "unknown key; expected one of {}",
-                        KEYS.join(", ")
-                    )));
-                }
+            if !KEYS.contains(&key) {
+                return Err(bad(&format!(
+                    "unknown key; expected one of {}",
+                    KEYS.join(", ")
+                )));
             }
+            // The scene file's conversion of a `[render]` value, with its messages.
+            settings
+                .set(key, &Written::from_text(value))
+                .map_err(|e| bad(&e.message))?;
         }
         Ok(Variant { name, settings })
     }
@@ -168,8 +118,10 @@ impl Variant {
     /// The shared settings with this entry's mode and its own settings, validated.
     pub(crate) fn settings(&self, shared: &RenderSettings) -> CliResult<RenderSettings> {
         let mut s = shared.clone();
+        // Combinations are checked on the entry's final settings (`apply` leaves them).
         self.settings
             .apply(&mut s)
+            .and_then(|()| s.validate())
             .map_err(|e| format!("--modes: '{}': {}: {e}", self.name, e.setting()))?;
         Ok(s)
     }
@@ -214,7 +166,7 @@ mod tests {
             .unwrap();
         let s = v[0].settings(&RenderSettings::default()).unwrap();
         assert_eq!(s.mode, Mode::parse("balance").unwrap());
-        assert_eq!(s.sampler, Sampler::Independent);
+        assert_eq!(s.sampler, bdpm_integrator::Sampler::Independent);
         assert_eq!((s.radius, s.spp, s.photons), (Some(0.01), 1, 5000));
         let px = parse_modes(&["balance:radius=1.5px".into()]).unwrap();
         let s = px[0].settings(&RenderSettings::default()).unwrap();
@@ -245,11 +197,16 @@ mod tests {
         ] {
             assert!(parse_modes(&[bad.into()]).is_err(), "{bad}");
         }
-        assert!(
-            parse_modes(&["balance:spp=0".into()]).unwrap()[0]
-                .settings(&RenderSettings::default())
-                .is_err()
-        );
+        // A count's range is checked as the entry is read, with the bound.
+        let e = parse_modes(&["balance:spp=0".into()]).unwrap_err();
+        assert!(e.ends_with("0 is outside [1, 4294967295]"), "{e}");
+        // A combination is checked on the entry's final settings.
+        let unjittered = RenderSettings {
+            pixel_jitter: false,
+            ..RenderSettings::default()
+        };
+        let lt = parse_modes(&["balance:light_tracing=true".into()]).unwrap();
+        assert!(lt[0].settings(&unjittered).is_err());
         assert!(parse_modes(&["balance".into(), "balance".into()]).is_err());
         assert_eq!(
             parse_modes(&[]).unwrap().len(),

@@ -67,9 +67,10 @@ impl Ctx<'_> {
         bdpm_settings::metres(v).map_err(|e| self.bad(field, e.to_string()))
     }
 
-    /// A number in [lo, hi] (f32 limits), converted to f32.
-    fn within(&self, field: &str, v: f64, lo: f32, hi: f32) -> Result<f32, LoadError> {
-        if v >= lo as f64 && v <= hi as f64 {
+    /// A number as written in [lo, hi], compared in f64 (the bounds as written, not their
+    /// f32 roundings), converted to f32.
+    fn within(&self, field: &str, v: f64, lo: f64, hi: f64) -> Result<f32, LoadError> {
+        if v >= lo && v <= hi {
             Ok(v as f32)
         } else {
             Err(self.bad(field, format!("{} is outside [{lo}, {hi}]", num(v))))

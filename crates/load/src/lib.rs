@@ -70,10 +70,12 @@ pub mod limits {
     pub const MAX_BUILTIN_TRIANGLES: u64 = 4_000_000;
     /// Largest absolute vertex coordinate, metres (after every transform).
     pub const MAX_COORDINATE: f32 = 1e6;
-    /// Narrowest lobe width Δ, degrees (as `bdpm_bdf` accepts).
-    pub const DELTA_MIN_DEGREES: f32 = 0.05;
+    /// Narrowest lobe width Δ, degrees (as `bdpm_bdf` accepts). In f64, as a scene file's
+    /// number is read: 0.05 as an f32 widened to f64 is 0.0500000007, above the 0.05 a user
+    /// writes, which was refused as outside [0.05, 90].
+    pub const DELTA_MIN_DEGREES: f64 = 0.05;
     /// Widest lobe width Δ, degrees.
-    pub const DELTA_MAX_DEGREES: f32 = 90.0;
+    pub const DELTA_MAX_DEGREES: f64 = 90.0;
     /// Largest scene (TOML) file, bytes. Real scenes are kilobytes; the cap stops a device
     /// such as `/dev/zero` given as the scene from being read until memory runs out.
     pub const MAX_SCENE_FILE_BYTES: u64 = 256 << 20;

@@ -5,10 +5,11 @@
 use std::path::{Path, PathBuf};
 
 use bdpm_integrator::{
-    PartialSettings, RadiusInput, RadiusSpec, RenderSettings, Setting, Stage, StageProbe,
+    PartialSettings, RadiusInput, RenderSettings, Setting, SettingsError, Stage, StageProbe,
 };
 use bdpm_load::{LoadReport, load_scene};
 use bdpm_scene::Scene;
+use bdpm_settings::{Written, limits};
 use clap::Args;
 
 use crate::files::stem_of;
@@ -52,20 +53,22 @@ pub struct Overrides {
     #[arg(long)]
     pub mode: Option<String>,
     /// Number of passes.
-    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u32>)]
+    #[arg(long, allow_negative_numbers = true, value_parser = count::<u32>(Setting::Passes))]
     pub passes: Option<u32>,
     /// Image size as WxH, e.g. 256x256.
     #[arg(long, value_parser = parse_resolution)]
     pub resolution: Option<(u32, u32)>,
     /// Photons emitted per pass (N_F).
-    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u64>)]
+    #[arg(long, allow_negative_numbers = true, value_parser = count::<u64>(Setting::Photons))]
     pub photons: Option<u64>,
     /// Camera samples per pixel per pass (N_B).
-    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u32>)]
+    #[arg(long, allow_negative_numbers = true, value_parser = count::<u32>(Setting::Spp))]
     pub spp: Option<u32>,
     /// Merge radius: metres (0.01) or pixel footprints (1.2px: the median footprint of the
     /// pixels' first hits at this resolution)
-    #[arg(long, allow_negative_numbers = true, value_parser = radius_text)]
+    // Taken as typed, a leading '-' included (`-1px` is a value, not flags), and checked where
+    // a scene file's radius is (`PartialSettings::apply`), with its messages.
+    #[arg(long, allow_hyphen_values = true)]
     pub radius: Option<String>,
     /// Master seed of all random streams.
     #[arg(long, allow_negative_numbers = true, value_parser = whole::<u64>)]
@@ -95,19 +98,19 @@ pub struct Overrides {
     #[arg(long)]
     pub adaptive_radius: Option<bool>,
     /// Photons traced for the radiance cache of the model-based weights (default: N_F).
-    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u64>)]
+    #[arg(long, allow_negative_numbers = true, value_parser = count::<u64>(Setting::CachePhotons))]
     pub cache_photons: Option<u64>,
     /// Angular bins per radiance-cache cell side of the model-based weights (default 1; one
     /// bin is used in a Lambert-only scene).
-    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u32>)]
+    #[arg(long, allow_negative_numbers = true, value_parser = count::<u32>(Setting::CacheBins))]
     pub cache_bins: Option<u32>,
     /// Backward rays per pixel of the weights' A/B table (default: 16 under the footprint
     /// noise model with jitter, else 64).
-    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u32>)]
+    #[arg(long, allow_negative_numbers = true, value_parser = count::<u32>(Setting::PixelTableRays))]
     pub pixel_table_rays: Option<u32>,
     /// The most direct-light samples per camera sample where the direct light varies steeply
     /// over a pixel (default 16; 1 turns the extra samples off).
-    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u32>)]
+    #[arg(long, allow_negative_numbers = true, value_parser = count::<u32>(Setting::DirectBoost))]
     pub direct_boost: Option<u32>,
     /// Worker threads (default: all cores; at most 8 per core, and at least 64 allowed).
     #[arg(long, allow_negative_numbers = true, value_parser = whole::<usize>)]
@@ -136,58 +139,102 @@ pub fn number(s: &str) -> Result<f64, String> {
         .map_err(|_| format!("'{s}' is not a number"))
 }
 
-/// Image size `WxH` for a flag, each side 1 to 16384 pixels.
+/// A count setting's flag (`--passes`, `--photons`, …): a whole number in the setting's range
+/// ([`Setting::range`]), with the scene file's message for a value of the wrong kind or out
+/// of range (`-1 is outside [1, 4294967295]`).
+pub fn count<T: TryFrom<i128>>(
+    setting: Setting,
+) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync + 'static {
+    move |s| {
+        let mut p = PartialSettings::default();
+        p.set(setting.key(), &Written::from_text(s))
+            .map_err(|e| e.message)?;
+        let value = match setting {
+            Setting::Passes => p.passes.map(u64::from),
+            Setting::Photons => p.photons,
+            Setting::Spp => p.spp.map(u64::from),
+            Setting::CachePhotons => p.cache_photons,
+            Setting::CacheBins => p.cache_bins.map(u64::from),
+            Setting::PixelTableRays => p.pixel_table_rays.map(u64::from),
+            Setting::DirectBoost => p.direct_boost.map(u64::from),
+            _ => None,
+        };
+        value
+            .and_then(|v| T::try_from(i128::from(v)).ok())
+            .ok_or_else(|| format!("'{s}' is not a value of {setting}"))
+    }
+}
+
+/// Image size `WxH` for a flag, each side 1 to [`limits::MAX_RESOLUTION`] pixels.
 pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+    let max = limits::MAX_RESOLUTION;
     let (w, h) = s
         .split_once(['x', 'X'])
-        .ok_or_else(|| format!("'{s}' is not WxH"))?;
-    let w: u32 = w
-        .trim()
-        .parse()
-        .map_err(|_| format!("bad width in '{s}'"))?;
-    let h: u32 = h
-        .trim()
-        .parse()
-        .map_err(|_| format!("bad height in '{s}'"))?;
-    if w == 0 || h == 0 || w > 16384 || h > 16384 {
-        return Err(format!(
-            "resolution '{s}' must be between 1x1 and 16384x16384"
-        ));
+        .ok_or_else(|| format!("'{s}' is not WxH (e.g. 256x256)"))?;
+    let side = |v: &str, which: &str| {
+        v.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|v| (1..=max).contains(v))
+            .ok_or_else(|| format!("the {which} in '{s}' is not a whole number in [1, {max}]"))
+    };
+    Ok((side(w, "width")?, side(h, "height")?))
+}
+
+/// The flag that sets `setting`.
+fn flag_of(setting: Setting) -> &'static str {
+    match setting {
+        Setting::Width | Setting::Height | Setting::Resolution => "--resolution",
+        Setting::Passes => "--passes",
+        Setting::Photons => "--photons",
+        Setting::Spp => "--spp",
+        Setting::Radius => "--radius",
+        Setting::Mode => "--mode",
+        Setting::NoiseModel => "--noise-model",
+        Setting::Sampler => "--sampler",
+        Setting::CachePhotons => "--cache-photons",
+        Setting::CacheBins => "--cache-bins",
+        Setting::PixelTableRays => "--pixel-table-rays",
+        Setting::DirectBoost => "--direct-boost",
+        Setting::AdaptiveRadius => "--adaptive-radius",
+        Setting::LightTracing => "--light-tracing",
+        // No flag sets it; only a scene file's value reaches here.
+        Setting::ThresholdRadius => "render.threshold_radius",
     }
-    Ok((w, h))
 }
 
-/// A merge radius for a flag, checked as [`RadiusSpec::parse`] reads it and kept as typed
-/// (as a scene file's text radius is).
-pub fn radius_text(s: &str) -> Result<String, String> {
-    RadiusSpec::parse(s).map(|_| s.trim().to_string())
-}
-
-/// Applies command-line overrides to the settings loaded from the scene file
-/// ([`PartialSettings::apply`]); an error names the flag.
-pub fn apply_overrides(settings: &mut RenderSettings, o: &Overrides) -> CliResult<()> {
-    o.partial().apply(settings).map_err(|e| {
-        // The scene file's values were validated by the loader, so an error is a flag's.
-        let flag = match e.setting() {
-            Setting::Width | Setting::Height | Setting::Resolution => "--resolution".to_string(),
-            Setting::Passes => "--passes".into(),
-            Setting::Photons => "--photons".into(),
-            Setting::Spp => "--spp".into(),
-            Setting::Radius => "--radius".into(),
-            Setting::Mode => "--mode".into(),
-            Setting::NoiseModel => "--noise-model".into(),
-            Setting::Sampler => "--sampler".into(),
-            Setting::CachePhotons => "--cache-photons".into(),
-            Setting::CacheBins => "--cache-bins".into(),
-            Setting::PixelTableRays => "--pixel-table-rays".into(),
-            Setting::DirectBoost => "--direct-boost".into(),
-            Setting::AdaptiveRadius => "--adaptive-radius".into(),
-            // A clash of two settings, either of which a flag may have set: name both.
-            Setting::LightTracing => "--light-tracing / --no-jitter".into(),
-            // No flag sets it; only a scene file's value reaches here.
-            Setting::ThresholdRadius => format!("render.{}", Setting::ThresholdRadius.key()),
-        };
-        format!("{flag}: {e}")
+/// Applies command-line overrides to the settings loaded from the scene file `scene`
+/// ([`PartialSettings::apply`]; an error names the flag), then checks the final settings
+/// once ([`RenderSettings::validate`]): a combination the file gets wrong may be put right by
+/// a flag (`--light-tracing false` over a file's light tracing without jitter), and one that
+/// is still wrong is named by where each of its settings came from.
+pub fn apply_overrides(
+    settings: &mut RenderSettings,
+    o: &Overrides,
+    scene: &Path,
+) -> CliResult<()> {
+    // The scene file's values were checked by the loader, so an error here is a flag's.
+    o.partial()
+        .apply(settings)
+        .map_err(|e| format!("{}: {e}", flag_of(e.setting())))?;
+    settings.validate().map_err(|e| match e {
+        SettingsError::LightTracingWithoutJitter => {
+            let from = |flag: Option<&str>, key: &str| match flag {
+                Some(f) => f.to_string(),
+                None => format!("{} sets {key}", scene.display()),
+            };
+            let tracing = from(
+                o.light_tracing.map(|_| "--light-tracing true"),
+                "light_tracing = true",
+            );
+            let jitter = from(o.no_jitter.then_some("--no-jitter"), "pixel_jitter = false");
+            if o.light_tracing.is_none() && !o.no_jitter {
+                format!("{}: render.light_tracing: {e}", scene.display())
+            } else {
+                format!("{tracing} and {jitter}: {e}")
+            }
+        }
+        other => format!("{}: {other}", flag_of(other.setting())),
     })
 }
 
@@ -235,7 +282,7 @@ pub fn prepare(path: &Path, overrides: &Overrides) -> CliResult<Prepared> {
     let loaded = load_scene(path).map_err(|e| e.to_string())?;
     let mut scene = loaded.scene;
     let mut settings = loaded.settings;
-    apply_overrides(&mut settings, overrides)?;
+    apply_overrides(&mut settings, overrides, path)?;
     if (scene.camera().width(), scene.camera().height()) != (settings.width, settings.height) {
         scene
             .set_resolution(settings.width, settings.height)
@@ -527,7 +574,7 @@ mod tests {
             (Some(500_000), Some(9), Some(8))
         );
         let mut s = RenderSettings::default();
-        apply_overrides(&mut s, &o).unwrap();
+        apply_overrides(&mut s, &o, Path::new("s.toml")).unwrap();
         assert_eq!(
             (s.cache_photons, s.cache_bins, s.pixel_table_rays),
             (Some(500_000), 9, Some(8))
@@ -552,11 +599,13 @@ mod tests {
             ..Default::default()
         };
         let mut s = RenderSettings::default();
-        apply_overrides(&mut s, &o).unwrap();
+        apply_overrides(&mut s, &o, Path::new("s.toml")).unwrap();
         assert_eq!((s.width, s.height, s.radius_px), (16, 8, Some(2.0)));
         assert!(!s.pixel_jitter);
         assert_eq!(s.mode.name(), "threshold");
-        let error = |o: Overrides| apply_overrides(&mut RenderSettings::default(), &o).unwrap_err();
+        let error = |o: Overrides| {
+            apply_overrides(&mut RenderSettings::default(), &o, Path::new("s.toml")).unwrap_err()
+        };
         let e = error(Overrides {
             noise_model: Some("wide".into()),
             ..Default::default()
@@ -581,7 +630,7 @@ mod tests {
             ..Default::default()
         });
         assert!(
-            e.starts_with("--light-tracing / --no-jitter: light tracing"),
+            e.starts_with("--light-tracing true and --no-jitter: light tracing"),
             "{e}"
         );
         let e = error(Overrides {

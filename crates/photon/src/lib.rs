@@ -74,4 +74,6 @@ mod trace;
 
 pub use map::{Photon, PhotonMap, PhotonQuery};
 pub use scene::PhotonScene;
-pub use trace::{PathVertex, PhotonArrival, Scatter, TraceOptions, trace_photons};
+pub use trace::{
+    PathVertex, PhotonArrival, Scatter, TraceOptions, trace_photons, trace_photons_until,
+};

@@ -4,7 +4,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::scene::PhotonScene;
-use crate::trace::{PathVertex, PhotonArrival, TraceOptions, trace_chunks};
+use crate::trace::{PathVertex, PhotonArrival, TraceOptions, never, trace_chunks};
 use bdpm_grid::{GridQuery, HashGrid};
 
 /// A stored photon: an arrival at a surface after ≥ 1 scattering (method.md §1). The first
@@ -146,6 +146,23 @@ impl PhotonMap {
         new: impl Fn(u64) -> A + Sync,
         visit: impl Fn(&mut A, &PhotonArrival, &[PathVertex]) + Sync,
     ) -> (PhotonMap, Vec<A>) {
+        Self::trace_visiting_until(scene, options, radius, new, visit, &never)
+            .expect("a trace that is never stopped is complete")
+    }
+
+    /// [`Self::trace_visiting`] that gives up when `stop()` returns true, asked before each
+    /// chunk of photons ([`crate::trace_photons_until`]): `None` then.
+    ///
+    /// # Panics
+    /// As [`Self::trace`].
+    pub fn trace_visiting_until<A: Send, S: PhotonScene + ?Sized>(
+        scene: &S,
+        options: &TraceOptions,
+        radius: f32,
+        new: impl Fn(u64) -> A + Sync,
+        visit: impl Fn(&mut A, &PhotonArrival, &[PathVertex]) + Sync,
+        stop: &(dyn Fn() -> bool + Sync),
+    ) -> Option<(PhotonMap, Vec<A>)> {
         // Only the vertices a path goes on from are kept: they are the previous vertices y_p
         // the weights read. A path's last vertex (where it was absorbed, and every depth-0
         // vertex of a path that ended there) is nobody's y_p; keeping those too held 2.6 times
@@ -173,7 +190,8 @@ impl PhotonMap {
                     vertices.push(a.vertex);
                 }
             },
-        );
+            stop,
+        )?;
         let n_vertices: usize = chunks.iter().map(|c| c.0.len()).sum();
         let n_photons: usize = chunks.iter().map(|c| c.2.len()).sum();
         assert!(
@@ -203,7 +221,7 @@ impl PhotonMap {
         // the photon stage's memory peak.
         let visited = chunks.into_iter().map(|c| c.3).collect();
         let map = PhotonMap::from_parts(positions, photons, vertices, options.photons, radius);
-        (map, visited)
+        Some((map, visited))
     }
 
     /// Builds a map from photons, their positions (m, `positions[i]` is `photons[i]`'s) and

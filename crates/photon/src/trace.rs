@@ -157,35 +157,59 @@ pub fn trace_photons<R: Send, S: PhotonScene + ?Sized>(
     options: &TraceOptions,
     visit: impl Fn(&PhotonArrival, &mut Vec<R>) + Sync,
 ) -> Vec<R> {
-    let chunks = trace_chunks(scene, options, |_| Vec::new(), |out, a| visit(a, out));
+    trace_photons_until(scene, options, visit, &never).unwrap_or_default()
+}
+
+/// [`trace_photons`] that gives up when `stop()` returns true: it is asked before each chunk
+/// of 4096 photons, and the result is `None` when a chunk was skipped (it would be
+/// incomplete). For long pre-passes that an interrupt must stop promptly; a `stop` that never
+/// fires changes nothing, the records included.
+pub fn trace_photons_until<R: Send, S: PhotonScene + ?Sized>(
+    scene: &S,
+    options: &TraceOptions,
+    visit: impl Fn(&PhotonArrival, &mut Vec<R>) + Sync,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Option<Vec<R>> {
+    let chunks = trace_chunks(scene, options, |_| Vec::new(), |out, a| visit(a, out), stop)?;
     let mut out = Vec::with_capacity(chunks.iter().map(Vec::len).sum());
     for c in chunks {
         out.extend(c);
     }
-    out
+    Some(out)
+}
+
+/// A stop that never fires.
+pub(crate) fn never() -> bool {
+    false
 }
 
 /// The parallel driver: one accumulator per fixed chunk of photon indices, returned in chunk
 /// order. `new(chunk)` makes a chunk's accumulator; `visit` is called for each arrival of the
-/// chunk's photons, sequentially and in path order.
+/// chunk's photons, sequentially and in path order. `stop` is asked before each chunk; `None`
+/// when it skipped one.
 pub(crate) fn trace_chunks<A: Send, S: PhotonScene + ?Sized>(
     scene: &S,
     options: &TraceOptions,
     new: impl Fn(u64) -> A + Sync,
     visit: impl Fn(&mut A, &PhotonArrival) + Sync,
-) -> Vec<A> {
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Option<Vec<A>> {
     let chunks = options.photons.div_ceil(CHUNK);
-    (0..chunks)
+    let done: Vec<Option<A>> = (0..chunks)
         .into_par_iter()
         .map(|c| {
+            if stop() {
+                return None;
+            }
             let mut acc = new(c);
             let end = ((c + 1) * CHUNK).min(options.photons);
             for i in c * CHUNK..end {
                 trace_one(scene, options, i, &mut |a| visit(&mut acc, a));
             }
-            acc
+            Some(acc)
         })
-        .collect()
+        .collect();
+    done.into_iter().collect()
 }
 
 /// The random walk of photon `index` of the pass.

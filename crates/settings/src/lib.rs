@@ -40,9 +40,13 @@ mod partial;
 mod record;
 #[cfg(feature = "serde")]
 mod serde_names;
+#[cfg(feature = "serde")]
+mod serde_partial;
+mod values;
 
 pub use partial::{PartialSettings, RadiusInput};
 pub use record::SettingsRecord;
+pub use values::{RENDER_KEYS, ValueError, Written};
 
 /// What a render computes: the unidirectional reference, or the BDPM mix with a weight mode.
 /// A mode carries no parameters: the threshold radius and the weight clamp are settings of
@@ -459,6 +463,28 @@ impl Setting {
             other => other.key(),
         }
     }
+
+    /// The noun with its article (`a mode`, `a noise model`).
+    pub(crate) fn article_noun(&self) -> String {
+        format!("a {}", self.noun())
+    }
+
+    /// The accepted range of a count, both ends included; `None` for a setting that is not
+    /// a count. [`RenderSettings::validate`] checks these, and a value as written is checked
+    /// against the same range before it is converted ([`PartialSettings::set`]).
+    pub fn range(&self) -> Option<(u64, u64)> {
+        use limits::*;
+        let most = |max: u32| Some((1, u64::from(max)));
+        match self {
+            Setting::Width | Setting::Height => most(MAX_RESOLUTION),
+            Setting::Passes | Setting::Spp => most(u32::MAX),
+            Setting::Photons | Setting::CachePhotons => Some((1, MAX_PHOTONS)),
+            Setting::CacheBins => most(MAX_CACHE_BINS),
+            Setting::PixelTableRays => most(MAX_PIXEL_TABLE_RAYS),
+            Setting::DirectBoost => most(MAX_DIRECT_BOOST),
+            _ => None,
+        }
+    }
 }
 
 impl fmt::Display for Setting {
@@ -499,9 +525,26 @@ pub enum SettingsError {
     /// A merge radius that cannot be used.
     #[error("{0}")]
     Radius(RadiusError),
-    /// A merge radius in pixel footprints that is not finite or not in (0, [`MAX_RADIUS_PX`]].
-    #[error("{0} px must be a number of pixel footprints in (0, {MAX_RADIUS_PX}]")]
-    RadiusPx(f32),
+    /// A merge radius in pixel footprints that is not finite or not in (0, [`MAX_RADIUS_PX`]]
+    /// (the number as written).
+    #[error(
+        "{} px: the radius must be positive, a number of pixel footprints in (0, {MAX_RADIUS_PX}]",
+        number_text(*.0)
+    )]
+    RadiusPx(f64),
+    /// A merge radius in pixel footprints too small for single precision (the number as
+    /// written; it would be zero or subnormal).
+    #[error(
+        "{} px is below the smallest normal single-precision number (1.2e-38)",
+        number_text(*.0)
+    )]
+    RadiusPxBelowNormal(f64),
+    /// A merge radius in metres, as written, below [`MIN_RADIUS`].
+    #[error(
+        "{} m is below the smallest usable merge radius {MIN_RADIUS:e} m (1/(pi r^2) would overflow single precision)",
+        number_text(*.0)
+    )]
+    RadiusBelowMinimum(f64),
     /// A threshold radius R that is not finite, not > 0 or not a normal f32 (metres).
     #[error("{0:e} must be a finite number > 0 (metres)")]
     ThresholdRadius(f32),
@@ -545,6 +588,8 @@ impl SettingsError {
             SettingsError::OutOfRange { setting, .. } => *setting,
             SettingsError::Radius(_)
             | SettingsError::RadiusPx(_)
+            | SettingsError::RadiusPxBelowNormal(_)
+            | SettingsError::RadiusBelowMinimum(_)
             | SettingsError::RadiusText(_) => Setting::Radius,
             SettingsError::ThresholdRadius(_) => Setting::ThresholdRadius,
             SettingsError::ResolutionCount(_) => Setting::Resolution,
@@ -602,12 +647,25 @@ impl RenderSettings {
         self.light_tracing && self.mode.kind().is_some_and(|k| k != HeuristicKind::Bdd1)
     }
 
-    /// Checks every setting: counts at least 1 and within [`limits`], a given merge radius
-    /// usable ([`check_radius`]) and the threshold radius finite, > 0 and normal. The first
-    /// problem found is returned.
+    /// Checks every setting ([`RenderSettings::validate_values`]) and then the combinations of
+    /// settings (light tracing needs pixel jitter). The first problem found is returned. Run
+    /// it once, on the final settings: a combination that a scene file gets wrong can be put
+    /// right by a command-line override.
     pub fn validate(&self) -> Result<(), SettingsError> {
-        use limits::*;
-        let range = |setting, value: u64, min: u64, max: u64| {
+        self.validate_values()?;
+        if self.light_tracing && !self.pixel_jitter {
+            return Err(SettingsError::LightTracingWithoutJitter);
+        }
+        Ok(())
+    }
+
+    /// Checks each setting on its own: counts within their [`Setting::range`], a given merge
+    /// radius usable ([`check_radius`]), a radius in pixels in (0, [`MAX_RADIUS_PX`]] and the
+    /// threshold radius finite, > 0 and normal; not the combinations
+    /// ([`RenderSettings::validate`]). The first problem found is returned.
+    pub fn validate_values(&self) -> Result<(), SettingsError> {
+        let range = |setting: Setting, value: u64| {
+            let (min, max) = setting.range().unwrap_or((0, u64::MAX));
             if (min..=max).contains(&value) {
                 Ok(())
             } else {
@@ -619,51 +677,31 @@ impl RenderSettings {
                 })
             }
         };
-        let max_res = MAX_RESOLUTION as u64;
-        range(Setting::Width, self.width.into(), 1, max_res)?;
-        range(Setting::Height, self.height.into(), 1, max_res)?;
-        range(Setting::Passes, self.passes.into(), 1, u32::MAX.into())?;
-        range(Setting::Photons, self.photons, 1, MAX_PHOTONS)?;
-        range(Setting::Spp, self.spp.into(), 1, u32::MAX.into())?;
+        range(Setting::Width, self.width.into())?;
+        range(Setting::Height, self.height.into())?;
+        range(Setting::Passes, self.passes.into())?;
+        range(Setting::Photons, self.photons)?;
+        range(Setting::Spp, self.spp.into())?;
         if let Some(r) = self.radius {
             check_radius(r).map_err(SettingsError::Radius)?;
         }
         if let Some(k) = self.radius_px
             && !(k > 0.0 && k <= MAX_RADIUS_PX)
         {
-            return Err(SettingsError::RadiusPx(k));
+            return Err(SettingsError::RadiusPx(k.into()));
         }
         let t = self.threshold_radius;
         if !(t.is_finite() && t > 0.0 && t.is_normal()) {
             return Err(SettingsError::ThresholdRadius(t));
         }
-        range(
-            Setting::CacheBins,
-            self.cache_bins.into(),
-            1,
-            MAX_CACHE_BINS.into(),
-        )?;
+        range(Setting::CacheBins, self.cache_bins.into())?;
         if let Some(n) = self.cache_photons {
-            range(Setting::CachePhotons, n, 1, MAX_PHOTONS)?;
+            range(Setting::CachePhotons, n)?;
         }
         if let Some(n) = self.pixel_table_rays {
-            range(
-                Setting::PixelTableRays,
-                n.into(),
-                1,
-                MAX_PIXEL_TABLE_RAYS.into(),
-            )?;
+            range(Setting::PixelTableRays, n.into())?;
         }
-        if self.light_tracing && !self.pixel_jitter {
-            return Err(SettingsError::LightTracingWithoutJitter);
-        }
-        range(
-            Setting::DirectBoost,
-            self.direct_boost.into(),
-            1,
-            MAX_DIRECT_BOOST.into(),
-        )?;
-        Ok(())
+        range(Setting::DirectBoost, self.direct_boost.into())
     }
 
     /// The settings as reports and image headers give them, with the merge radius in force
@@ -768,8 +806,9 @@ pub enum RadiusSpec {
 }
 
 impl RadiusSpec {
-    /// Parses `0.01` (metres), `0.01m` or `1.2px`. Says what is wrong otherwise; the ranges
-    /// are checked by [`RenderSettings::validate`].
+    /// Parses `0.01` (metres), `0.01m` or `1.2px`. Says what is wrong otherwise; the number
+    /// is not checked here (`-1px` parses), the ranges are: as written by
+    /// [`RadiusInput::spec`], in single precision by [`RenderSettings::validate`].
     pub fn parse(text: &str) -> Result<RadiusSpec, String> {
         let t = text.trim();
         let (number, px) = match t.strip_suffix("px") {
@@ -779,11 +818,6 @@ impl RadiusSpec {
         let v: f64 = number.trim().parse().map_err(|_| {
             format!("'{text}' is not a radius: write metres (0.01) or pixel footprints (1.2px)")
         })?;
-        if !(v.is_finite() && v > 0.0) {
-            return Err(format!(
-                "'{text}': the radius must be a positive, finite number"
-            ));
-        }
         Ok(if px {
             RadiusSpec::Pixels(v)
         } else {
@@ -818,7 +852,12 @@ impl fmt::Display for RadiusSpec {
 /// Smallest merge radius accepted, metres. The renderer divides by the merge disk's area in
 /// f32 (1/(πr²)) and the photon grid by its cell edge 2r; below about 10⁻¹⁹ m r² is subnormal
 /// or zero in f32 and the quotient infinite. At 10⁻¹⁸ m, 1/(πr²) ≈ 3·10³⁵ stays finite.
-pub const MIN_RADIUS: f32 = 1e-18;
+pub const MIN_RADIUS: f32 = MIN_RADIUS_AS_WRITTEN as f32;
+
+/// [`MIN_RADIUS`] as a decimal, for a radius checked as the user wrote it (in f64): the f32
+/// constant widened to f64 is not 10⁻¹⁸, so a user's `1e-18` would be refused against it, and
+/// a number just below the bound would round onto it in f32.
+pub(crate) const MIN_RADIUS_AS_WRITTEN: f64 = 1e-18;
 
 /// Checks a merge radius r (metres) in the precision the renderer uses it in: finite and at
 /// least [`MIN_RADIUS`].

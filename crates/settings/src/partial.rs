@@ -4,20 +4,19 @@
 
 use std::path::PathBuf;
 
-use crate::{RadiusSpec, RenderSettings, Setting, SettingsError, metres, parse_name};
+use crate::{
+    MAX_RADIUS_PX, MIN_RADIUS_AS_WRITTEN, RadiusSpec, RenderSettings, Setting, SettingsError,
+    metres, parse_name,
+};
 
 /// Render settings given in part, as written: every field optional, named as the scene
 /// file's `[render]` keys. Names (mode, noise model, sampler) and radii stay as the user
 /// wrote them, so that [`PartialSettings::apply`] can check them and quote them; each caller
 /// names the field its way (`render.mode` in a scene file, `--mode` on the command line).
 ///
-/// With the `serde` feature it deserialises from a `[render]` table, refusing unknown keys.
+/// With the `serde` feature it deserialises from a `[render]` table, refusing unknown keys,
+/// each value read as written and set by [`PartialSettings::set`].
 #[derive(Clone, Debug, Default, PartialEq)]
-#[cfg_attr(
-    feature = "serde",
-    derive(serde::Deserialize),
-    serde(deny_unknown_fields)
-)]
 pub struct PartialSettings {
     /// `[width, height]`, pixels; a list so that a wrong count is reported rather than
     /// truncated.
@@ -67,7 +66,6 @@ pub struct PartialSettings {
 /// as [`RadiusSpec::parse`] reads it (`"0.01"`, `"0.01m"`, `"1.2px"`; scene files, flags,
 /// `--modes` entries).
 #[derive(Clone, Debug, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Deserialize), serde(untagged))]
 pub enum RadiusInput {
     /// Metres.
     Metres(f64),
@@ -76,33 +74,50 @@ pub enum RadiusInput {
 }
 
 impl RadiusInput {
-    /// The radius given: text parsed, and metres checked as written ([`metres`]: 1e300 is
-    /// refused as 1e300, not as its f32 rounding).
+    /// The radius given: text parsed, and the number checked as written, in f64, against
+    /// the documented bounds (metres: [`metres`] and at least [`crate::MIN_RADIUS`]; pixel
+    /// footprints: in (0, [`MAX_RADIUS_PX`]] and normal in f32), so that 1e300 is refused
+    /// as 1e300 and 1e-50px as 1e-50, not as their f32 roundings, and a number just outside
+    /// a bound does not round onto it.
     pub fn spec(&self) -> Result<RadiusSpec, SettingsError> {
         let spec = match self {
             RadiusInput::Metres(v) => RadiusSpec::Metres(*v),
             RadiusInput::Text(t) => RadiusSpec::parse(t).map_err(SettingsError::RadiusText)?,
         };
-        Ok(match spec {
-            RadiusSpec::Metres(v) => RadiusSpec::Metres(
-                metres(v)
-                    .map_err(|error| SettingsError::Length {
-                        setting: Setting::Radius,
-                        error,
-                    })?
-                    .into(),
-            ),
-            pixels => pixels,
-        })
+        match spec {
+            RadiusSpec::Metres(v) => {
+                let m = metres(v).map_err(|error| SettingsError::Length {
+                    setting: Setting::Radius,
+                    error,
+                })?;
+                if v < MIN_RADIUS_AS_WRITTEN {
+                    return Err(SettingsError::RadiusBelowMinimum(v));
+                }
+                Ok(RadiusSpec::Metres(m.into()))
+            }
+            RadiusSpec::Pixels(k) => {
+                if !(k > 0.0 && k <= f64::from(MAX_RADIUS_PX)) {
+                    return Err(SettingsError::RadiusPx(k));
+                }
+                if !(k as f32).is_normal() {
+                    return Err(SettingsError::RadiusPxBelowNormal(k));
+                }
+                Ok(RadiusSpec::Pixels(k))
+            }
+        }
     }
 }
 
 impl PartialSettings {
-    /// Puts the settings given onto `settings` and validates the result
-    /// ([`RenderSettings::validate`]). Names are parsed, a resolution must have two values,
-    /// lengths are checked as written; the error's [`SettingsError::setting`] says which
-    /// setting, for the caller to name as its user wrote it. On error `settings` may be
+    /// Puts the settings given onto `settings` and checks each value of the result
+    /// ([`RenderSettings::validate_values`]). Names are parsed, a resolution must have two
+    /// values, lengths are checked as written; the error's [`SettingsError::setting`] says
+    /// which setting, for the caller to name as its user wrote it. On error `settings` may be
     /// partly changed.
+    ///
+    /// The combinations of settings are not checked here: a later override (a command-line
+    /// flag over a scene file, a `--modes` entry over both) may still put one right, so the
+    /// caller checks them once, on the final settings ([`RenderSettings::validate`]).
     pub fn apply(&self, settings: &mut RenderSettings) -> Result<(), SettingsError> {
         let s = settings;
         if let Some(r) = &self.resolution {
@@ -143,6 +158,6 @@ impl PartialSettings {
         s.clamp_weights = self.clamp_weights.unwrap_or(s.clamp_weights);
         s.pixel_jitter = self.pixel_jitter.unwrap_or(s.pixel_jitter);
         s.light_tracing = self.light_tracing.unwrap_or(s.light_tracing);
-        s.validate()
+        s.validate_values()
     }
 }

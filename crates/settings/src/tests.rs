@@ -140,8 +140,34 @@ fn radius_in_pixels_parses_applies_and_validates() {
     assert_eq!(RadiusSpec::parse("1.5px"), Ok(RadiusSpec::Pixels(1.5)));
     assert_eq!(RadiusSpec::parse(" 0.01 "), Ok(RadiusSpec::Metres(0.01)));
     assert_eq!(RadiusSpec::parse("0.01m"), Ok(RadiusSpec::Metres(0.01)));
-    for bad in ["", "px", "-1px", "0", "1 pixel", "nanpx", "infpx"] {
+    for bad in ["", "px", "1 pixel", "1e40 pixels", "abc"] {
         assert!(RadiusSpec::parse(bad).is_err(), "{bad}");
+    }
+    // Numbers out of range parse; their range is checked as written (`RadiusInput::spec`).
+    for (text, message) in [
+        (
+            "-1px",
+            "-1 px: the radius must be positive, a number of pixel footprints in (0, 1000]",
+        ),
+        (
+            "1e40px",
+            "1e40 px: the radius must be positive, a number of pixel footprints in (0, 1000]",
+        ),
+        ("nanpx", "NaN px: the radius must be positive"),
+        (
+            "1e-50px",
+            "1e-50 px is below the smallest normal single-precision number",
+        ),
+        ("0", "0 must be a finite number > 0 (metres)"),
+        ("-0.5m", "-0.5 must be a finite number > 0 (metres)"),
+        (
+            "1e-19",
+            "1e-19 m is below the smallest usable merge radius 1e-18 m",
+        ),
+    ] {
+        let e = RadiusInput::Text(text.into()).spec().unwrap_err();
+        assert_eq!(e.setting(), Setting::Radius);
+        assert!(e.to_string().starts_with(message), "{text}: {e}");
     }
     let mut s = RenderSettings::default();
     RadiusSpec::Metres(0.02).apply(&mut s);
@@ -151,7 +177,7 @@ fn radius_in_pixels_parses_applies_and_validates() {
     s.radius_px = Some(MAX_RADIUS_PX * 2.0);
     assert_eq!(
         s.validate(),
-        Err(SettingsError::RadiusPx(MAX_RADIUS_PX * 2.0))
+        Err(SettingsError::RadiusPx((MAX_RADIUS_PX * 2.0).into()))
     );
     // Metres set in code over the default's pixels: valid, and the metres are in force (the
     // renderer's `resolve_radius`, tested in bdpm-integrator).
@@ -293,4 +319,164 @@ fn serde_round_trip() {
             .unwrap()
             .contains("\"threshold_radius_m\"")
     );
+}
+
+/// The documented bounds of every bounded `[render]` setting, as a user writes them: the
+/// minimum and the maximum accepted, the nearest numbers outside refused. Before, numbers were
+/// compared after their conversion to f32, so that `1000.00001px` and `9.99999999e-19` (metres)
+/// rounded onto their bounds and were accepted.
+#[test]
+fn every_bound_is_exact_as_written() {
+    let try_set = |key: &str, text: &str| {
+        let mut p = PartialSettings::default();
+        p.set(key, &Written::from_text(text))
+            .map_err(|e| e.to_string())?;
+        p.apply(&mut RenderSettings::default())
+            .map_err(|e| e.to_string())
+    };
+    let ok = |key: &str, text: &str| {
+        try_set(key, text).unwrap_or_else(|e| panic!("{key} = {text} refused: {e}"));
+    };
+    let refused = |key: &str, text: &str, needle: &str| {
+        let e = try_set(key, text).expect_err(&format!("{key} = {text} accepted"));
+        assert!(e.contains(needle), "{key} = {text}: {e}");
+    };
+    for (key, setting) in [
+        ("passes", Setting::Passes),
+        ("photons", Setting::Photons),
+        ("spp", Setting::Spp),
+        ("cache_bins", Setting::CacheBins),
+        ("cache_photons", Setting::CachePhotons),
+        ("pixel_table_rays", Setting::PixelTableRays),
+        ("direct_boost", Setting::DirectBoost),
+    ] {
+        let (min, max) = setting.range().expect("a count");
+        let bounds = format!("[{min}, {max}]");
+        ok(key, &min.to_string());
+        ok(key, &max.to_string());
+        refused(key, &(min - 1).to_string(), &bounds);
+        refused(key, &(max + 1).to_string(), &bounds);
+    }
+    let side = limits::MAX_RESOLUTION;
+    let resolution = |w: i128, h: i128| {
+        let mut p = PartialSettings::default();
+        let list = Written::List(vec![Written::Whole(w), Written::Whole(h)]);
+        p.set("resolution", &list).map_err(|e| e.to_string())?;
+        p.apply(&mut RenderSettings::default())
+            .map_err(|e| e.to_string())
+    };
+    assert_eq!(resolution(1, side.into()), Ok(()));
+    for (w, h) in [(0, 1), (1, i128::from(side) + 1)] {
+        let e = resolution(w, h).unwrap_err();
+        assert!(e.contains(&format!("outside [1, {side}]")), "{e}");
+    }
+    let mut p = PartialSettings::default();
+    let e = p
+        .set(
+            "resolution",
+            &Written::List(vec![Written::Whole(8), Written::Whole(0)]),
+        )
+        .unwrap_err();
+    assert_eq!(e.field, "resolution[1]");
+    ok("radius", "1000px");
+    refused("radius", "1000.00001px", "in (0, 1000]");
+    ok("radius", "1e-18");
+    ok("radius", "1e-18m");
+    refused(
+        "radius",
+        "9.99999999e-19",
+        "below the smallest usable merge radius",
+    );
+    ok("threshold_radius", "1.1754943508222875e-38");
+    refused("threshold_radius", "1e-39", "normal");
+    ok("seed", &u64::MAX.to_string());
+    refused("seed", "-1", "outside [0, 18446744073709551615]");
+    ok("roulette_depth", "0");
+    refused("roulette_depth", "-1", "outside [0, 4294967295]");
+}
+
+/// A combination is checked once, on the final settings: `apply` lets a scene file's light
+/// tracing without jitter through, so that an override can put it right, and `validate`
+/// refuses it if none does.
+#[test]
+fn combinations_are_checked_on_the_final_settings() {
+    let file = PartialSettings {
+        light_tracing: Some(true),
+        pixel_jitter: Some(false),
+        ..PartialSettings::default()
+    };
+    let mut s = RenderSettings::default();
+    file.apply(&mut s).unwrap();
+    assert_eq!(s.validate(), Err(SettingsError::LightTracingWithoutJitter));
+    let flag = PartialSettings {
+        light_tracing: Some(false),
+        ..PartialSettings::default()
+    };
+    flag.apply(&mut s).unwrap();
+    assert_eq!(s.validate(), Ok(()));
+}
+
+/// A value of the wrong kind is named with its key and what was expected, whatever key it is.
+#[cfg(feature = "serde")]
+#[test]
+fn render_values_of_the_wrong_kind_say_what_was_expected() {
+    let error = |json: &str| {
+        serde_json::from_str::<PartialSettings>(json)
+            .unwrap_err()
+            .to_string()
+    };
+    for (json, message) in [
+        (
+            r#"{"radius": true}"#,
+            r#"render.radius: expected a length in metres (0.01) or pixel footprints ("0.2px"), found a boolean"#,
+        ),
+        (
+            r#"{"radius": "-1px"}"#,
+            "render.radius: -1 px: the radius must be positive",
+        ),
+        (
+            r#"{"passes": "x"}"#,
+            r#"render.passes: expected a whole number in [1, 4294967295], found the text "x""#,
+        ),
+        (
+            r#"{"passes": -1}"#,
+            "render.passes: -1 is outside [1, 4294967295]",
+        ),
+        (
+            r#"{"photons": 1e9}"#,
+            "render.photons: expected a whole number in [1, 1000000000], found the number 1e9",
+        ),
+        (
+            r#"{"pixel_jitter": 1}"#,
+            "render.pixel_jitter: expected true or false, found the integer 1",
+        ),
+        (
+            r#"{"mode": 3}"#,
+            "render.mode: expected a mode name (path, light, bdd0",
+        ),
+        (r#"{"mode": "fast"}"#, "render.mode: unknown mode 'fast'"),
+        (
+            r#"{"resolution": [8]}"#,
+            "render.resolution: 1 values given; expected [width, height] in pixels",
+        ),
+        (
+            r#"{"threshold_radius": "a"}"#,
+            r#"render.threshold_radius: expected a length in metres (0.2), found the text "a""#,
+        ),
+        (
+            r#"{"output": {"a": 1}}"#,
+            "render.output: expected a file path, found a table",
+        ),
+        (
+            r#"{"sp": 1}"#,
+            "unknown field `sp`, expected one of `resolution`",
+        ),
+    ] {
+        let e = error(json);
+        assert!(e.starts_with(message), "{json}: {e}");
+    }
+    let p: PartialSettings =
+        serde_json::from_str(r#"{"radius": 1, "resolution": [4, 2], "mode": "path"}"#).unwrap();
+    assert_eq!(p.radius, Some(RadiusInput::Metres(1.0)));
+    assert_eq!(p.resolution, Some(vec![4, 2]));
 }

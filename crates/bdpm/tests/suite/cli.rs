@@ -946,14 +946,17 @@ fn command_line_numbers_are_checked_with_clear_messages() {
     std::fs::write(&path, BASE_SCENE).expect("write scene");
     // (arguments, what the one error line must contain)
     let cases: Vec<(Vec<&str>, Vec<&str>)> = vec![
-        (vec!["--radius", "-1"], vec!["--radius", "positive", "-1"]),
+        (
+            vec!["--radius", "-1"],
+            vec!["--radius", "-1 must be a finite number > 0"],
+        ),
         (
             vec!["--passes", "-1"],
-            vec!["--passes", "'-1' is not a whole number"],
+            vec!["--passes", "-1 is outside [1, 4294967295]"],
         ),
         (
             vec!["--spp", "2.5"],
-            vec!["--spp", "'2.5' is not a whole number"],
+            vec!["--spp", "expected a whole number", "found the number 2.5"],
         ),
         (
             vec!["--radius", "1e-30"],
