@@ -6,7 +6,7 @@
 # of the per-round ratios. On a shared machine quote these medians and ratios, not one run.
 # Usage:
 #   scripts/stage-times.sh REPEATS PASSES THREADS SCENE.toml MODE...
-# e.g. (docs/performance.md, "The weights' cost per pass at the Lambert default"):
+# e.g. (docs/performance.md, "The weights' cost per pass at the defaults, stage by stage"):
 #   scripts/stage-times.sh 6 4 2 scenes/cornell-lambert.toml balance optimal-path
 # BDPM=path/to/bdpm picks the binary (default: this checkout's target/release/bdpm).
 set -euo pipefail

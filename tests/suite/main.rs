@@ -7,6 +7,7 @@
 mod cache;
 mod cornell;
 mod determinism;
+mod doc_claims;
 mod furnace;
 mod new_scenes;
 mod noise_model;
