@@ -8,6 +8,7 @@ mod cache;
 mod cornell;
 mod determinism;
 mod furnace;
+mod light_leak;
 mod new_scenes;
 mod noise_model;
 mod precision;
