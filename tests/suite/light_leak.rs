@@ -324,6 +324,61 @@ fn a_light_just_inside_lights_the_room_the_same_in_every_reference() {
         }
     }
 }
+/// No scene of the repository has a light within a surface's ray offset (the near-ceiling
+/// Cornell box's is 3 mm below the ceiling, against an offset of 2·10⁻⁵ m).
+#[test]
+fn the_repository_scenes_have_no_light_near_a_surface() {
+    for dir in ["", "preprint"] {
+        let mut names: Vec<String> = std::fs::read_dir(scene_path(dir))
+            .expect("scenes/")
+            .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+            .filter(|n| n.ends_with(".toml"))
+            .collect();
+        names.sort();
+        assert!(!names.is_empty());
+        for name in names {
+            let path = if dir.is_empty() {
+                name
+            } else {
+                format!("{dir}/{name}")
+            };
+            let (scene, _) = load(&path, 8, 8);
+            assert_eq!(scene.lights_near_surfaces(), [], "{path}");
+        }
+    }
+}
+
+/// A light within its surface's ray offset is reported with its index and distance; one
+/// 1 mm away is not.
+#[test]
+fn a_light_within_the_ray_offset_of_a_surface_is_reported() {
+    for (gap, expect) in [(1e-6, true), (-1e-6, true), (0.0, true), (1e-3, false)] {
+        let room = Room {
+            rot: oblique(),
+            ceiling_kd: 0.5,
+            light: DVec3::new(0.5, 1.0 + gap, 0.5),
+            camera: DVec3::new(0.5, 0.5, 0.05),
+            look_at: DVec3::new(0.5, 0.6, 1.0),
+            render: SMALL,
+        };
+        let (scene, _) = room.scene("<near>");
+        let near = scene.lights_near_surfaces();
+        assert_eq!(near.len(), usize::from(expect), "gap {gap}: {near:?}");
+        if let Some(w) = near.first() {
+            assert_eq!(w.light, 0);
+            // The light's and the vertices' coordinates round by up to 1.2·10⁻⁷ m each.
+            assert!(
+                (f64::from(w.distance) - gap.abs()).abs() < 3e-7,
+                "gap {gap}: distance {}",
+                w.distance
+            );
+            assert!(w.distance < w.offset, "{w:?}");
+            let text = w.to_string();
+            assert!(text.starts_with("light[0] "), "{text}");
+        }
+    }
+}
+
 /// Photons from the sphere furnace's light (inside a closed geodesic sphere of 20 480
 /// triangles, whose edges are all shared) never leave it: of these 10⁷ rays from the light, 4
 /// passed between two triangles without the watertight edge test (`NEAR_EDGE` set to 0),

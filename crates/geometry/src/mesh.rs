@@ -1,7 +1,7 @@
 use std::collections::HashSet;
 use std::fmt;
 
-use glam::{UVec2, Vec2, Vec3, Vec3A, Vec4};
+use glam::{DVec3, UVec2, Vec2, Vec3, Vec3A, Vec4};
 use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::ray::{Ray, RayHit};
@@ -215,6 +215,43 @@ fn watertight_inside(o: Vec3A, d: Vec3A, v: [Vec3; 3]) -> bool {
         edge_side(o, d, v[2], v[0]),
     ];
     e.iter().all(|&x| x >= 0.0) || e.iter().all(|&x| x <= 0.0)
+}
+
+/// Distance from `p` to the triangle `v` (Ericson, *Real-Time Collision Detection*, 5.1.5:
+/// the closest point by the Voronoi region of `p`), in the units of the input.
+fn point_triangle_distance(p: DVec3, v: [DVec3; 3]) -> f64 {
+    let [a, b, c] = v;
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return ap.length();
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return bp.length();
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return (ap - ab * (d1 / (d1 - d3))).length();
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return cp.length();
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return (ap - ac * (d2 / (d2 - d6))).length();
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (bp - (c - b) * w).length();
+    }
+    let denom = 1.0 / (va + vb + vc);
+    let (v, w) = (vb * denom, vc * denom);
+    (ap - ab * v - ac * w).length()
 }
 
 /// A surface point found by a ray.
@@ -957,6 +994,31 @@ impl Geometry {
         self.total_area
     }
 
+    /// The nearest triangle lying closer to the point `p` (metres, this geometry's frame)
+    /// than its own [`Geometry::spawn_offset`]: (triangle, distance in metres), or `None`.
+    /// Within that distance a surface is below the resolution rays work at (a ray leaves it
+    /// one offset away). Every triangle is visited (a box test first, then the exact distance
+    /// in f64), so this is for a few points, such as the lights, not for every ray.
+    pub fn nearest_within_offset(&self, p: Vec3) -> Option<(u32, f32)> {
+        let mut best: Option<(u32, f64)> = None;
+        for (prim, tri) in self.tris.iter().enumerate() {
+            let offset = self.offsets[prim];
+            if tri.area <= 0.0 {
+                continue;
+            }
+            let lo = tri.v[0].min(tri.v[1]).min(tri.v[2]) - Vec3::splat(offset);
+            let hi = tri.v[0].max(tri.v[1]).max(tri.v[2]) + Vec3::splat(offset);
+            if p.cmplt(lo).any() || p.cmpgt(hi).any() {
+                continue;
+            }
+            let d = point_triangle_distance(p.as_dvec3(), tri.v.map(Vec3::as_dvec3));
+            if d < offset as f64 && best.is_none_or(|(_, b)| d < b) {
+                best = Some((prim as u32, d));
+            }
+        }
+        best.map(|(prim, d)| (prim, d as f32))
+    }
+
     /// Axis-aligned bounds (min, max) of the non-degenerate triangles, metres.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         self.bounds
@@ -1132,6 +1194,36 @@ mod tests {
                 "{kernel:?}: rays, segments through"
             );
         }
+    }
+
+    /// The distance of a point to a triangle in each Voronoi region, and the surfaces found
+    /// within their offset of a point.
+    #[test]
+    fn points_near_surfaces() {
+        let v = [DVec3::ZERO, DVec3::X, DVec3::Y];
+        for (p, want) in [
+            (DVec3::new(0.2, 0.2, 0.5), 0.5),           // above the face
+            (DVec3::new(-3.0, -4.0, 0.0), 5.0),         // beyond vertex 0
+            (DVec3::new(2.0, 0.0, 0.0), 1.0),           // beyond vertex 1
+            (DVec3::new(0.0, 4.0, 4.0), 5.0),           // beyond vertex 2
+            (DVec3::new(0.5, -2.0, 0.0), 2.0),          // beyond edge 0–1
+            (DVec3::new(-2.0, 0.5, 0.0), 2.0),          // beyond edge 0–2
+            (DVec3::new(1.0, 1.0, 0.0), 0.5f64.sqrt()), // beyond edge 1–2
+        ] {
+            let d = point_triangle_distance(p, v);
+            assert!((d - want).abs() < 1e-12, "{p}: {d} against {want}");
+        }
+        let g = Geometry::new(unit_box()).unwrap();
+        let offset = g.spawn_offset(0);
+        let (_, d) = g
+            .nearest_within_offset(Vec3::new(0.3, 1.0 + 1e-6, 0.4))
+            .expect("the ceiling is within its offset");
+        assert!((d - 1e-6).abs() < 2e-7, "{d}");
+        assert!(
+            g.nearest_within_offset(Vec3::new(0.3, 1.0 + 2.0 * offset, 0.4))
+                .is_none()
+        );
+        assert!(g.nearest_within_offset(Vec3::splat(0.5)).is_none());
     }
 
     #[test]
