@@ -9,6 +9,7 @@ mod cornell;
 mod determinism;
 mod doc_claims;
 mod furnace;
+mod light_leak;
 mod new_scenes;
 mod noise_model;
 mod precision;

@@ -104,10 +104,12 @@ impl Tri4 {
     /// operations in the same order on each lane (glam's `Vec3A` cross product is
     /// `a.y·b.z − a.z·b.y, …` and its dot product `(x + y) + z`, without fused multiply-adds on
     /// the x86_64 baseline), so each lane's distance has the same bits as the scalar test's.
-    /// Returns per lane `t` in units of |d| (+∞ for a miss) and the barycentrics (u, v) of
-    /// the point where the ray meets the lane's plane.
+    /// Returns per lane `t` in units of |d| (+∞ for a miss), the barycentrics (u, v) of the
+    /// point where the ray meets the lane's plane, and the lanes the barycentric test alone
+    /// rejected within [`NEAR_EDGE`] of an edge: the caller decides those with the watertight
+    /// edge test (`Geometry::rescue_near_edges`).
     #[inline(always)]
-    pub(crate) fn intersect(&self, ray: &BoxRay, tmax: f32) -> (Vec4, Vec4, Vec4) {
+    pub(crate) fn intersect(&self, ray: &BoxRay, tmax: f32) -> Lanes {
         let p = cross(&ray.d, &self.e2);
         let det = dot(&self.e1, &p);
         let inv = Vec4::ONE / det;
@@ -121,14 +123,46 @@ impl Tri4 {
         let v = dot(&ray.d, &q) * inv;
         let t = dot(&self.e2, &q) * inv;
         // A NaN (det = 0 gives ∞·0) fails every comparison, as it does in the scalar test.
-        let inside = det.cmpne(Vec4::ZERO)
-            & u.cmpge(Vec4::ZERO)
-            & v.cmpge(Vec4::ZERO)
-            & (u + v).cmple(Vec4::ONE)
-            & t.cmpgt(Vec4::ZERO)
-            & t.cmplt(Vec4::splat(tmax));
-        (Vec4::select(inside, t, Vec4::INFINITY), u, v)
+        let in_range = det.cmpne(Vec4::ZERO) & t.cmpgt(Vec4::ZERO) & t.cmplt(Vec4::splat(tmax));
+        // The least barycentric (1 − (u + v) ≥ 0 exactly when u + v ≤ 1): the ray passes
+        // through the triangle where it is ≥ 0 (the scalar test's three comparisons: in range,
+        // u and v are finite, never NaN) and just outside an edge where it is ≥ −NEAR_EDGE.
+        let least = u.min(v).min(Vec4::ONE - (u + v));
+        let hit = in_range & least.cmpge(Vec4::ZERO);
+        let loose = in_range & least.cmpge(Vec4::splat(-NEAR_EDGE));
+        let hits = hit.bitmask();
+        Lanes {
+            t: Vec4::select(hit, t, Vec4::INFINITY),
+            u,
+            v,
+            near: loose.bitmask() & !hits,
+            t_raw: t,
+        }
     }
+}
+
+/// How far outside a triangle's edges (in barycentric units) a ray may pass and still be
+/// handed to the watertight edge test: 2⁻¹⁰. The barycentric test rounds differently on the
+/// two triangles of a shared edge, so a ray within rounding of the edge can miss both (from a
+/// point 1 µm in front of a tilted quad's centre, 7 rays in 16 607 passed through its
+/// diagonal: few, but each carries direct light at 1 µm). The rounding of u and v is a few
+/// ulps times |o − v₀| over the triangle's height, well below this unless a triangle is
+/// 10⁴ times smaller than its distance from the origin.
+pub(crate) const NEAR_EDGE: f32 = 1.0 / 1024.0;
+
+/// What [`Tri4::intersect`] found in the four lanes of a packet.
+pub(crate) struct Lanes {
+    /// Distance of each lane's hit in units of |d|, +∞ for a miss.
+    pub(crate) t: Vec4,
+    /// Barycentric u of the ray's meeting point with each lane's plane.
+    pub(crate) u: Vec4,
+    /// Barycentric v of the ray's meeting point with each lane's plane.
+    pub(crate) v: Vec4,
+    /// Bit k: lane k's plane is met within range but just outside its edges (within
+    /// [`NEAR_EDGE`]).
+    pub(crate) near: u32,
+    /// The distance of each lane's meeting point with its plane (valid for `near` lanes).
+    pub(crate) t_raw: Vec4,
 }
 
 /// The 4-wide BVH: nodes (the root first), leaf packets, and which triangle each lane holds.

@@ -763,10 +763,13 @@ impl<'a> Renderer<'a> {
         }
     }
 
-    /// Warnings known before the first pass, one line each: a merge radius that is a large
-    /// part of the scene (above [`LARGE_RADIUS_FRACTION`] of its largest extent).
+    /// Warnings known before the first pass, one line each: a light within the ray offset of
+    /// a surface ([`Scene::lights_near_surfaces`]), a merge radius that is a large part of the
+    /// scene (above [`LARGE_RADIUS_FRACTION`] of its largest extent).
     pub fn warnings(&self) -> Vec<String> {
-        let mut warnings = Vec::new();
+        let mut warnings: Vec<String> = (self.scene.lights_near_surfaces().iter())
+            .map(ToString::to_string)
+            .collect();
         let (lo, hi) = self.scene.geometry().bounds();
         let extent = (hi - lo).max_element();
         let r = self.radius;

@@ -137,6 +137,39 @@ impl fmt::Display for SceneError {
 
 impl std::error::Error for SceneError {}
 
+/// A point light nearer a surface than that surface's ray offset
+/// ([`bdpm_geometry::Geometry::spawn_offset`]), found by [`Scene::lights_near_surfaces`].
+///
+/// Such a light is not lost or leaked: which side of the surface it lies on is decided once,
+/// the same for its photons and its shadow rays (`Geometry::occluded`). But the light it casts
+/// on that surface near it (irradiance ∝ 1/distance²) lands on hit points that are themselves
+/// placed only to within an offset (held one offset inside their triangle's edges, left one
+/// offset off the surface), so it depends on rounding at the scale of the distance itself.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightNearSurface {
+    /// Index of the light in [`Scene::lights`] (the scene file's `light[i]`).
+    pub light: usize,
+    /// Its position in world coordinates, metres.
+    pub position: Vec3,
+    /// Distance to the nearest such surface, metres.
+    pub distance: f32,
+    /// That surface's ray offset, metres.
+    pub offset: f32,
+}
+
+impl fmt::Display for LightNearSurface {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let p = self.position;
+        write!(
+            f,
+            "light[{}] at ({}, {}, {}) m is {:.2e} m from a surface, closer than the {:.2e} m by \
+             which rays leave that surface: the light it casts on that surface near it depends on \
+             rounding; move it at least {:.2e} m away",
+            self.light, p.x, p.y, p.z, self.distance, self.offset, self.offset
+        )
+    }
+}
+
 /// Geometry, materials, lights and camera of one render.
 ///
 /// The parts are read through accessors and fixed at [`Scene::new`]: the light-selection
@@ -348,6 +381,25 @@ impl Scene {
         let mid = sizes.len() / 2;
         let (_, m, _) = sizes.select_nth_unstable_by(mid, f32::total_cmp);
         Some(*m)
+    }
+
+    /// The lights that lie closer to some surface than that surface's ray offset, in light
+    /// order (see [`LightNearSurface`]). Visits every triangle once per light.
+    pub fn lights_near_surfaces(&self) -> Vec<LightNearSurface> {
+        let origin = self.geometry.origin();
+        self.lights
+            .iter()
+            .enumerate()
+            .filter_map(|(light, l)| {
+                let (prim, distance) = self.geometry.nearest_within_offset(l.position)?;
+                Some(LightNearSurface {
+                    light,
+                    position: l.position + origin,
+                    distance,
+                    offset: self.geometry.spawn_offset(prim),
+                })
+            })
+            .collect()
     }
 
     /// Gives the camera another image size (the field of view stays vertical).
