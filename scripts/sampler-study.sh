@@ -12,15 +12,19 @@ bin=${BDPM:-$(cd "$(dirname "$0")/.." && pwd)/target/release/bdpm}
 mkdir -p "$out"
 for scene in cornell-lambert cornell-glossy; do
   for res in $resolutions; do
+    ref=()
     for r in $radii; do
       modes="balance:sampler=independent,balance:sampler=stratified,optimal-path:sampler=independent,optimal-path:sampler=stratified"
       extra=()
       [ "$r" != scene ] && extra=(--radius "$r")
       dir="$out/$scene-$res-r$r"
-      # The reference: 64 passes of `light`, cached under out/ (its own error is in study.md).
+      # The reference: 64 passes of `light`, rendered by the first radius's study and cached
+      # in its directory (its own error is in study.md); `light` merges nothing, so the
+      # other radii read it.
       "$bin" study "scenes/preprint/$scene.toml" --modes "$modes" --passes "$passes" \
         --resolution "${res}x${res}" "${extra[@]}" --clock cpu --quiet \
-        --reference-passes 64 -o "$dir" > "$dir.log"
+        --reference-passes 64 "${ref[@]}" -o "$dir" > "$dir.log"
+      [ ${#ref[@]} -gt 0 ] || ref=(--reference "$(ls "$dir"/reference-*.exr)")
       echo "$dir/study.md"
     done
   done

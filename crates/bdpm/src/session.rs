@@ -22,6 +22,7 @@ use bdpm_output::cli::{
 };
 use bdpm_output::exr::{self as exr_file, Precision, RGB, TechniqueSums};
 use bdpm_output::files::{self, OutputLock, Outputs, Staged};
+use bdpm_output::memory;
 use bdpm_output::preview;
 pub(crate) use bdpm_output::report::StopReason;
 use bdpm_output::report::{self, PassPlan};
@@ -218,6 +219,10 @@ fn memory_gate(
     let settings = &loaded.settings;
     let pixels = settings.width as u64 * settings.height as u64;
     let mut estimate = pool.install(|| estimate_memory(&loaded.scene, settings, job.techniques));
+    if job.merge {
+        // A merge prepares the renderer and renders no pass.
+        estimate = memory::without_passes(estimate, settings);
+    }
     if job.accumulate {
         // The passes of the accumulation file: held (read from files, or rendered and kept)
         // until the file is written, plus the copy the writer encodes, or the reader decodes.

@@ -3,13 +3,17 @@
 //! written as a float EXR and as a false-colour PNG on a log scale with x₀ marked.
 use std::path::{Path, PathBuf};
 
-use bdpm_integrator::{Mode, RenderError, Renderer, WeightMap, WeightTarget, weight_map_heuristic};
+use bdpm_integrator::{
+    Mode, RenderError, RenderSettings, Renderer, WeightMap, WeightTarget, estimate_memory,
+    human_bytes, weight_map_heuristic,
+};
 use clap::{ArgGroup, Args};
 use glam::Vec3;
 
-use bdpm_output::cli::{CliResult, Overrides, prepare, thread_pool};
+use bdpm_output::cli::{CliResult, Overrides, parse_bytes, prepare, thread_pool};
 use bdpm_output::colormap::{Canvas, ColourMap, Legend, compose};
 use bdpm_output::files::stem_of;
+use bdpm_output::memory::{self, MemoryLimit};
 use bdpm_output::{exr, say};
 
 /// Bottom of the PNG's colour scale: w₀ at or below it gets the bottom colour. 2⁻⁷, the
@@ -52,6 +56,12 @@ pub(crate) struct WeightsArgs {
     /// Output EXR path (default: out/<scene>-weights-<mode>.exr); the PNG goes beside it.
     #[arg(short = 'o', long = "output")]
     output: Option<PathBuf>,
+    /// Refuse to start when the estimated peak memory of preparing the mode's renderer (its
+    /// radiance cache, pixel table and pilots; no pass is rendered) exceeds this, e.g. 8G or
+    /// 512M (K, M, G, T are powers of 1024). Default: the memory available on this machine
+    /// (MemAvailable of /proc/meminfo), no limit where unknown.
+    #[arg(long, value_parser = parse_bytes)]
+    max_memory: Option<u64>,
 }
 
 /// Parses `X,Y,Z` (metres).
@@ -124,6 +134,7 @@ pub(crate) fn run(args: WeightsArgs) -> CliResult<()> {
         .with_extension("exr");
     let png_path = exr_path.with_extension("png");
     let pool = thread_pool(args.overrides.threads)?;
+    memory_gate(&args.scene, &scene, &settings, &pool, args.max_memory)?;
 
     let renderer = pool
         .install(|| Renderer::new(&scene, &settings))
@@ -187,6 +198,35 @@ pub(crate) fn run(args: WeightsArgs) -> CliResult<()> {
     }
     say!("wrote {}, {}", exr_path.display(), png_path.display());
     Ok(())
+}
+
+/// Refuses a weight map whose renderer would not fit in memory (`max_memory`, default the
+/// available memory), before it is prepared: the render's estimate without the items of a
+/// pass, which the weight map does not render.
+fn memory_gate(
+    path: &Path,
+    scene: &bdpm_scene::Scene,
+    settings: &RenderSettings,
+    pool: &rayon::ThreadPool,
+    max_memory: Option<u64>,
+) -> CliResult<()> {
+    let estimate = memory::without_passes(
+        pool.install(|| estimate_memory(scene, settings, false)),
+        settings,
+    );
+    let limit = MemoryLimit::of(max_memory);
+    match limit.exceeded_by(estimate.total()) {
+        Some(_) => Err(format!(
+            "{}: the weight map needs about {} ({}), more than {}; lower {} (or raise \
+             --max-memory)",
+            path.display(),
+            human_bytes(estimate.total()),
+            memory::parts(&estimate),
+            limit.describe(),
+            estimate.scalable_largest().lower
+        )),
+        None => Ok(()),
+    }
 }
 
 /// The PNG: w₀ on a log scale from 0.008 to 1 (viridis), black where no surface is seen, a red

@@ -10,13 +10,15 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use bdpm_integrator::{Mode, Renderer, Stage};
+use bdpm_integrator::{Mode, RenderSettings, Renderer, Stage, human_bytes};
 use clap::Args;
 
 use bdpm_output::cli::{
-    CliResult, Overrides, cpu_model, load_average, parse_resolution, prepare, thread_pool,
+    CliResult, Overrides, cpu_model, load_average, parse_bytes, parse_resolution,
+    peak_resident_memory, prepare, thread_pool, whole,
 };
 use bdpm_output::files::stem_of;
+use bdpm_output::memory::MemoryLimit;
 
 // The field docs are clap's help text, printed in a terminal: `<scene>` there is a
 // placeholder, not an HTML tag.
@@ -26,30 +28,36 @@ use bdpm_output::files::stem_of;
 pub struct BenchArgs {
     /// Scene file (TOML).
     scene: PathBuf,
-    /// Modes to time, comma-separated (default: every BDPM mode).
-    #[arg(long, value_delimiter = ',')]
+    // The help lists every key an entry may set, from the parser's own list.
+    #[arg(long, value_delimiter = ',', help = crate::modes_help("time"))]
     modes: Vec<String>,
     /// Image size as WxH (default: the scene's).
     #[arg(long, value_parser = parse_resolution)]
     resolution: Option<(u32, u32)>,
     /// Photons emitted per pass, N_F (default: the scene's).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u64>)]
     photons: Option<u64>,
     /// Camera samples per pixel per pass, N_B (default: the scene's).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u32>)]
     spp: Option<u32>,
     /// Timed passes per run.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 2, allow_negative_numbers = true, value_parser = whole::<u32>)]
     passes: u32,
     /// Runs per mode and thread count; figures are medians over them.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, allow_negative_numbers = true, value_parser = whole::<u32>)]
     repeats: u32,
     /// Thread counts, comma-separated (default: 1 and all cores).
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true, value_parser = whole::<usize>)]
     threads_list: Vec<usize>,
     /// Master seed.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u64>)]
     seed: Option<u64>,
+    /// Refuse to start when the estimated peak memory of an entry's renderer (one is held at a
+    /// time) exceeds this, e.g. 8G or 512M (K, M, G, T are powers of 1024). Default: the
+    /// memory available on this machine (MemAvailable of /proc/meminfo), no limit where
+    /// unknown.
+    #[arg(long, value_parser = parse_bytes)]
+    max_memory: Option<u64>,
     /// Markdown output (default: out/bench-<scene>.md).
     #[arg(short = 'o', long = "output")]
     output: Option<PathBuf>,
@@ -113,7 +121,7 @@ fn time_cell(
     let pool = thread_pool(Some(threads))?;
     let build = || {
         pool.install(|| Renderer::new(scene, settings))
-            .map_err(|e| format!("mode {name}: {e}"))
+            .map_err(|e| format!("--modes entry '{name}': {e}"))
     };
     // Warm-up: caches, page faults, the allocator, the CPU's clock.
     {
@@ -166,21 +174,47 @@ fn time_cell(
     })
 }
 
-/// Runs the subcommand.
-pub(crate) fn run(args: BenchArgs) -> CliResult<()> {
-    if args.passes == 0 || args.repeats == 0 {
-        return Err("--passes and --repeats must be at least 1".into());
-    }
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let mut threads_list = if args.threads_list.is_empty() {
+/// The thread counts of `--threads-list` (default: 1 and every core), each checked.
+fn threads_list(args: &BenchArgs, cores: usize) -> CliResult<Vec<usize>> {
+    let mut list = if args.threads_list.is_empty() {
         vec![1, cores]
     } else {
         args.threads_list.clone()
     };
-    threads_list.dedup();
-    if threads_list.contains(&0) {
-        return Err("--threads-list: thread counts must be at least 1".into());
+    list.dedup();
+    // The cap of `--threads`, for the same reason: thousands of threads only queue.
+    let max = (8 * cores).max(64);
+    for &t in &list {
+        if t == 0 || t > max {
+            return Err(format!(
+                "--threads-list: {t} threads is outside 1 to {max} (8 per core, {cores} cores)"
+            ));
+        }
     }
+    Ok(list)
+}
+
+/// The timed cells and what the report says about the run that timed them.
+struct Timing {
+    cells: Vec<Cell>,
+    /// Wall time of all cells, s.
+    seconds: f64,
+    load_before: String,
+    load_after: String,
+    /// The estimated peak of the largest entry's renderer (one is held at a time), bytes.
+    estimate: u64,
+}
+
+/// Runs the subcommand: checks, a memory gate, the cells, the report.
+pub(crate) fn run(args: BenchArgs) -> CliResult<()> {
+    if args.passes == 0 {
+        return Err("--passes must be at least 1 (timed passes per run)".into());
+    }
+    if args.repeats == 0 {
+        return Err("--repeats must be at least 1 (runs per mode and thread count)".into());
+    }
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let threads_list = threads_list(&args, cores)?;
     let variants = crate::parse_modes(&args.modes)?;
     let overrides = Overrides {
         resolution: args.resolution,
@@ -191,7 +225,23 @@ pub(crate) fn run(args: BenchArgs) -> CliResult<()> {
     };
     let loaded = prepare(&args.scene, &overrides)?;
     let (scene, base) = (loaded.scene, loaded.settings);
-
+    // One renderer is held at a time (each cell prepares its own and drops it): the bench
+    // needs what its largest entry needs.
+    let estimates: Vec<_> = crate::entry_estimates(&scene, &variants, &base, &thread_pool(None)?)?
+        .into_iter()
+        .map(|(_, e)| e)
+        .collect();
+    let largest = estimates.iter().max_by_key(|e| e.total());
+    if let Some(largest) = largest {
+        crate::refuse_above_limit(
+            &args.scene,
+            "bench",
+            largest,
+            &variants,
+            &estimates,
+            MemoryLimit::of(args.max_memory),
+        )?;
+    }
     let load_before = load_average();
     let started = Instant::now();
     let mut cells = Vec::new();
@@ -209,9 +259,30 @@ pub(crate) fn run(args: BenchArgs) -> CliResult<()> {
             cells.push(cell);
         }
     }
-    let seconds = started.elapsed().as_secs_f64();
-    let load_after = load_average();
+    let timing = Timing {
+        cells,
+        seconds: started.elapsed().as_secs_f64(),
+        load_before,
+        load_after: load_average(),
+        estimate: largest.map_or(0, |e| e.total()),
+    };
+    let md = report(&args, &base, &variants, &threads_list, &timing);
+    let stem = stem_of(&args.scene, "scene");
+    let path = args
+        .output
+        .unwrap_or_else(|| PathBuf::from("out").join(format!("bench-{stem}.md")));
+    crate::publish(&path, &md)
+}
 
+/// The markdown report: the run, the table of cells and the speed-ups.
+fn report(
+    args: &BenchArgs,
+    base: &RenderSettings,
+    variants: &[crate::Variant],
+    threads_list: &[usize],
+    t: &Timing,
+) -> String {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut md = String::new();
     let command: Vec<String> = std::env::args().collect();
     let _ = writeln!(
@@ -227,19 +298,25 @@ pub(crate) fn run(args: BenchArgs) -> CliResult<()> {
     let _ = writeln!(md, "Command: `{}`\n", command.join(" "));
     let _ = writeln!(
         md,
-        "Machine: {cores} cores ({}); load average (1, 5, 15 min) {load_before} before, \
-         {load_after} after; {seconds:.0} s in all. The machine is shared: figures are medians \
-         of {} runs of {} timed passes, each after one warm-up pass.\n",
+        "Machine: {cores} cores ({}); load average (1, 5, 15 min) {} before, {} after; {:.0} s \
+         in all. The machine is shared: figures are medians of {} runs of {} timed passes, each \
+         after one warm-up pass. Memory: the largest entry's renderer (one is held at a time) \
+         was estimated at {}; the measured peak resident memory (VmHWM) is {}.\n",
         cpu_model(),
+        t.load_before,
+        t.load_after,
+        t.seconds,
         args.repeats,
-        args.passes
+        args.passes,
+        human_bytes(t.estimate),
+        peak_resident_memory().map_or("unknown".into(), human_bytes)
     );
     let _ = writeln!(
         md,
         "| mode | threads | M photons/s | M camera samples/s | s/pass | preparation (s) |"
     );
     let _ = writeln!(md, "|---|---:|---:|---:|---:|---|");
-    for c in &cells {
+    for c in &t.cells {
         let prep = if c.prep.is_empty() {
             "—".to_string()
         } else {
@@ -261,38 +338,39 @@ pub(crate) fn run(args: BenchArgs) -> CliResult<()> {
         );
     }
     if threads_list.len() >= 2 {
-        let (t1, tn) = (threads_list[0], threads_list[threads_list.len() - 1]);
-        let _ = writeln!(
-            md,
-            "\nSpeed-up of {tn} threads over {t1} (ratio of the medians above):\n"
-        );
-        let _ = writeln!(md, "| mode | photons | camera samples | pass time |");
-        let _ = writeln!(md, "|---|---:|---:|---:|");
-        for name in variants.iter().map(|v| &v.name) {
-            let find = |t: usize| cells.iter().find(|c| &c.mode == name && c.threads == t);
-            if let (Some(a), Some(b)) = (find(t1), find(tn)) {
-                let ratio = |x: f64, y: f64| {
-                    if x.is_finite() && y.is_finite() && x > 0.0 {
-                        format!("{:.2}×", y / x)
-                    } else {
-                        "—".into()
-                    }
-                };
-                let _ = writeln!(
-                    md,
-                    "| {name} | {} | {} | {} |",
-                    ratio(a.photons_per_s, b.photons_per_s),
-                    ratio(a.samples_per_s, b.samples_per_s),
-                    ratio(b.pass_s, a.pass_s)
-                );
-            }
+        speed_ups(&mut md, variants, threads_list, &t.cells);
+    }
+    md
+}
+
+/// The table of speed-ups of the last thread count over the first.
+fn speed_ups(md: &mut String, variants: &[crate::Variant], threads_list: &[usize], cells: &[Cell]) {
+    let (t1, tn) = (threads_list[0], threads_list[threads_list.len() - 1]);
+    let _ = writeln!(
+        md,
+        "\nSpeed-up of {tn} threads over {t1} (ratio of the medians above):\n"
+    );
+    let _ = writeln!(md, "| mode | photons | camera samples | pass time |");
+    let _ = writeln!(md, "|---|---:|---:|---:|");
+    for name in variants.iter().map(|v| &v.name) {
+        let find = |t: usize| cells.iter().find(|c| &c.mode == name && c.threads == t);
+        if let (Some(a), Some(b)) = (find(t1), find(tn)) {
+            let ratio = |x: f64, y: f64| {
+                if x.is_finite() && y.is_finite() && x > 0.0 {
+                    format!("{:.2}×", y / x)
+                } else {
+                    "—".into()
+                }
+            };
+            let _ = writeln!(
+                md,
+                "| {name} | {} | {} | {} |",
+                ratio(a.photons_per_s, b.photons_per_s),
+                ratio(a.samples_per_s, b.samples_per_s),
+                ratio(b.pass_s, a.pass_s)
+            );
         }
     }
-    let stem = stem_of(&args.scene, "scene");
-    let path = args
-        .output
-        .unwrap_or_else(|| PathBuf::from("out").join(format!("bench-{stem}.md")));
-    crate::publish(&path, &md)
 }
 
 #[cfg(test)]

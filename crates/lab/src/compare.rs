@@ -8,7 +8,7 @@ use std::process::ExitCode;
 
 use clap::Args;
 
-use bdpm_output::cli::CliResult;
+use bdpm_output::cli::{CliResult, positive, whole};
 use bdpm_output::say;
 use bdpm_output::stats::luminance;
 
@@ -23,7 +23,7 @@ pub struct CompareArgs {
     /// Second EXR, of the same size.
     b: PathBuf,
     /// Agreement threshold in combined standard errors √(σ_a² + σ_b²) per pixel.
-    #[arg(long, default_value_t = 4.0)]
+    #[arg(long, default_value_t = 4.0, allow_negative_numbers = true, value_parser = positive)]
     sigmas: f64,
     /// Exit with code 1 unless the mean radiance channels are bit-identical.
     #[arg(long)]
@@ -32,12 +32,12 @@ pub struct CompareArgs {
     /// difference and its z-score against the combined standard error of the block means
     /// (both files need stderr). Tells a bias (many blocks off by many standard errors, of one
     /// sign) from noise.
-    #[arg(long, value_name = "BLOCK")]
+    #[arg(long, value_name = "BLOCK", allow_negative_numbers = true, value_parser = whole::<u32>)]
     blocks: Option<u32>,
     /// Also say how much of the squared error (luminance, the second file as reference, its
     /// own error included) the N pixels of largest squared error hold, and where they lie:
     /// whether a few pixels decide the rel. RMSE.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = whole::<usize>)]
     worst: Option<usize>,
 }
 
@@ -154,6 +154,15 @@ pub(crate) fn error_against(
     }
     let var = reference_variance(reference_stderr, reference.len());
     let (measured, floor) = (rmse(image, reference).powi(2), mean(&var));
+    if measured == 0.0 {
+        // Equal images: no error to measure, whatever the reference's own (the floor below
+        // stands in for a difference too small to resolve, and there is none).
+        return Some(ErrorFigures {
+            rel_rmse: 0.0,
+            rel_mse: 0.0,
+            below_reference: false,
+        });
+    }
     let mse = without_floor(measured, floor);
     Some(ErrorFigures {
         rel_rmse: mse.sqrt() / ref_mean,
@@ -206,8 +215,79 @@ pub(crate) fn block_differences(
     out
 }
 
+/// Prints the first image's error against the second as reference.
+fn say_error(e: &ErrorFigures, reference_has_stderr: bool) {
+    say!(
+        "the first against the second as reference: rel. RMSE {:.3}%, relMSE {:.4e}{}",
+        100.0 * e.rel_rmse,
+        e.rel_mse,
+        if e.rel_rmse == 0.0 {
+            " (the images are equal)"
+        } else if e.below_reference {
+            " (no more than the second's own error, which is subtracted: shown at the floor, \
+             1 % of the second's variance; the second is too noisy to measure this error)"
+        } else if reference_has_stderr {
+            " (the second's own error subtracted)"
+        } else {
+            " (the second has no stderr layer: its own error is included)"
+        }
+    );
+}
+
+/// Prints the differences of `block` × `block` blocks' means (`--blocks`), which need both
+/// files' standard errors.
+fn say_blocks(
+    a: &crate::reference::Reference,
+    b: &crate::reference::Reference,
+    (a_lum, b_lum): (&[f64], &[f64]),
+    block: u32,
+) -> CliResult<()> {
+    let (Some(sa), Some(sb)) = (a.stderr.as_deref(), b.stderr.as_deref()) else {
+        return Err(format!(
+            "--blocks needs the stderr layer in both files; {} has none",
+            if a.stderr.is_none() { &a.path } else { &b.path }.display()
+        ));
+    };
+    let d = block_differences(
+        (a_lum, b_lum),
+        (&luminances(sa), &luminances(sb)),
+        a.width as usize,
+        block as usize,
+    );
+    let nb = d.len().max(1) as f64;
+    let mean_rel = d.iter().map(|x| x.relative).sum::<f64>() / nb;
+    let rms_z = (d.iter().map(|x| x.z * x.z).sum::<f64>() / nb).sqrt();
+    let beyond = d.iter().filter(|x| x.z.abs() > 3.0).count();
+    let worst = d
+        .iter()
+        .max_by(|x, y| x.z.abs().total_cmp(&y.z.abs()))
+        .copied();
+    say!(
+        "{}x{} blocks ({}): mean relative difference {:+.3}%, rms z {:.2} (1 for noise alone), {} beyond 3 standard errors{}",
+        block,
+        block,
+        d.len(),
+        100.0 * mean_rel,
+        rms_z,
+        beyond,
+        worst.map_or(String::new(), |w| format!(
+            "; largest |z| {:.1} at {:+.2}%",
+            w.z.abs(),
+            100.0 * w.relative
+        ))
+    );
+    Ok(())
+}
+
 /// Runs `bdpm compare`.
 pub(crate) fn run(args: CompareArgs) -> CliResult<ExitCode> {
+    // The flags first, so that a bad one is refused before the files are read.
+    if args.worst == Some(0) {
+        return Err("--worst must be at least 1 pixel".into());
+    }
+    if args.blocks == Some(0) {
+        return Err("--blocks must be at least 1 pixel".into());
+    }
     let a = read_exr(&args.a)?;
     let b = read_exr(&args.b)?;
     if (a.width, a.height) != (b.width, b.height) {
@@ -252,55 +332,10 @@ pub(crate) fn run(args: CompareArgs) -> CliResult<ExitCode> {
     );
     let (a_lum, b_lum) = (luminances(&a.mean), luminances(&b.mean));
     if let Some(e) = error_against(&a_lum, &b_lum, b.stderr.as_deref()) {
-        say!(
-            "the first against the second as reference: rel. RMSE {:.3}%, relMSE {:.4e}{}",
-            100.0 * e.rel_rmse,
-            e.rel_mse,
-            if e.below_reference {
-                " (no more than the second's own error, which is subtracted: shown at the floor, \
-                 1 % of the second's variance; the second is too noisy to measure this error)"
-            } else if b.stderr.is_some() {
-                " (the second's own error subtracted)"
-            } else {
-                " (the second has no stderr layer: its own error is included)"
-            }
-        );
+        say_error(&e, b.stderr.is_some());
     }
     if let Some(block) = args.blocks {
-        let (Some(sa), Some(sb)) = (a.stderr.as_deref(), b.stderr.as_deref()) else {
-            return Err("--blocks needs the stderr layer in both files".into());
-        };
-        if block == 0 {
-            return Err("--blocks must be at least 1 pixel".into());
-        }
-        let d = block_differences(
-            (&a_lum, &b_lum),
-            (&luminances(sa), &luminances(sb)),
-            a.width as usize,
-            block as usize,
-        );
-        let nb = d.len().max(1) as f64;
-        let mean_rel = d.iter().map(|x| x.relative).sum::<f64>() / nb;
-        let rms_z = (d.iter().map(|x| x.z * x.z).sum::<f64>() / nb).sqrt();
-        let beyond = d.iter().filter(|x| x.z.abs() > 3.0).count();
-        let worst = d
-            .iter()
-            .max_by(|x, y| x.z.abs().total_cmp(&y.z.abs()))
-            .copied();
-        say!(
-            "{}x{} blocks ({}): mean relative difference {:+.3}%, rms z {:.2} (1 for noise alone), {} beyond 3 standard errors{}",
-            block,
-            block,
-            d.len(),
-            100.0 * mean_rel,
-            rms_z,
-            beyond,
-            worst.map_or(String::new(), |w| format!(
-                "; largest |z| {:.1} at {:+.2}%",
-                w.z.abs(),
-                100.0 * w.relative
-            ))
-        );
+        say_blocks(&a, &b, (&a_lum, &b_lum), block)?;
     }
     if let Some(n) = args.worst
         && let Some((share, [x0, y0, x1, y1])) = worst_pixels(&a_lum, &b_lum, a.width as usize, n)
@@ -343,13 +378,18 @@ mod tests {
         assert!((e.rel_mse - 0.09 / 1.01).abs() < 1e-9);
         assert!(!e.below_reference);
         assert_eq!(error_against(&[1.0], &[0.0], None), None);
-        // An image equal to the reference: zero error, reported as the floor and flagged.
-        let e = error_against(&r, &r, Some(&se)).unwrap();
+        // An image within the reference's own error: reported as the floor and flagged.
+        let e = error_against(&[1.05, 0.95], &r, Some(&se)).unwrap();
         assert!(e.below_reference);
         assert!((e.rel_rmse - (0.01f64 * 0.01).sqrt()).abs() < 1e-9);
-        // Without the reference's error there is no floor: zero is zero.
-        let e = error_against(&r, &r, None).unwrap();
-        assert_eq!((e.rel_rmse, e.below_reference), (0.0, false));
+        // An image equal to the reference has no error, with or without the reference's.
+        for se in [Some(&se[..]), None] {
+            let e = error_against(&r, &r, se).unwrap();
+            assert_eq!(
+                (e.rel_rmse, e.rel_mse, e.below_reference),
+                (0.0, 0.0, false)
+            );
+        }
     }
 
     #[test]

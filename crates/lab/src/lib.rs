@@ -10,9 +10,13 @@
 use std::path::Path;
 use std::process::ExitCode;
 
-use bdpm_integrator::{Mode, PartialSettings, RenderSettings, Written};
+use bdpm_integrator::{
+    MemoryEstimate, Mode, PartialSettings, RenderSettings, Written, estimate_memory, human_bytes,
+};
 use bdpm_output::cli::CliResult;
 use bdpm_output::files::write_atomic;
+use bdpm_output::memory::{self, MemoryLimit};
+use bdpm_scene::Scene;
 use clap::Subcommand;
 
 mod bench;
@@ -54,7 +58,9 @@ pub fn run(command: Command) -> Result<ExitCode, String> {
     }
 }
 
-/// The keys a `--modes` entry may set ([`Variant`]).
+/// The keys a `--modes` entry may set ([`Variant`]), each converted by the scene file's
+/// conversion of its `[render]` value ([`PartialSettings::set`]): the one list that the
+/// parser, its messages and the `--modes` help text ([`modes_help`]) read.
 const KEYS: [&str; 10] = [
     "sampler",
     "light_tracing",
@@ -68,10 +74,22 @@ const KEYS: [&str; 10] = [
     "direct_boost",
 ];
 
+/// The help text of a `--modes` flag that `verb`s the entries (`compare`, `time`), with
+/// every key an entry may set.
+pub(crate) fn modes_help(verb: &str) -> String {
+    format!(
+        "Modes to {verb}, comma-separated (default: every BDPM mode); each may carry settings \
+         of its own, MODE[:KEY=VALUE]… with KEY one of {} (e.g. \
+         `optimal-path:radius=0.2px:cache_photons=500000`)",
+        KEYS.join(", ")
+    )
+}
+
 /// One entry of `--modes`: a mode, and settings of its own on top of the shared ones
-/// (`MODE[:KEY=VALUE]…` with KEY one of `sampler`, `radius` (metres, or pixel footprints as
-/// `1.2px`), `spp`, `photons`, the weights' preparation `cache_photons`, `cache_bins`,
-/// `pixel_table_rays`, and `direct_boost`), so that configurations are compared side by side in one run, e.g.
+/// (`MODE[:KEY=VALUE]…` with KEY one of [`KEYS`]: `sampler`, `radius` (metres, or pixel
+/// footprints as `1.2px`), `spp`, `photons`, the weights' preparation `cache_photons`,
+/// `cache_bins`, `pixel_table_rays`, and `direct_boost`, `light_tracing`,
+/// `adaptive_radius`), so that configurations are compared side by side in one run, e.g.
 /// `balance:sampler=independent,balance,optimal-path:radius=0.2px:cache_photons=500000`.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Variant {
@@ -146,6 +164,63 @@ fn parse_modes(list: &[String]) -> CliResult<Vec<Variant>> {
         }
     }
     Ok(variants)
+}
+
+/// Each entry's render settings (the shared `base` with the entry's own) and the memory its
+/// renderer is estimated to need ([`estimate_memory`]), in the order given.
+fn entry_estimates(
+    scene: &Scene,
+    variants: &[Variant],
+    base: &RenderSettings,
+    pool: &rayon::ThreadPool,
+) -> CliResult<Vec<(RenderSettings, MemoryEstimate)>> {
+    variants
+        .iter()
+        .map(|v| {
+            let s = v.settings(base)?;
+            let e = pool.install(|| estimate_memory(scene, &s, false));
+            Ok((s, e))
+        })
+        .collect()
+}
+
+/// Refuses a command over `variants` whose estimated peak `total` exceeds `limit`, in one line
+/// that names the scene, the estimate and its parts, the limit, and the entry that needs the
+/// most alone (`entries`: each variant's own estimate) with the setting to lower.
+fn refuse_above_limit(
+    scene: &Path,
+    command: &str,
+    total: &MemoryEstimate,
+    variants: &[Variant],
+    entries: &[MemoryEstimate],
+    limit: MemoryLimit,
+) -> CliResult<()> {
+    if limit.exceeded_by(total.total()).is_none() {
+        return Ok(());
+    }
+    let largest = variants
+        .iter()
+        .zip(entries)
+        .max_by_key(|(_, e)| e.total())
+        .map(|(v, e)| {
+            let part = e.scalable_largest();
+            format!(
+                "; its largest entry, --modes '{}', needs about {} alone, most of it {}: lower {} \
+                 (for the entry or for all)",
+                v.name,
+                human_bytes(e.total()),
+                part.name,
+                part.lower
+            )
+        })
+        .unwrap_or_default();
+    Err(format!(
+        "{}: the {command} needs about {} ({}), more than {}{largest}, or raise --max-memory",
+        scene.display(),
+        human_bytes(total.total()),
+        memory::parts(total),
+        limit.describe()
+    ))
 }
 
 /// Writes a markdown report to `path` and prints it, then where it went.

@@ -32,10 +32,11 @@ use serde::Serialize;
 
 use bdpm_output::accum::{check_scene_hash, estimator_hash, scene_hash};
 use bdpm_output::cli::{
-    CliResult, Overrides, Prepared, available_memory, prepare as cli_prepare, thread_pool,
+    CliResult, Overrides, Prepared, parse_bytes, prepare as cli_prepare, thread_pool,
 };
 use bdpm_output::colormap::{Canvas, ColourMap, Legend, compose, format_value};
 use bdpm_output::files::stem_of;
+use bdpm_output::memory::{self, MemoryLimit};
 use bdpm_output::{exr, files, say};
 
 /// Side of the pixel blocks over which V is also compared (summed over the block's pixels):
@@ -47,7 +48,12 @@ const LOG2_RANGE: f64 = 3.0;
 /// The headroom map's scale: log₂(predicted V / floor) within ±0.5 (a factor of √2 either way;
 /// the ratio is ≥ 1 up to the model's sampling noise).
 const HEADROOM_LOG2_RANGE: f64 = 0.5;
-/// Colour of pixels that are not compared (no surface, or no measured noise).
+/// The floor of `--headroom`: the functional's minimiser over weights w₁(x₀, x₁) per path
+/// kind.
+const FLOOR: Heuristic = Heuristic::OptimalSplit {
+    clamp_weights: false,
+};
+/// Colour of pixels that are not compared (no surface).
 const NOT_COMPARED: [u8; 3] = [0, 0, 0];
 
 /// Arguments of this subcommand.
@@ -74,6 +80,12 @@ pub struct PredictArgs {
     /// cell side): the model reads L_d and b at x₁ from it, the weights from the render's.
     #[arg(long, default_value_t = MODEL_CACHE_PHOTONS, value_parser = clap::value_parser!(u64).range(1..))]
     model_cache_photons: u64,
+    /// Refuse to start when the estimated peak memory (the mode's renderer, the model's
+    /// cache, and with --headroom the floor's renderer) exceeds this, e.g. 8G or 512M (K, M,
+    /// G, T are powers of 1024). Default: the memory available on this machine
+    /// (MemAvailable of /proc/meminfo), no limit where unknown.
+    #[arg(long, value_parser = parse_bytes)]
+    max_memory: Option<u64>,
 }
 
 /// The measured render: √V per pixel (RGB) and its `bdpm.*` header attributes.
@@ -171,9 +183,16 @@ fn check_settings(
 /// Agreement of predicted and measured V over a set of samples (pixels or blocks).
 #[derive(Serialize, Debug, Clone, PartialEq)]
 pub(crate) struct Agreement {
-    /// Samples compared (both V finite and positive).
+    /// Samples compared: both V finite and ≥ 0 ([`ratio`]); the ratio quantiles are over all
+    /// of them.
     count: usize,
-    /// Pearson correlation of ln V (predicted against measured).
+    /// Of them, samples where the model predicts no noise at all but some was measured
+    /// (ratio 0).
+    predicted_zero: usize,
+    /// Samples where neither predicts nor measures noise: they agree (ratio 1).
+    both_zero: usize,
+    /// Pearson correlation of ln V (predicted against measured), over the samples where both
+    /// are positive.
     correlation_log: f64,
     /// Pearson correlation of V.
     correlation: f64,
@@ -183,6 +202,21 @@ pub(crate) struct Agreement {
     ratio_q10: f64,
     /// 90 % quantile of predicted/measured.
     ratio_q90: f64,
+}
+
+/// predicted/measured V of one sample: 1 where both are 0 (they agree), 0 where only the
+/// prediction is (the model misses all of the noise), infinite where only the measurement
+/// is; `None` where either is not finite or negative.
+pub(crate) fn ratio(predicted: f64, measured: f64) -> Option<f64> {
+    let usable = |v: f64| v.is_finite() && v >= 0.0;
+    if !(usable(predicted) && usable(measured)) {
+        return None;
+    }
+    Some(match (predicted > 0.0, measured > 0.0) {
+        (false, false) => 1.0,
+        (_, true) => predicted / measured,
+        (true, false) => f64::INFINITY,
+    })
 }
 
 /// Shares of the model's terms in the predicted total, summed over the compared pixels.
@@ -275,29 +309,41 @@ fn quantile(sorted: &[f64], q: f64) -> f64 {
     let x = q * (sorted.len() - 1) as f64;
     let i = x.floor() as usize;
     let j = (i + 1).min(sorted.len() - 1);
-    sorted[i] + (x - i as f64) * (sorted[j] - sorted[i])
+    let f = x - i as f64;
+    // At an order statistic exactly, that value: 0 × ∞ would make an infinite neighbour NaN.
+    if f == 0.0 {
+        sorted[i]
+    } else {
+        sorted[i] + f * (sorted[j] - sorted[i])
+    }
 }
 
-/// Compares pairs (predicted, measured); pairs where either is not finite and positive are
-/// left out.
+/// Compares pairs (predicted, measured) by their [`ratio`]; pairs where either is not finite
+/// or negative are left out, and the log correlation leaves out the ones with a zero.
 pub(crate) fn agreement(pairs: &[(f64, f64)]) -> Agreement {
     let kept: Vec<(f64, f64)> = pairs
         .iter()
         .copied()
-        .filter(|(p, m)| p.is_finite() && m.is_finite() && *p > 0.0 && *m > 0.0)
+        .filter(|&(p, m)| ratio(p, m).is_some())
         .collect();
+    let positive: Vec<(f64, f64)> = kept
+        .iter()
+        .copied()
+        .filter(|(p, m)| *p > 0.0 && *m > 0.0)
+        .collect();
+    let (lp, lm): (Vec<f64>, Vec<f64>) = positive.iter().map(|(p, m)| (p.ln(), m.ln())).unzip();
     let (p, m): (Vec<f64>, Vec<f64>) = kept.iter().copied().unzip();
-    let lp: Vec<f64> = p.iter().map(|x| x.ln()).collect();
-    let lm: Vec<f64> = m.iter().map(|x| x.ln()).collect();
-    let mut ratio: Vec<f64> = kept.iter().map(|(p, m)| p / m).collect();
-    ratio.sort_by(f64::total_cmp);
+    let mut ratios: Vec<f64> = kept.iter().filter_map(|&(p, m)| ratio(p, m)).collect();
+    ratios.sort_by(f64::total_cmp);
     Agreement {
         count: kept.len(),
+        predicted_zero: kept.iter().filter(|(p, m)| *p == 0.0 && *m > 0.0).count(),
+        both_zero: kept.iter().filter(|(p, m)| *p == 0.0 && *m == 0.0).count(),
         correlation_log: pearson(&lp, &lm),
         correlation: pearson(&p, &m),
-        ratio_median: quantile(&ratio, 0.5),
-        ratio_q10: quantile(&ratio, 0.1),
-        ratio_q90: quantile(&ratio, 0.9),
+        ratio_median: quantile(&ratios, 0.5),
+        ratio_q10: quantile(&ratios, 0.1),
+        ratio_q90: quantile(&ratios, 0.9),
     }
 }
 
@@ -505,16 +551,7 @@ impl Setup<'_> {
             .install(|| renderer.predict_variance())
             .map_err(|e| e.to_string())?;
         let floor = if args.headroom {
-            // The unclamped `optimal-split` reads its own A and B, so its renderer must build
-            // the pixel table; its weights read the cache the model reads, so that it is the
-            // functional's minimiser.
-            let floor = Heuristic::OptimalSplit {
-                clamp_weights: false,
-            };
-            let mut s = model_cache_settings(settings, photons);
-            s.mode = Mode::Bdpm(floor.kind());
-            // With a radius per block, the mode's map: the floor's own pilot would draw another.
-            s.adaptive_radius = false;
+            let s = floor_settings(settings, photons);
             let map = renderer.radius_map().cloned();
             let r = pool
                 .install(|| {
@@ -528,7 +565,7 @@ impl Setup<'_> {
                 })
                 .map_err(|e| format!("{}: {e}", args.scene.display()))?;
             Some(
-                pool.install(|| r.predict_variance_for(floor))
+                pool.install(|| r.predict_variance_for(FLOOR))
                     .map_err(|e| e.to_string())?,
             )
         } else {
@@ -557,11 +594,11 @@ impl Setup<'_> {
         let (settings, measured) = (&self.loaded.settings, &self.measured);
         let (p, floor) = (&predicted.prediction, &predicted.floor);
         let mv = &measured.variance;
-        let ratio: Vec<f64> = p
+        let ratios: Vec<f64> = p
             .total
             .iter()
             .zip(mv)
-            .map(|(p, m)| if *m > 0.0 { p / m } else { f64::NAN })
+            .map(|(p, m)| ratio(*p, *m).unwrap_or(f64::NAN))
             .collect();
         let surface: Vec<usize> = (0..mv.len()).filter(|&i| p.total[i].is_finite()).collect();
         let compared: Vec<usize> = surface
@@ -600,7 +637,7 @@ impl Setup<'_> {
             p.total
                 .iter()
                 .zip(&f.total)
-                .map(|(m, f)| if *f > 0.0 { m / f } else { f64::NAN })
+                .map(|(m, f)| ratio(*m, *f).unwrap_or(f64::NAN))
                 .collect()
         });
         let headroom = floor
@@ -643,7 +680,7 @@ impl Setup<'_> {
         };
         Comparison {
             report,
-            ratio,
+            ratio: ratios,
             measured_on_surface,
             headroom_ratio,
         }
@@ -752,32 +789,50 @@ fn headroom(
     }
 }
 
-/// Refuses a prediction whose estimated peak memory (the mode's preparation as a render's
-/// estimate counts it, and the model's cache build) exceeds the available memory, naming what
-/// to lower, before anything large is allocated.
+/// Refuses a prediction whose estimated peak memory exceeds `--max-memory` (default: the
+/// available memory), naming what to lower, before anything large is allocated: the mode's
+/// preparation as a render's estimate counts it and the model's cache build, and with
+/// `--headroom` the floor's renderer, prepared while the mode's is held
+/// ([`memory::held_together`]).
 fn memory_gate(
     args: &PredictArgs,
     scene: &bdpm_scene::Scene,
     settings: &RenderSettings,
     pool: &rayon::ThreadPool,
 ) -> CliResult<()> {
-    let mut estimate = pool.install(|| estimate_memory(scene, settings, false));
-    estimate
-        .items
-        .push(model_cache_item(&estimate, args.model_cache_photons));
-    estimate.items.sort_by_key(|i| std::cmp::Reverse(i.bytes));
-    match available_memory() {
-        Some(limit) if estimate.total() > limit => Err(format!(
-            "{}: the prediction needs about {} ({} {}), more than the {} of available memory; lower {}",
+    let mut mode = pool.install(|| estimate_memory(scene, settings, false));
+    mode.items
+        .push(model_cache_item(&mode, args.model_cache_photons));
+    let mut renderers = vec![mode];
+    if args.headroom {
+        let floor = floor_settings(settings, args.model_cache_photons);
+        renderers.push(pool.install(|| estimate_memory(scene, &floor, false)));
+    }
+    let estimate = memory::held_together(&renderers);
+    let limit = MemoryLimit::of(args.max_memory);
+    match limit.exceeded_by(estimate.total()) {
+        Some(_) => Err(format!(
+            "{}: the prediction needs about {} ({}), more than {}; lower {} (or raise \
+             --max-memory)",
             args.scene.display(),
             human_bytes(estimate.total()),
-            estimate.items[0].name,
-            human_bytes(estimate.items[0].bytes),
-            human_bytes(limit),
+            memory::parts(&estimate),
+            limit.describe(),
             estimate.scalable_largest().lower
         )),
-        _ => Ok(()),
+        None => Ok(()),
     }
+}
+
+/// The settings of the floor's renderer (`--headroom`): the unclamped `optimal-split`, which
+/// reads its own A and B, so its renderer builds the pixel table; its weights read the cache
+/// the model reads (`photons` photons), so that it is the functional's minimiser.
+fn floor_settings(settings: &RenderSettings, photons: u64) -> RenderSettings {
+    let mut s = model_cache_settings(settings, photons);
+    s.mode = Mode::Bdpm(FLOOR.kind());
+    // With a radius per block, the mode's map: the floor's own pilot would draw another.
+    s.adaptive_radius = false;
+    s
 }
 
 fn print_summary(r: &Report<'_>) {
@@ -792,13 +847,23 @@ fn print_summary(r: &Report<'_>) {
         say!("  {} ({:.2} s): {}", p.stage, p.seconds, p.detail);
     }
     say!(
-        "image mean V: predicted {:.4e}, measured {:.4e} (ratio {:.3}); {} pixels without a surface, {} without measured noise",
+        "image mean V: predicted {:.4e}, measured {:.4e} (ratio {:.3}; per pixel, the median of predicted/measured is {:.3}); {} pixels without a surface, {} without measured noise",
         r.image_mean_predicted_v,
         r.image_mean_measured_v,
         r.image_mean_predicted_v / r.image_mean_measured_v,
+        r.per_pixel.ratio_median,
         r.pixels_without_surface,
         r.pixels_without_measured_noise
     );
+    let a = &r.per_pixel;
+    if a.predicted_zero + a.both_zero > 0 {
+        say!(
+            "{} pixels with no predicted noise: {} of them measured noise (ratio 0, counted in the ratios below and drawn at the scale's low end), {} measured none (they agree: ratio 1)",
+            a.predicted_zero + a.both_zero,
+            a.predicted_zero,
+            a.both_zero
+        );
+    }
     say!(
         "relV: predicted {:.4e}, measured {:.4e} (ratio {:.3})",
         r.rel_v_predicted,
@@ -852,17 +917,21 @@ fn headroom_png_path(exr: &Path) -> PathBuf {
     exr.with_file_name(format!("{stem}-headroom.png"))
 }
 
-/// A ratio map: log₂(ratio) from −`range` (blue) through 0 (white) to +`range` (red), black
-/// where nothing is compared, with the colour bar titled `title`.
+/// A ratio map: log₂(ratio) from −`range` (blue) through 0 (white) to +`range` (red), ratios
+/// beyond either end (0 and ∞ included) at that end, black where nothing is compared, with
+/// the colour bar titled `title`.
 fn ratio_png(p: &Prediction, ratio: &[f64], range: f64, title: &str) -> CliResult<Canvas> {
     let position = |r: f64| (r.log2() / range + 1.0) * 0.5;
     let colours: Vec<[u8; 3]> = ratio
         .iter()
         .map(|&r| {
-            if r.is_finite() && r > 0.0 {
-                ColourMap::Diverging.colour(position(r))
-            } else {
+            // A ratio of 0 (no noise predicted where some was measured) or ∞ takes the end
+            // of the scale, as any ratio beyond it does; only pixels without a surface are
+            // not compared.
+            if r.is_nan() {
                 NOT_COMPARED
+            } else {
+                ColourMap::Diverging.colour(position(r))
             }
         })
         .collect();
@@ -877,7 +946,7 @@ fn ratio_png(p: &Prediction, ratio: &[f64], range: f64, title: &str) -> CliResul
         title: vec![
             title.into(),
             "log2 scale".into(),
-            "black: not compared".into(),
+            "black: no surface".into(),
         ],
         ticks,
     };
@@ -896,10 +965,31 @@ mod tests {
         assert!((a.correlation - 1.0).abs() < 1e-12);
         assert!((a.correlation_log - 1.0).abs() < 1e-12);
         assert_eq!((a.ratio_median, a.ratio_q10, a.ratio_q90), (2.0, 2.0, 2.0));
-        // Non-positive or non-finite pairs are left out.
-        let b = agreement(&[(1.0, 0.0), (f64::NAN, 1.0), (1.0, 1.0), (2.0, 1.0)]);
-        assert_eq!(b.count, 2);
-        assert_eq!(b.ratio_median, 1.5);
+        // Non-finite or negative pairs are left out; a pair measured without noise but
+        // predicted with some has ratio ∞.
+        let b = agreement(&[
+            (1.0, 0.0),
+            (f64::NAN, 1.0),
+            (-1.0, 1.0),
+            (1.0, 1.0),
+            (2.0, 1.0),
+        ]);
+        assert_eq!((b.count, b.predicted_zero, b.both_zero), (3, 0, 0));
+        assert_eq!(b.ratio_median, 2.0);
+    }
+
+    #[test]
+    fn pixels_without_predicted_noise_are_compared_not_dropped() {
+        assert_eq!(ratio(0.0, 0.0), Some(1.0));
+        assert_eq!(ratio(0.0, 2.0), Some(0.0));
+        assert_eq!(ratio(1.0, 0.0), Some(f64::INFINITY));
+        assert_eq!(ratio(1.0, 4.0), Some(0.25));
+        assert_eq!(ratio(f64::NAN, 1.0), None);
+        // Two pixels the model predicts no noise for: one measured some (ratio 0), one none
+        // (they agree, ratio 1); both count, and move the median.
+        let a = agreement(&[(0.0, 1.0), (0.0, 0.0), (2.0, 1.0), (3.0, 1.0), (4.0, 1.0)]);
+        assert_eq!((a.count, a.predicted_zero, a.both_zero), (5, 1, 1));
+        assert_eq!((a.ratio_median, a.ratio_q10), (2.0, 0.4));
     }
 
     #[test]

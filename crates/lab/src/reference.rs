@@ -1,6 +1,7 @@
 //! The reference image of `bdpm study`: read from a given EXR, or rendered once with the
 //! `light` mode (unbiased, and far faster to converge than `path` on the Cornell scenes,
-//! method.md §10) and cached under `out/` by a hash of everything that determines it.
+//! method.md §10) and cached in the study's output directory by a hash of everything that
+//! determines it.
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -51,23 +52,25 @@ pub(crate) fn reference_settings(
     s
 }
 
-/// The cache path of a reference: `out/reference-<stem>-<W>x<H>-<hash>.exr`, the hash over the
-/// scene hash (the scene file and the meshes, buffers and images it references,
-/// [`bdpm_output::accum::scene_hash`]) and every reference setting.
+/// The cache path of a reference in the study's directory `dir`:
+/// `dir/reference-<stem>-<W>x<H>-<hash>.exr`, the hash over the scene hash (the scene file and
+/// the meshes, buffers and images it references, [`bdpm_output::accum::scene_hash`]) and
+/// every reference setting.
 pub(crate) fn cache_path(
+    dir: &Path,
     scene_path: &Path,
     scene_hash: &str,
     settings: &RenderSettings,
-) -> Result<PathBuf, String> {
+) -> PathBuf {
     let mut key = scene_hash.as_bytes().to_vec();
     key.extend_from_slice(format!("{settings:?}").as_bytes());
     let stem = stem_of(scene_path, "scene");
-    Ok(PathBuf::from("out").join(format!(
+    dir.join(format!(
         "reference-{stem}-{}x{}-{:016x}.exr",
         settings.width,
         settings.height,
         fnv1a(&key)
-    )))
+    ))
 }
 
 /// Reads the RGB mean (channels `R`, `G`, `B`) and, when present, the `stderr.R/G/B` layer of
@@ -134,11 +137,31 @@ pub(crate) fn cached_or_render(
         "{prefix:>16} [{elapsed_precise}] {bar:32} {percent:>3}% (eta {eta})",
     );
     bar.set_prefix("reference");
+    if !quiet {
+        bdpm_output::say_err!(
+            "reference: rendering {} passes of `light` (N_F = {}, N_B = {}) to cache as {}",
+            settings.passes,
+            settings.photons,
+            settings.spp,
+            path.display()
+        );
+    }
     let start = Instant::now();
     let mut film = Film::new(settings.width, settings.height);
     for pass in 0..settings.passes {
         let out = pool.install(|| renderer.render_pass(pass, &|n| bar.inc(n)));
         film.add_pass(&out.estimates, out.dropped);
+        if pass == 0 && settings.passes > 1 && !quiet {
+            let first = start.elapsed().as_secs_f64();
+            bar.suspend(|| {
+                bdpm_output::say_err!(
+                    "reference: its first pass took {first:.2} s: about {:.1} s for all {} \
+                     (give --reference FILE, or fewer --reference-passes, to skip or shorten it)",
+                    first * settings.passes as f64,
+                    settings.passes
+                )
+            });
+        }
     }
     let seconds = start.elapsed().as_secs_f64();
     bar.finish_and_clear();

@@ -10,13 +10,16 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use bdpm_integrator::{Film, Renderer};
+use bdpm_integrator::{
+    Film, MemoryEstimate, MemoryItem, RenderSettings, Renderer, estimate_memory, human_bytes,
+};
 use bdpm_output::accum::{check_scene_hash, scene_hash};
 use bdpm_output::cli::{
-    CliResult, Overrides, Prepared, load_average, prepare as cli_prepare, process_cpu_seconds,
-    progress_bar, thread_pool,
+    CliResult, Overrides, Prepared, load_average, parse_bytes, peak_resident_memory, positive,
+    prepare as cli_prepare, process_cpu_seconds, progress_bar, thread_pool, whole,
 };
 use bdpm_output::files::{refuse_inputs, stem_of, write_atomic};
+use bdpm_output::memory::{self, MemoryLimit};
 use bdpm_output::plot;
 use bdpm_output::preview::write_png;
 use bdpm_output::stats::{PixelStats, luminance};
@@ -38,25 +41,24 @@ pub struct StudyArgs {
     /// Render settings (--passes, --photons, --spp, --resolution, …) for every mode.
     #[command(flatten)]
     overrides: Overrides,
-    /// Modes to compare, comma-separated (default: every BDPM mode); each may carry settings
-    /// of its own, MODE[:KEY=VALUE]… with KEY one of sampler, radius, spp, photons,
-    /// cache_photons, cache_bins, pixel_table_rays (e.g.
-    /// `optimal-path:radius=0.2px:cache_photons=500000`).
-    #[arg(long, value_delimiter = ',')]
+    // The help lists every key an entry may set, from the parser's own list.
+    #[arg(long, value_delimiter = ',', help = crate::modes_help("compare"))]
     modes: Vec<String>,
     /// Give each mode this many seconds of wall time (preparation included) instead of a fixed
-    /// number of passes; it stops after the pass that reaches the budget.
-    #[arg(long, conflicts_with = "passes")]
+    /// number of passes; it stops after the pass that reaches the budget, and has at least
+    /// one pass even when its preparation alone took longer (the report says so).
+    #[arg(long, conflicts_with = "passes", allow_negative_numbers = true, value_parser = positive)]
     time_budget: Option<f64>,
     /// Reference image (EXR with R, G, B; a `stderr` layer is used when present). Default: a
-    /// `light` render, cached under out/.
+    /// `light` render, cached in the output directory (its estimated time is printed after
+    /// its first pass, its own error once it is done).
     #[arg(long)]
     reference: Option<PathBuf>,
     /// Passes of the rendered reference (default: 16 × the study's passes).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u32>)]
     reference_passes: Option<u32>,
     /// Photons per pass of the rendered reference (default: the study's N_F).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u64>)]
     reference_photons: Option<u64>,
     /// The clock of the time axis, the equal-time comparison and the efficiency: `wall`, or
     /// `cpu` (the process's CPU time, user + system: steadier on a shared machine). Both are
@@ -66,6 +68,12 @@ pub struct StudyArgs {
     /// Output directory (default: out/study-<scene>).
     #[arg(short = 'o', long = "output")]
     output: Option<PathBuf>,
+    /// Refuse to start when the estimated peak memory exceeds this, e.g. 8G or 512M (K, M,
+    /// G, T are powers of 1024): every entry's renderer is prepared and held while the modes
+    /// take their passes in turn, and the reference render comes first. Default: the memory
+    /// available on this machine (MemAvailable of /proc/meminfo), no limit where unknown.
+    #[arg(long, value_parser = parse_bytes)]
+    max_memory: Option<u64>,
     /// Do not draw progress bars.
     #[arg(long)]
     quiet: bool,
@@ -511,6 +519,8 @@ struct ModeState<'a> {
     wall: f64,
     /// The mode's process CPU time so far, preparation included, s (NaN if unknown).
     cpu: f64,
+    /// The mode's time on the study's clock when its preparation ended, s.
+    prepared_at: f64,
     renderer: Renderer<'a>,
     stages: Vec<(String, f64)>,
     film: Film,
@@ -518,6 +528,13 @@ struct ModeState<'a> {
     /// `lum` over the even passes (0, 2, …) and over the odd ones.
     halves: [PixelStats; 2],
     points: Vec<PassPoint>,
+}
+
+/// What [`Study::finish`] hands the report: the runs, the previews written and the notes.
+struct Finished {
+    runs: Vec<ModeRun>,
+    files: Vec<String>,
+    notes: Vec<String>,
 }
 
 /// The reference's own error, as the amounts it adds to a squared-error figure.
@@ -623,30 +640,49 @@ struct RefFacts {
     rel_mse_floor: f64,
 }
 
-/// The markdown report: settings, reference, and the per-mode table.
-fn markdown(
-    header: &str,
-    refs: &RefFacts,
-    runs: &[ModeRun],
-    baseline: &str,
-    clock: &str,
-    regional: &str,
-    files: &[String],
-) -> String {
-    let mut s = String::new();
-    let _ = writeln!(s, "{header}\n");
-    let floor = match refs.floor {
-        Some(f) => format!(
-            "its own error (RMSE-equivalent of its standard error, an upper bound) is {:.3e} \
-             W·m⁻²·sr⁻¹ = {:.3}% relative",
-            f,
-            100.0 * f / refs.mean_lum
-        ),
-        None => "its own error is unknown (no stderr layer)".into(),
-    };
+impl RefFacts {
+    /// What is known of the reference's own error, for the report and the terminal.
+    fn own_error(&self) -> String {
+        match self.floor {
+            Some(f) => format!(
+                "its own error (RMSE-equivalent of its standard error, an upper bound) is \
+                 {f:.3e} W·m⁻²·sr⁻¹ = {:.3}% relative",
+                100.0 * f / self.mean_lum
+            ),
+            None => "its own error is unknown (no stderr layer)".into(),
+        }
+    }
+
+    /// A warning when the reference's own relative error is at least half the smallest
+    /// final rel. RMSE of the modes (`runs`, the reference's error subtracted): their error
+    /// figures are then differences of near numbers, and a longer reference is needed.
+    fn warning(&self, runs: &[ModeRun]) -> Option<String> {
+        let own = self.floor? / self.mean_lum;
+        let (name, best) = runs
+            .iter()
+            .filter_map(|r| Some((&r.name, r.final_point()?.rel_rmse)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))?;
+        (own >= 0.5 * best).then(|| {
+            format!(
+                "the reference's own error ({:.2}% relative) is not small against the modes' \
+                 errors (the smallest, `{name}`'s, {:.2}% after subtracting it): the figures \
+                 are uncertain; render a longer reference (--reference-passes) or give a \
+                 converged one (--reference)",
+                100.0 * own,
+                100.0 * best
+            )
+        })
+    }
+}
+
+/// The report's paragraphs before the table: the reference, its own error (with a warning
+/// when it is not small) and how the figures are made.
+fn preamble(s: &mut String, refs: &RefFacts, runs: &[ModeRun], baseline: &str, clock: &str) {
     let subtracted = if refs.floor.is_some() {
         format!(
-            " Every error figure (RMSE, rel. RMSE, relMSE) has the reference's own error              subtracted: its variance per pixel from the squared error (relMSE {:.3e}), floored              at 1 % of it.",
+            " Every error figure (RMSE, rel. RMSE, relMSE) has the reference's own error \
+             subtracted: its variance per pixel from the squared error (relMSE {:.3e}), floored \
+             at 1 % of it.",
             refs.rel_mse_floor
         )
     } else {
@@ -654,9 +690,14 @@ fn markdown(
     };
     let _ = writeln!(
         s,
-        "Reference: {}; mean luminance {:.4e} W·m⁻²·sr⁻¹; {floor}.\n",
-        refs.origin, refs.mean_lum
+        "Reference: {}; mean luminance {:.4e} W·m⁻²·sr⁻¹; {}.\n",
+        refs.origin,
+        refs.mean_lum,
+        refs.own_error()
     );
+    if let Some(w) = refs.warning(runs) {
+        let _ = writeln!(s, "**Warning:** {w}.\n");
+    }
     let t_eq = equal_time(runs);
     let _ = writeln!(
         s,
@@ -671,6 +712,22 @@ fn markdown(
          1/(relV · {clock} time per pass), relative to `{baseline}`. Without bias, relMSE after \
          K passes is relV/K.{subtracted}\n"
     );
+}
+
+/// The markdown report: settings, reference, and the per-mode table.
+fn markdown(
+    header: &str,
+    refs: &RefFacts,
+    runs: &[ModeRun],
+    baseline: &str,
+    clock: &str,
+    after_table: &str,
+    files: &[String],
+) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "{header}\n");
+    preamble(&mut s, refs, runs, baseline, clock);
+    let t_eq = equal_time(runs);
     let _ = writeln!(
         s,
         "| mode | passes | prep (s) | wall s/pass | CPU s/pass | mean V | relV | rel. RMSE | relMSE | rel. RMSE at {t_eq:.2} s | relMSE at {t_eq:.2} s | efficiency vs {baseline} | efficiency in relV |"
@@ -723,8 +780,8 @@ fn markdown(
             ratio(r.rel_v, base_rel, r.seconds_per_pass()),
         );
     }
-    if !regional.is_empty() {
-        let _ = writeln!(s, "\n{regional}");
+    if !after_table.is_empty() {
+        let _ = writeln!(s, "\n{after_table}");
     }
     let dropped: u64 = runs.iter().map(|r| r.dropped).sum();
     if dropped > 0 {
@@ -782,9 +839,14 @@ struct Study<'a> {
     load_before: String,
     /// Whether the time axis is the process CPU time.
     use_cpu: bool,
+    /// The estimated peak of the modes' renderers held together, and of the reference
+    /// render when there was one.
+    memory: MemoryEstimate,
+    reference_memory: Option<MemoryEstimate>,
 }
 
-/// Checks the arguments, loads the scene and reads or renders the reference.
+/// Checks the arguments, loads the scene, refuses a study that would not fit in memory, and
+/// reads or renders the reference.
 fn prepare(args: &StudyArgs) -> CliResult<Study<'_>> {
     if args.overrides.mode.is_some() {
         return Err("study: use --modes (a comma-separated list), not --mode".into());
@@ -797,6 +859,7 @@ fn prepare(args: &StudyArgs) -> CliResult<Study<'_>> {
         ));
     }
     let variants = crate::parse_modes(&args.modes)?;
+    check_preview_names(&variants)?;
     let loaded = cli_prepare(&args.scene, &args.overrides)?;
     let pool = thread_pool(args.overrides.threads)?;
     let stem = stem_of(&args.scene, "scene");
@@ -804,7 +867,11 @@ fn prepare(args: &StudyArgs) -> CliResult<Study<'_>> {
         .output
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(format!("study-{stem}")));
-    let reference = study_reference(args, &variants, &loaded, &dir, &pool)?;
+    let limit = MemoryLimit::of(args.max_memory);
+    let memory = memory_gate(args, &variants, &loaded, &pool, limit)?;
+    claim_directory(&dir)?;
+    let (reference, reference_memory) =
+        study_reference(args, &variants, &loaded, &dir, &pool, limit)?;
     let (w, h) = (loaded.settings.width, loaded.settings.height);
     if (reference.width, reference.height) != (w, h) {
         return Err(format!(
@@ -835,6 +902,9 @@ fn prepare(args: &StudyArgs) -> CliResult<Study<'_>> {
         floor: reference.stderr.as_ref().map(|_| floor.mse.sqrt()),
         rel_mse_floor: floor.rel_mse,
     };
+    if !args.quiet {
+        bdpm_output::say_err!("reference: {}", refs.own_error());
+    }
     let load_before = load_average();
     let use_cpu = args.clock == "cpu";
     if use_cpu && process_cpu_seconds().is_none() {
@@ -854,18 +924,94 @@ fn prepare(args: &StudyArgs) -> CliResult<Study<'_>> {
         refs,
         load_before,
         use_cpu,
+        memory,
+        reference_memory,
     })
 }
 
+/// Refuses an output directory that is a file, creates it, and checks that a file can be
+/// created in it: before the reference and the modes run, not after.
+fn claim_directory(dir: &Path) -> CliResult<()> {
+    if std::fs::metadata(dir).is_ok_and(|m| !m.is_dir()) {
+        return Err(format!(
+            "-o {}: it is a file; study writes a directory (of CSV, plots and previews)",
+            dir.display()
+        ));
+    }
+    std::fs::create_dir_all(dir)
+        .map_err(|e| format!("-o {}: cannot create the directory: {e}", dir.display()))?;
+    let probe = dir.join(format!(".bdpm-study-probe-{}", std::process::id()));
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+        .map_err(|e| format!("-o {}: cannot write in the directory: {e}", dir.display()))?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
+}
+
+/// Refuses entries whose previews would be one file ([`preview_name`] maps every character
+/// but letters, digits, '.', '_' and '-' to '_', and a file system may ignore case): one
+/// preview would replace the other.
+fn check_preview_names(variants: &[crate::Variant]) -> CliResult<()> {
+    for (i, v) in variants.iter().enumerate() {
+        let file = preview_name(&v.name);
+        if let Some(w) = variants[..i]
+            .iter()
+            .find(|w| preview_name(&w.name).eq_ignore_ascii_case(&file))
+        {
+            return Err(format!(
+                "--modes: '{}' and '{}' would both write the preview {file}; write the entries \
+                 so that they differ in letters, digits, '.', '_' or '-'",
+                w.name, v.name
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Refuses, before the reference or any mode runs, a study whose renderers would not fit in
+/// memory together: every entry's renderer is prepared and held, then the modes take their
+/// passes one at a time ([`memory::held_together`]), beside the reference image. Returns the
+/// estimate.
+fn memory_gate(
+    args: &StudyArgs,
+    variants: &[crate::Variant],
+    loaded: &Prepared,
+    pool: &rayon::ThreadPool,
+    limit: MemoryLimit,
+) -> CliResult<MemoryEstimate> {
+    let estimates: Vec<MemoryEstimate> =
+        crate::entry_estimates(&loaded.scene, variants, &loaded.settings, pool)?
+            .into_iter()
+            .map(|(_, e)| e)
+            .collect();
+    let mut total = memory::held_together(&estimates);
+    let pixels = loaded.settings.width as u64 * loaded.settings.height as u64;
+    total.items.push(MemoryItem {
+        name: "reference image",
+        bytes: pixels * REFERENCE_BYTES_PER_PIXEL,
+        lower: "--resolution",
+    });
+    crate::refuse_above_limit(&args.scene, "study", &total, variants, &estimates, limit)?;
+    Ok(total)
+}
+
+/// Bytes per pixel of the reference the study holds: its mean and standard error (RGB, f64)
+/// and its luminance and variance (f64).
+const REFERENCE_BYTES_PER_PIXEL: u64 = 2 * 24 + 2 * 8;
+
 /// The reference: read from `--reference` (which must not be one of the study's outputs) or
-/// a `light` render, cached.
+/// a `light` render, cached in the study's directory `dir`; with the estimated peak memory of
+/// the render when there was one.
 fn study_reference(
     args: &StudyArgs,
     variants: &[crate::Variant],
     loaded: &Prepared,
     dir: &Path,
     pool: &rayon::ThreadPool,
-) -> CliResult<reference::Reference> {
+    limit: MemoryLimit,
+) -> CliResult<(reference::Reference, Option<MemoryEstimate>)> {
     let settings = &loaded.settings;
     let hash = scene_hash(&args.scene, &loaded.report.gltf_files)?;
     if let Some(path) = &args.reference {
@@ -880,7 +1026,8 @@ fn study_reference(
         let members: Vec<&Path> = members.iter().map(PathBuf::as_path).collect();
         refuse_inputs(&members, &[path], &[])?;
     }
-    Ok(match &args.reference {
+    let mut rendered = None;
+    let reference = match &args.reference {
         Some(path) => {
             let mut r = reference::read_exr(path)?;
             // A reference of another scene gives errors that mean nothing; one made by
@@ -901,7 +1048,10 @@ fn study_reference(
                 None => settings.photons,
             };
             let rs = reference::reference_settings(settings, passes, photons);
-            let path = reference::cache_path(&args.scene, &hash, &rs)?;
+            let path = reference::cache_path(dir, &args.scene, &hash, &rs);
+            if !path.exists() {
+                rendered = Some(reference_memory_gate(args, loaded, &rs, pool, limit)?);
+            }
             let mut r =
                 reference::cached_or_render(&loaded.scene, &hash, &rs, &path, pool, args.quiet)?;
             r.origin = format!(
@@ -910,7 +1060,33 @@ fn study_reference(
             );
             r
         }
-    })
+    };
+    Ok((reference, rendered))
+}
+
+/// Refuses a reference render (settings `rs`) that would not fit in memory, naming the
+/// flags that shape it; returns its estimate.
+fn reference_memory_gate(
+    args: &StudyArgs,
+    loaded: &Prepared,
+    rs: &RenderSettings,
+    pool: &rayon::ThreadPool,
+    limit: MemoryLimit,
+) -> CliResult<MemoryEstimate> {
+    let e = pool.install(|| estimate_memory(&loaded.scene, rs, false));
+    match limit.exceeded_by(e.total()) {
+        Some(_) => Err(format!(
+            "{}: the study's reference render (`light`, N_F = {}) needs about {} ({}), more \
+             than {}; lower --reference-photons or --resolution, give --reference FILE, or \
+             raise --max-memory",
+            args.scene.display(),
+            rs.photons,
+            human_bytes(e.total()),
+            memory::parts(&e),
+            limit.describe()
+        )),
+        None => Ok(e),
+    }
 }
 
 impl Study<'_> {
@@ -930,19 +1106,22 @@ impl Study<'_> {
             let renderer = self
                 .pool
                 .install(|| Renderer::new(&self.loaded.scene, &s))
-                .map_err(|e| format!("{}: mode {name}: {e}", self.args.scene.display()))?;
+                .map_err(|e| {
+                    format!("{}: --modes entry '{name}': {e}", self.args.scene.display())
+                })?;
             let stages = renderer
                 .stages()
                 .iter()
                 .map(|st| (st.stage.name().to_string(), st.seconds))
                 .collect();
+            // The mode's clock: preparation plus its passes, not the metrics computed between.
+            let (wall, cpu) = (t0.elapsed().as_secs_f64(), self.cpu_now() - c0);
             states.push(ModeState {
                 name: name.clone(),
                 passes: s.passes,
-                // The mode's clock: preparation plus its passes, not the metrics computed
-                // between.
-                wall: t0.elapsed().as_secs_f64(),
-                cpu: self.cpu_now() - c0,
+                wall,
+                cpu,
+                prepared_at: if self.use_cpu { cpu } else { wall },
                 renderer,
                 stages,
                 film: Film::new(w, h),
@@ -954,8 +1133,12 @@ impl Study<'_> {
         Ok(states)
     }
 
-    /// Whether a mode has had its passes, or its time budget.
+    /// Whether a mode has had its passes, or its time budget. Every mode has at least one
+    /// pass: one whose preparation alone took the budget is reported with it, not dropped.
     fn done(&self, m: &ModeState<'_>) -> bool {
+        if m.points.is_empty() {
+            return false;
+        }
         match self.args.time_budget {
             Some(budget) => (if self.use_cpu { m.cpu } else { m.wall }) >= budget,
             None => m.points.len() as u32 >= m.passes,
@@ -1030,12 +1213,27 @@ impl Study<'_> {
         });
     }
 
-    /// Writes each mode's preview and turns the modes into their runs; returns the runs and
-    /// the previews written.
-    fn finish(&self, states: Vec<ModeState<'_>>) -> CliResult<(Vec<ModeRun>, Vec<String>)> {
+    /// Writes each mode's preview and turns the modes into their runs; returns the runs, the
+    /// previews written and the notes for the report (a mode whose preparation alone took
+    /// longer than the time budget).
+    fn finish(&self, states: Vec<ModeState<'_>>) -> CliResult<Finished> {
         let mut runs = Vec::new();
         let mut files = Vec::new();
+        let mut notes = Vec::new();
         for m in states {
+            if let Some(budget) = self.args.time_budget
+                && m.prepared_at >= budget
+            {
+                notes.push(format!(
+                    "`{}`'s preparation took {:.2} s of {} time, more than the time budget of \
+                     {budget} s: it had {} pass(es), {:.2} s in all",
+                    m.name,
+                    m.prepared_at,
+                    self.args.clock,
+                    m.points.len(),
+                    m.points.last().map_or(m.prepared_at, |p| p.time)
+                ));
+            }
             let variance = m.lum.variance();
             let mean_v = variance.as_ref().map_or(f64::NAN, |v| mean(v));
             let rel_v = variance
@@ -1071,12 +1269,34 @@ impl Study<'_> {
             }
             runs.push(run);
         }
-        Ok((runs, files))
+        if !self.args.quiet {
+            for n in notes.iter().chain(&self.refs.warning(&runs)) {
+                bdpm_output::say_err!("note: {}", n.replace('`', ""));
+            }
+        }
+        Ok(Finished { runs, files, notes })
+    }
+
+    /// The paragraphs after the report's table: the regional choice, then the notes.
+    fn after_table(&self, runs: &[ModeRun], notes: &[String]) -> String {
+        let regional = regional_paragraph(
+            runs,
+            &self.ref_lum,
+            &self.ref_var,
+            self.loaded.settings.width as usize,
+            &self.args.clock,
+            equal_time(runs),
+        );
+        std::iter::once(regional)
+            .chain(notes.iter().map(|n| format!("Note: {n}.")))
+            .filter(|p| !p.is_empty())
+            .collect::<Vec<_>>()
+            .join("\n\n")
     }
 
     /// Writes the previews, the CSV, the plots and the markdown report.
     fn write(&self, states: Vec<ModeState<'_>>) -> CliResult<()> {
-        let (runs, files) = self.finish(states)?;
+        let Finished { runs, files, notes } = self.finish(states)?;
         let (args, settings, dir) = (self.args, &self.loaded.settings, &self.dir);
         let (stem, w, h) = (&self.stem, settings.width, settings.height);
         let csv_path = dir.join("study.csv");
@@ -1130,21 +1350,13 @@ impl Study<'_> {
             }
         }
         all_files.extend(files);
-        let regional = regional_paragraph(
-            &runs,
-            &self.ref_lum,
-            &self.ref_var,
-            w as usize,
-            &args.clock,
-            equal_time(&runs),
-        );
         let md = markdown(
             &self.header(),
             &self.refs,
             &runs,
             &baseline,
             &args.clock,
-            &regional,
+            &self.after_table(&runs, &notes),
             &all_files,
         );
         crate::publish(&dir.join("study.md"), &md)
@@ -1170,10 +1382,29 @@ impl Study<'_> {
         let command: Vec<String> = std::env::args().collect();
         format!(
             "{header}\n\nCommand: `{}`\n\nLoad average (1, 5, 15 min) {} before the modes ran, {} after: \
-             wall times depend on what else the machine runs.",
+             wall times depend on what else the machine runs.\n\n{}",
             command.join(" "),
             self.load_before,
-            load_average()
+            load_average(),
+            self.memory_line()
+        )
+    }
+
+    /// The memory estimates the study was admitted with, and the measured peak.
+    fn memory_line(&self) -> String {
+        let reference = self.reference_memory.as_ref().map_or(String::new(), |e| {
+            format!(
+                ", the reference render before them at {} ({})",
+                human_bytes(e.total()),
+                memory::parts(e)
+            )
+        });
+        let peak = peak_resident_memory().map_or("unknown".into(), human_bytes);
+        format!(
+            "Memory: the modes' renderers held together were estimated at {} ({}){reference}; \
+             the measured peak resident memory (VmHWM) is {peak}.",
+            human_bytes(self.memory.total()),
+            memory::parts(&self.memory)
         )
     }
 }

@@ -13,6 +13,7 @@ pub mod cli;
 pub mod colormap;
 pub mod exr;
 pub mod files;
+pub mod memory;
 pub mod plot;
 pub mod preview;
 pub mod report;

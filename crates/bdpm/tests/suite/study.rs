@@ -7,7 +7,7 @@ fn scene() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/sphere-furnace.toml")
 }
 
-/// Runs the study in `cwd` (the reference is cached under `cwd/out`) writing into `cwd/<out>`.
+/// Runs the study in `cwd` writing into `cwd/<out>`, where the reference is cached.
 fn study(cwd: &Path, out: &str) -> String {
     let output = Command::new(env!("CARGO_BIN_EXE_bdpm"))
         .current_dir(cwd)
@@ -99,8 +99,10 @@ fn study_writes_csv_plots_and_table_deterministically() {
             && md.contains("Counting the kernel bias"),
         "{md}"
     );
-    let cached: Vec<_> = std::fs::read_dir(dir.join("out"))
-        .expect("out/")
+    // The reference is cached in the study's directory, not under the working directory.
+    assert!(!dir.join("out").exists());
+    let cached: Vec<_> = std::fs::read_dir(dir.join("a"))
+        .expect("a/")
         .filter_map(|e| e.ok())
         .filter(|e| {
             e.file_name()
@@ -111,6 +113,8 @@ fn study_writes_csv_plots_and_table_deterministically() {
     assert_eq!(cached.len(), 1, "one cached reference");
 
     // Again, now with the cached reference: the same errors.
-    let again = study(dir, "b");
+    let again = study(dir, "a");
     assert_eq!(without_times(&csv), without_times(&again));
+    let md = std::fs::read_to_string(dir.join("a/study.md")).expect("md");
+    assert!(md.contains("; cached "), "{md}");
 }
