@@ -163,6 +163,7 @@ pub(crate) fn load_gltf(
                     Some(m) => (m, None),
                     None => {
                         let mut seen = Seen {
+                            json: doc.as_json(),
                             materials: &mut material_map,
                             images: &mut images,
                             part: &mut part,
@@ -239,6 +240,8 @@ fn node_light<'a>(
 /// What one file's walk has met so far: its materials (scene index and the texture-coordinate
 /// set of their base-colour texture), its decoded images, and the counts in `part`.
 struct Seen<'a> {
+    /// The file's JSON, read directly where the `gltf` crate's accessors would panic.
+    json: &'a gltf::json::Root,
     materials: &'a mut HashMap<usize, (u32, Option<u32>)>,
     images: &'a mut HashMap<(usize, Wrap, Wrap), Arc<Texture>>,
     part: &'a mut GltfPart,
@@ -330,45 +333,7 @@ fn base_colour_texture(
         image.index()
     );
     let err = |m: String| origin.err(format!("{what}: {m}"));
-    let bytes: Vec<u8> = match image.source() {
-        gltf::image::Source::View { view, .. } => {
-            let data = buffers
-                .get(view.buffer().index())
-                .ok_or_else(|| err("its bufferView's buffer is missing".into()))?;
-            let end = view.offset().checked_add(view.length());
-            match end {
-                Some(end) if end <= data.len() => data[view.offset()..end].to_vec(),
-                _ => {
-                    return Err(err(format!(
-                        "bufferView {} reaches past the end of buffer {}",
-                        view.index(),
-                        view.buffer().index()
-                    )));
-                }
-            }
-        }
-        gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => {
-            let (header, payload) = uri
-                .split_once(',')
-                .ok_or_else(|| err("malformed data URI".into()))?;
-            if !header.ends_with(";base64") {
-                return Err(err("only base64 data URIs are supported".into()));
-            }
-            base64::engine::general_purpose::STANDARD
-                .decode(payload)
-                .map_err(|e| err(format!("bad base64 in data URI: {e}")))?
-        }
-        gltf::image::Source::Uri { uri, .. } => {
-            let dir = origin.path.parent().unwrap_or(Path::new(""));
-            let file = crate::files::confined_uri(dir, uri).map_err(|e| err(e.to_string()))?;
-            crate::files::read_regular(&file, crate::limits::MAX_GLTF_BYTES, "texture image")
-                .map_err(|message| LoadError::Gltf {
-                    path: file.clone(),
-                    field: format!("{}, {what} of {}", origin.field, origin.path.display()),
-                    message,
-                })?
-        }
-    };
+    let bytes = image_bytes(origin, seen.json, image.index(), buffers, &what)?;
     let decoded = crate::image::decode(&bytes).map_err(err)?;
     let texture = Texture::new(
         decoded.width,
@@ -382,6 +347,69 @@ fn base_colour_texture(
     let _ = seen.images.insert(key, Arc::clone(&texture));
     seen.part.textures += 1;
     Ok(texture)
+}
+
+/// The encoded bytes of image `index`: a bufferView's bytes (GLB, or any buffer), a base64
+/// `data:` URI, or a PNG or JPEG file next to the glTF file. Read from the JSON directly: the
+/// `gltf` crate's `Image::source` panics on an image with a bufferView but no mimeType, and on
+/// one with neither a bufferView nor a uri. The mimeType is not needed (images are recognised
+/// by their first bytes).
+fn image_bytes(
+    origin: &Origin<'_>,
+    json: &gltf::json::Root,
+    index: usize,
+    buffers: &[Vec<u8>],
+    what: &str,
+) -> Result<Vec<u8>, LoadError> {
+    let err = |m: String| origin.err(format!("{what}: {m}"));
+    let image = json
+        .images
+        .get(index)
+        .ok_or_else(|| err(format!("image {index} does not exist")))?;
+    if let Some(view) = &image.buffer_view {
+        let v = view.value();
+        let view = json
+            .buffer_views
+            .get(v)
+            .ok_or_else(|| err(format!("bufferView {v} does not exist")))?;
+        let b = view.buffer.value();
+        let data = buffers
+            .get(b)
+            .ok_or_else(|| err(format!("bufferView {v}: buffer {b} does not exist")))?;
+        let start = view.byte_offset.map_or(0, |o| o.0) as usize;
+        return match start.checked_add(view.byte_length.0 as usize) {
+            Some(end) if end <= data.len() => Ok(data[start..end].to_vec()),
+            _ => Err(err(format!(
+                "bufferView {v} reaches past the end of buffer {b} ({} bytes)",
+                data.len()
+            ))),
+        };
+    }
+    let Some(uri) = &image.uri else {
+        return Err(err(
+            "has neither a uri nor a bufferView, so there are no image bytes to read".into(),
+        ));
+    };
+    if uri.starts_with("data:") {
+        let (header, payload) = uri
+            .split_once(',')
+            .ok_or_else(|| err("malformed data URI (no comma)".into()))?;
+        if !header.ends_with(";base64") {
+            return Err(err("only base64 data URIs are supported".into()));
+        }
+        return base64::engine::general_purpose::STANDARD
+            .decode(payload)
+            .map_err(|e| err(format!("bad base64 in data URI: {e}")));
+    }
+    let dir = origin.path.parent().unwrap_or(Path::new(""));
+    let file = crate::files::confined_uri(dir, uri).map_err(err)?;
+    crate::files::read_regular(&file, crate::limits::MAX_GLTF_BYTES, "texture image").map_err(
+        |message| LoadError::Gltf {
+            path: file.clone(),
+            field: format!("{}, {what} of {}", origin.field, origin.path.display()),
+            message,
+        },
+    )
 }
 
 /// Appends one triangle primitive, transformed by `world`, to `part`, with the texture

@@ -4,6 +4,7 @@
 //! per package instead of one per file.
 
 mod cli;
+mod round4_textures;
 mod scripts;
 mod study;
 

@@ -1,0 +1,216 @@
+//! Round four (issue 43): textures, glTF images and the scene's memory, through the binary.
+//! Every glTF, PNG and JPEG file is made by the test itself.
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bdpm() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_bdpm"))
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// Exit code 1 (not a panic's 101 or an abort's 134) and exactly one line on stderr
+/// containing every `needle`.
+fn assert_one_line_error(out: &Output, needles: &[&str]) {
+    let stderr = text(&out.stderr);
+    assert!(!stderr.contains("panicked"), "panic: {stderr}");
+    assert_eq!(out.status.code(), Some(1), "stderr: {stderr}");
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 1, "not one line: {stderr}");
+    assert!(lines[0].starts_with("bdpm: error: "), "{stderr}");
+    for n in needles {
+        assert!(lines[0].contains(n), "'{n}' not in: {stderr}");
+    }
+}
+
+fn assert_success(out: &Output) {
+    assert!(
+        out.status.success(),
+        "bdpm failed ({:?}):\nstdout: {}\nstderr: {}",
+        out.status,
+        text(&out.stdout),
+        text(&out.stderr)
+    );
+}
+
+fn read_json(path: &Path) -> serde_json::Value {
+    let s = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    serde_json::from_str(&s).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// A scene of one or more `[[shape]]`s naming `files` (glTF files in the scene's folder),
+/// seen by a camera at z = −2 with a light in front of them.
+fn scene_text(files: &[&str]) -> String {
+    let mut s = String::from(
+        r#"
+[render]
+resolution = [8, 8]
+passes = 1
+photons = 1000
+spp = 1
+mode = "path"
+
+[camera]
+position = [0.0, 0.0, -2.0]
+look_at = [0.0, 0.0, 0.0]
+vfov = 40
+
+[[light]]
+position = [0.1, 0.2, -1.0]
+flux = 4.0
+"#,
+    );
+    for f in files {
+        s.push_str(&format!("\n[[shape]]\ntype = \"mesh\"\nfile = \"{f}\"\n"));
+    }
+    s
+}
+
+/// Renders the scene file `name` (written with `text`) in `dir` with `extra` arguments.
+fn render(dir: &Path, name: &str, scene: &str, extra: &[&str]) -> Output {
+    let path = dir.join(format!("{name}.toml"));
+    std::fs::write(&path, scene).expect("write scene");
+    bdpm()
+        .arg("render")
+        .arg(&path)
+        .args(extra)
+        .args(["--quiet", "-o"])
+        .arg(dir.join(format!("{name}.exr")))
+        .output()
+        .expect("run bdpm")
+}
+
+/// An 8-bit RGB PNG of `w` × `h` texels, a gradient.
+fn png_rgb(w: u32, h: u32) -> Vec<u8> {
+    let mut data = Vec::with_capacity((w * h * 3) as usize);
+    for y in 0..h {
+        for x in 0..w {
+            data.extend_from_slice(&[(x * 255 / w.max(1)) as u8, (y * 255 / h.max(1)) as u8, 90]);
+        }
+    }
+    let mut out = Vec::new();
+    let mut e = png::Encoder::new(&mut out, w, h);
+    e.set_color(png::ColorType::Rgb);
+    e.set_depth(png::BitDepth::Eight);
+    let mut writer = e.write_header().expect("png header");
+    writer.write_image_data(&data).expect("png data");
+    writer.finish().expect("png end");
+    out
+}
+
+/// The quad x, y ∈ [−0.5, 0.5] m at z = 0 facing −z: positions (48 bytes), texture
+/// coordinates (32 bytes) and u16 indices (12 bytes).
+fn quad_bin() -> Vec<u8> {
+    let corners = [[-0.5f32, 0.5], [-0.5, -0.5], [0.5, -0.5], [0.5, 0.5]];
+    let mut b = Vec::new();
+    for [x, y] in corners {
+        for c in [x, y, 0.0] {
+            b.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for [x, y] in corners {
+        for c in [x + 0.5, 0.5 - y] {
+            b.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for i in [0u16, 1, 2, 0, 2, 3] {
+        b.extend_from_slice(&i.to_le_bytes());
+    }
+    b
+}
+
+/// Writes `name.gltf` and `name.bin` in `dir`: the quad, drawn by `materials` primitives
+/// (one per material, all over the same accessors), material k using texture k, whose
+/// sampler k has its own wrap modes, and every texture showing image 0, `image` (a JSON
+/// object). `embedded` is appended to the buffer after the quad as bufferView 3 (when not
+/// empty), for images stored in the buffer.
+fn textured_quad(dir: &Path, name: &str, image: &str, embedded: &[u8], materials: usize) {
+    let mut bin = quad_bin();
+    let quad_len = bin.len();
+    bin.extend_from_slice(embedded);
+    std::fs::write(dir.join(format!("{name}.bin")), &bin).expect("write bin");
+    let wraps = [33071, 33648, 10497];
+    let list = |f: &dyn Fn(usize) -> String| (0..materials).map(f).collect::<Vec<_>>().join(", ");
+    let samplers = list(&|k| {
+        format!(
+            r#"{{ "wrapS": {}, "wrapT": {} }}"#,
+            wraps[k % 3],
+            wraps[(k / 3) % 3]
+        )
+    });
+    let textures = list(&|k| format!(r#"{{ "source": 0, "sampler": {k} }}"#));
+    let mats = list(&|k| {
+        format!(r#"{{ "pbrMetallicRoughness": {{ "baseColorTexture": {{ "index": {k} }} }} }}"#)
+    });
+    let prims = list(&|k| {
+        format!(
+            r#"{{ "attributes": {{ "POSITION": 0, "TEXCOORD_0": 1 }}, "indices": 2, "material": {k} }}"#
+        )
+    });
+    let embedded_view = if embedded.is_empty() {
+        String::new()
+    } else {
+        format!(
+            r#", {{ "buffer": 0, "byteOffset": {quad_len}, "byteLength": {} }}"#,
+            embedded.len()
+        )
+    };
+    let gltf = format!(
+        r#"{{
+  "asset": {{ "version": "2.0" }},
+  "buffers": [ {{ "byteLength": {}, "uri": "{name}.bin" }} ],
+  "bufferViews": [
+    {{ "buffer": 0, "byteOffset": 0, "byteLength": 48 }},
+    {{ "buffer": 0, "byteOffset": 48, "byteLength": 32 }},
+    {{ "buffer": 0, "byteOffset": 80, "byteLength": 12 }}{embedded_view}
+  ],
+  "accessors": [
+    {{ "bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-0.5, -0.5, 0], "max": [0.5, 0.5, 0] }},
+    {{ "bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2" }},
+    {{ "bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR" }}
+  ],
+  "images": [ {image} ],
+  "samplers": [ {samplers} ],
+  "textures": [ {textures} ],
+  "materials": [ {mats} ],
+  "meshes": [ {{ "primitives": [ {prims} ] }} ],
+  "nodes": [ {{ "mesh": 0 }} ],
+  "scenes": [ {{ "nodes": [0] }} ]
+}}"#,
+        bin.len()
+    );
+    std::fs::write(dir.join(format!("{name}.gltf")), gltf).expect("write gltf");
+}
+
+fn temp() -> (tempfile::TempDir, PathBuf) {
+    let t = crate::temp_dir("round4-textures");
+    let p = t.path().to_path_buf();
+    (t, p)
+}
+
+/// Finding 1: an image in a bufferView without a mimeType, and an image with neither a uri
+/// nor a bufferView, made the `gltf` crate panic (exit 101). The first is decoded (images are
+/// recognised by their bytes), the second refused in one line naming the file and the image.
+#[test]
+fn gltf_images_without_mime_type_or_source_do_not_panic() {
+    let (_t, dir) = temp();
+    textured_quad(&dir, "nomime", r#"{ "bufferView": 3 }"#, &png_rgb(4, 4), 1);
+    let out = render(&dir, "nomime", &scene_text(&["nomime.gltf"]), &[]);
+    assert_success(&out);
+    let json = read_json(&dir.join("nomime.json"));
+    assert_eq!(json["scene"]["gltf"]["textures"], 1, "{}", json["scene"]);
+
+    textured_quad(&dir, "nosource", r#"{ "name": "lost" }"#, &[], 1);
+    let out = render(&dir, "nosource", &scene_text(&["nosource.gltf"]), &[]);
+    assert_one_line_error(
+        &out,
+        &[
+            "nosource.gltf",
+            "shape[0].file",
+            "image 0",
+            "neither a uri nor a bufferView",
+        ],
+    );
+}
