@@ -87,21 +87,169 @@ fn decode_png(bytes: &[u8]) -> Result<Decoded, String> {
     })
 }
 
+/// What the marker segments of a JPEG say, before any decoding.
+struct JpegLayout {
+    width: u32,
+    height: u32,
+    /// Progressive (SOF2, SOF6, SOF10, SOF14) rather than sequential.
+    progressive: bool,
+    /// Horizontal and vertical sampling factors of each component.
+    sampling: Vec<(u8, u8)>,
+    /// Scans (SOS segments).
+    scans: usize,
+    /// Bytes of entropy-coded data over all scans.
+    coded_bytes: u64,
+}
+
+impl JpegLayout {
+    /// The fewest bytes of entropy-coded data that can describe the image: every 8 × 8 block
+    /// of every component costs at least one bit in a progressive file (its DC code) and two
+    /// in a sequential one (a DC code and an AC code or end-of-block), as Huffman codes are at
+    /// least one bit long.
+    fn least_coded_bytes(&self) -> u64 {
+        let h_max = u64::from(self.sampling.iter().map(|s| s.0).max().unwrap_or(1));
+        let v_max = u64::from(self.sampling.iter().map(|s| s.1).max().unwrap_or(1));
+        let (w, h) = (u64::from(self.width), u64::from(self.height));
+        let blocks: u64 = self
+            .sampling
+            .iter()
+            .map(|&(hc, vc)| {
+                let cw = (w * u64::from(hc)).div_ceil(h_max);
+                let ch = (h * u64::from(vc)).div_ceil(v_max);
+                cw.div_ceil(8) * ch.div_ceil(8)
+            })
+            .sum();
+        let bits_per_block = if self.progressive { 1 } else { 2 };
+        (blocks * bits_per_block).div_ceil(8)
+    }
+}
+
+/// Walks the JPEG's marker segments (zune-jpeg does not report them, and it decodes a file
+/// whose data stop early by filling the missing blocks with grey, even in strict mode, when an
+/// end-of-image marker follows): the frame header's size and sampling, the scans and their
+/// entropy-coded bytes. A file without a frame header or a scan, or one that ends inside a
+/// segment or its scan data, is an error.
+fn jpeg_layout(b: &[u8]) -> Result<JpegLayout, String> {
+    let mut layout = JpegLayout {
+        width: 0,
+        height: 0,
+        progressive: false,
+        sampling: Vec::new(),
+        scans: 0,
+        coded_bytes: 0,
+    };
+    let cut = || "JPEG ends inside a segment (the file is truncated)".to_string();
+    let mut i = 2;
+    let mut frame = false;
+    loop {
+        // Markers may be preceded by any number of 0xFF fill bytes.
+        while b.get(i) == Some(&0xFF) && b.get(i + 1) == Some(&0xFF) {
+            i += 1;
+        }
+        let (Some(&0xFF), Some(&marker)) = (b.get(i), b.get(i + 1)) else {
+            return Err("JPEG ends without an end-of-image marker (the file is truncated)".into());
+        };
+        i += 2;
+        match marker {
+            0xD9 => break,
+            0xD0..=0xD7 | 0x01 => continue,
+            _ => {}
+        }
+        let len = b.get(i..i + 2).ok_or_else(cut)?;
+        let len = usize::from(u16::from_be_bytes([len[0], len[1]]));
+        let seg = b.get(i + 2..i + len.max(2)).ok_or_else(cut)?;
+        i += len.max(2);
+        match marker {
+            0xC0..=0xC3 | 0xC5..=0xC7 | 0xC9..=0xCB | 0xCD..=0xCF => {
+                let comps = seg.get(5).copied().unwrap_or(0) as usize;
+                let head = seg
+                    .get(..6 + 3 * comps)
+                    .filter(|_| comps > 0)
+                    .ok_or_else(|| {
+                        "JPEG frame header is too short for its components".to_string()
+                    })?;
+                frame = true;
+                layout.height = u32::from(u16::from_be_bytes([head[1], head[2]]));
+                layout.width = u32::from(u16::from_be_bytes([head[3], head[4]]));
+                layout.progressive = matches!(marker, 0xC2 | 0xC6 | 0xCA | 0xCE);
+                layout.sampling = head[6..]
+                    .chunks_exact(3)
+                    .map(|c| (c[1] >> 4, c[1] & 15))
+                    .collect();
+                if layout.sampling.iter().any(|&(h, v)| h == 0 || v == 0) {
+                    return Err("JPEG frame header has a sampling factor of 0".into());
+                }
+            }
+            0xDA => {
+                layout.scans += 1;
+                // Entropy-coded data run to the next marker that is not a stuffed 0xFF00 or
+                // a restart marker.
+                let start = i;
+                loop {
+                    match (b.get(i), b.get(i + 1)) {
+                        (Some(&0xFF), Some(&next))
+                            if next != 0 && !(0xD0..=0xD7).contains(&next) =>
+                        {
+                            break;
+                        }
+                        (Some(_), Some(_)) => i += 1,
+                        _ => {
+                            return Err(
+                                "JPEG ends inside its scan data (the file is truncated)".into()
+                            );
+                        }
+                    }
+                }
+                layout.coded_bytes += (i - start) as u64;
+            }
+            _ => {}
+        }
+    }
+    if !frame {
+        return Err("JPEG has no frame header (SOF), so no image size".into());
+    }
+    if layout.scans == 0 {
+        return Err("JPEG has no scan (SOS): the file holds no image data".into());
+    }
+    Ok(layout)
+}
+
 fn decode_jpeg(bytes: &[u8]) -> Result<Decoded, String> {
     use zune_jpeg::zune_core::bytestream::ZCursor;
     use zune_jpeg::zune_core::colorspace::ColorSpace;
     use zune_jpeg::zune_core::options::DecoderOptions;
-    let options = DecoderOptions::default().jpeg_set_out_colorspace(ColorSpace::RGB);
+    // Strict: a truncated scan, a missing scan or a marker inside the entropy-coded data is an
+    // error; zune-jpeg otherwise fills the rows it could not decode with grey and succeeds.
+    let options = DecoderOptions::default()
+        .jpeg_set_out_colorspace(ColorSpace::RGB)
+        .set_strict_mode(true);
+    let layout = jpeg_layout(bytes)?;
+    let (width, height) = (layout.width, layout.height);
+    check_size(u64::from(width), u64::from(height))?;
+    // Before the decoder allocates the image: a header claiming more texels than the scans can
+    // describe (a 635-byte file claiming 16384 × 16384 took 3.9 GB and 15 s to decode to grey).
+    let least = layout.least_coded_bytes();
+    if layout.coded_bytes < least {
+        return Err(format!(
+            "JPEG header claims {width}×{height} texels, more than its {} bytes can hold ({} bytes of scan data where that size needs at least {least}); the file is truncated or its header forged",
+            bytes.len(),
+            layout.coded_bytes
+        ));
+    }
     let mut decoder = zune_jpeg::JpegDecoder::new_with_options(ZCursor::new(bytes), options);
     decoder
         .decode_headers()
         .map_err(|e| format!("cannot decode JPEG: {e:?}"))?;
     let info = decoder.info().ok_or("cannot decode JPEG: no header")?;
-    check_size(u64::from(info.width), u64::from(info.height))?;
-    let samples = decoder
-        .decode()
-        .map_err(|e| format!("cannot decode JPEG: {e:?}"))?;
-    let (width, height) = (u32::from(info.width), u32::from(info.height));
+    if (u32::from(info.width), u32::from(info.height)) != (width, height) {
+        return Err(format!(
+            "cannot decode JPEG: the decoder reads {}×{} where the frame header says {width}×{height}",
+            info.width, info.height
+        ));
+    }
+    let samples = decoder.decode().map_err(|e| {
+        format!("cannot decode JPEG ({width}×{height}): {e:?}; the file is truncated or damaged")
+    })?;
     if samples.len() != width as usize * height as usize * 3 {
         return Err(format!(
             "cannot decode JPEG: {} samples for a {width}×{height} RGB image",
@@ -161,6 +309,36 @@ mod tests {
                 Vec3::new(srgb(1), srgb(2), srgb(3))
             ]
         );
+    }
+
+    /// Random byte edits and cuts of the JPEG (its marker walk and the decoder) and of a PNG:
+    /// `Ok` or an error, never a panic, and an image that decodes has width × height texels.
+    /// `PROPTEST_CASES=100000` runs it longer.
+    #[test]
+    fn damaged_images_decode_or_fail_without_panic() {
+        use proptest::prelude::*;
+        let mut png = Vec::new();
+        {
+            let mut e = png::Encoder::new(&mut png, 4, 3);
+            e.set_color(png::ColorType::Rgb);
+            e.set_depth(png::BitDepth::Eight);
+            let mut w = e.write_header().expect("header");
+            w.write_image_data(&[7; 36]).expect("data");
+        }
+        let edit = (any::<usize>(), any::<u8>());
+        proptest!(|(which in 0..2usize, edits in proptest::collection::vec(edit, 1..6), cut in any::<usize>())| {
+            let mut bytes = if which == 0 { SOLID_JPEG.to_vec() } else { png.clone() };
+            for (i, b) in edits {
+                let n = bytes.len();
+                bytes[i % n] = b;
+            }
+            if cut % 3 == 0 {
+                bytes.truncate(cut % (bytes.len() + 1));
+            }
+            if let Ok(d) = decode(&bytes) {
+                prop_assert_eq!(d.texels.len(), d.width as usize * d.height as usize);
+            }
+        });
     }
 
     #[test]

@@ -214,3 +214,74 @@ fn gltf_images_without_mime_type_or_source_do_not_panic() {
         ],
     );
 }
+
+/// 16 × 8 texels of sRGB (200, 100, 50), baseline JPEG (the loader's own test image); the
+/// damaged versions below are made from it.
+const JPEG: &[u8] = include_bytes!("../../../load/tests/data/solid-200-100-50.jpg");
+
+/// The JPEG's segments: (marker byte, start of the 0xFF, end), the scan's entropy-coded data
+/// included in the SOS segment.
+fn jpeg_segments(b: &[u8]) -> Vec<(u8, usize, usize)> {
+    let mut out = Vec::new();
+    let mut i = 2;
+    while i + 1 < b.len() {
+        assert_eq!(b[i], 0xFF, "marker expected at {i}");
+        let marker = b[i + 1];
+        if marker == 0xD9 {
+            out.push((marker, i, i + 2));
+            break;
+        }
+        let mut end = i + 2 + usize::from(u16::from_be_bytes([b[i + 2], b[i + 3]]));
+        if marker == 0xDA {
+            // Entropy-coded data runs to the next marker that is not a stuffed 0xFF00 or RSTn.
+            while !(b[end] == 0xFF && b[end + 1] != 0 && !(0xD0..=0xD7).contains(&b[end + 1])) {
+                end += 1;
+            }
+        }
+        out.push((marker, i, end));
+        i = end;
+    }
+    out
+}
+
+/// Finding 2: a JPEG whose header claims 16384² texels decoded to 3.9 GB of filler (exit 0, or
+/// 134 under a memory limit); truncated and scan-less JPEGs decoded silently with grey rows.
+/// Each is now refused in one line naming the file and the image; the intact file renders.
+#[test]
+fn forged_truncated_and_scanless_jpegs_are_refused() {
+    let (_t, dir) = temp();
+    let segments = jpeg_segments(JPEG);
+    let (_, sof, _) = *segments.iter().find(|s| s.0 == 0xC0).expect("SOF0");
+    let (_, sos, sos_end) = *segments.iter().find(|s| s.0 == 0xDA).expect("SOS");
+    let forged = |w: u16, h: u16| {
+        let mut b = JPEG.to_vec();
+        b[sof + 5..sof + 7].copy_from_slice(&h.to_be_bytes());
+        b[sof + 7..sof + 9].copy_from_slice(&w.to_be_bytes());
+        b
+    };
+    // Cut within the entropy-coded data, as a download that stopped early.
+    let scan_data = sos + 2 + usize::from(u16::from_be_bytes([JPEG[sos + 2], JPEG[sos + 3]]));
+    let truncated = JPEG[..scan_data + (sos_end - scan_data) / 2].to_vec();
+    let mut scanless = JPEG[..sos].to_vec();
+    scanless.extend_from_slice(&JPEG[sos_end..]);
+    #[rustfmt::skip]
+    let cases: [(&str, Vec<u8>, &[&str]); 4] = [
+        ("huge", forged(16384, 16384), &["16384×16384", "more than its 635 bytes can hold"]),
+        ("tall", forged(16, 4096), &["16×4096", "more than its 635 bytes can hold"]),
+        ("truncated", truncated, &["ends inside its scan data"]),
+        ("scanless", scanless, &["has no scan"]),
+    ];
+    for (name, bytes, needles) in cases {
+        std::fs::write(dir.join(format!("{name}.jpg")), bytes).expect("write jpeg");
+        let image = format!(r#"{{ "uri": "{name}.jpg" }}"#);
+        textured_quad(&dir, name, &image, &[], 1);
+        let out = render(&dir, name, &scene_text(&[&format!("{name}.gltf")]), &[]);
+        let mut all = vec![format!("{name}.gltf"), "image 0".to_string()];
+        all.extend(needles.iter().map(|n| n.to_string()));
+        let all: Vec<&str> = all.iter().map(String::as_str).collect();
+        assert_one_line_error(&out, &all);
+    }
+    std::fs::write(dir.join("intact.jpg"), JPEG).expect("write jpeg");
+    textured_quad(&dir, "intact", r#"{ "uri": "intact.jpg" }"#, &[], 1);
+    assert_success(&render(&dir, "intact", &scene_text(&["intact.gltf"]), &[]));
+}
