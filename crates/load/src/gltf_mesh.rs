@@ -13,7 +13,7 @@ use std::sync::Arc;
 
 use base64::Engine;
 use bdpm_geometry::TriangleMesh;
-use bdpm_scene::{PointLight, Texture, Wrap};
+use bdpm_scene::{PointLight, TexelImage, Texture, Wrap};
 use glam::{Mat3, Mat4, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::json::extensions::scene::khr_lights_punctual::Type as LightType;
@@ -23,6 +23,7 @@ use gltf::{Accessor, Node, Semantic};
 
 use crate::LoadError;
 use crate::build::Materials;
+use crate::memory::Budget;
 
 /// Deepest node nesting accepted. glTF forbids cycles but the parser does not check for them,
 /// so the walk stops here instead of running forever.
@@ -49,8 +50,6 @@ pub(crate) struct GltfPart {
     pub(crate) texcoords: Vec<[Vec2; 3]>,
     /// Materials made from this file that use a base-colour texture.
     pub(crate) textured_materials: usize,
-    /// Distinct base-colour images decoded (one per image and sampler).
-    pub(crate) textures: usize,
     /// Materials made from this file with normal, occlusion, emissive or metallic-roughness
     /// textures, which are ignored.
     pub(crate) other_textures: usize,
@@ -78,6 +77,37 @@ impl Origin<'_> {
     }
 }
 
+/// What the glTF files of one scene share while it loads: the decoded images, each decoded
+/// once whatever the samplers, materials, files and `[[shape]]`s that show it, and the memory
+/// budget every large allocation is checked against.
+#[derive(Default)]
+pub(crate) struct Assets {
+    images: HashMap<ImageKey, Arc<TexelImage>>,
+    pub(crate) budget: Budget,
+}
+
+impl Assets {
+    pub(crate) fn new(budget: Budget) -> Assets {
+        Assets {
+            images: HashMap::new(),
+            budget,
+        }
+    }
+
+    /// Images decoded.
+    pub(crate) fn decoded(&self) -> usize {
+        self.images.len()
+    }
+}
+
+/// Where an image's bytes come from: a file (canonical path), or a glTF file's own bytes
+/// (its canonical path and the image's index: a bufferView or a data URI).
+#[derive(Debug, PartialEq, Eq, Hash)]
+enum ImageKey {
+    File(PathBuf),
+    Embedded(PathBuf, usize),
+}
+
 /// Loads every triangle primitive and KHR_lights_punctual point light of the default scene
 /// (or the first scene, or every root node when there is no scene). `post` is applied after
 /// each node's world matrix; `material` replaces every glTF material when given.
@@ -86,49 +116,12 @@ pub(crate) fn load_gltf(
     post: Mat4,
     material: Option<u32>,
     materials: &mut Materials,
+    assets: &mut Assets,
 ) -> Result<GltfPart, LoadError> {
-    let bytes = crate::files::read_regular(origin.path, crate::limits::MAX_GLTF_BYTES, "glTF file")
-        .map_err(|e| origin.err(e))?;
-    let invalid = |e: gltf::Error| origin.err(format!("not a valid glTF 2.0 file: {e}"));
-    let raw = gltf::Gltf::from_slice_without_validation(&bytes).map_err(invalid)?;
-    // gltf-json 1.4's validator indexes the accessor list with a primitive's POSITION index
-    // before checking it (mesh.rs, primitive_validate_hook), so that case is checked first.
-    let json = raw.document.into_json();
-    for (m, mesh) in json.meshes.iter().enumerate() {
-        for (p, prim) in mesh.primitives.iter().enumerate() {
-            for (semantic, index) in &prim.attributes {
-                if index.value() >= json.accessors.len() {
-                    return Err(origin.err(format!(
-                        "not a valid glTF 2.0 file: meshes[{m}].primitives[{p}].attributes: {semantic:?} names accessor {}, which does not exist",
-                        index.value()
-                    )));
-                }
-            }
-        }
-    }
-    let gltf = gltf::Gltf {
-        document: gltf::Document::from_json(json).map_err(invalid)?,
-        blob: raw.blob,
-    };
-    let buffers = load_buffers(origin, &gltf)?;
+    let gltf = read_document(origin, &assets.budget)?;
+    let buffers = load_buffers(origin, &gltf, &assets.budget)?;
     let doc = &gltf.document;
-
-    let roots: Vec<Node<'_>> = match doc.default_scene().or_else(|| doc.scenes().next()) {
-        Some(scene) => scene.nodes().collect(),
-        None => {
-            let mut is_child = vec![false; doc.nodes().len()];
-            for node in doc.nodes() {
-                for child in node.children() {
-                    if let Some(flag) = is_child.get_mut(child.index()) {
-                        *flag = true;
-                    }
-                }
-            }
-            doc.nodes()
-                .filter(|n| !is_child.get(n.index()).copied().unwrap_or(false))
-                .collect()
-        }
-    };
+    let roots = root_nodes(doc);
 
     let mut part = GltfPart::default();
     let mut material_map: HashMap<usize, (u32, Option<u32>)> = HashMap::new();
@@ -164,6 +157,7 @@ pub(crate) fn load_gltf(
                     None => {
                         let mut seen = Seen {
                             json: doc.as_json(),
+                            assets: &mut *assets,
                             materials: &mut material_map,
                             images: &mut images,
                             part: &mut part,
@@ -182,35 +176,106 @@ pub(crate) fn load_gltf(
         {
             part.skipped_cameras += 1;
         }
-        if let Some(light) = node_light(doc, &node) {
-            match light.type_ {
-                Checked::Valid(LightType::Point) => {
-                    let flux = 4.0 * PI * light.intensity * Vec3::from_array(light.color);
-                    let position = world.transform_point3(Vec3::ZERO);
-                    if !(flux.is_finite() && flux.min_element() >= 0.0) {
-                        return Err(origin.err(format!(
-                            "node {}: point light has intensity {} and color {:?}; need finite values >= 0",
-                            node.index(),
-                            light.intensity,
-                            light.color
-                        )));
-                    }
-                    if !position.is_finite() {
-                        return Err(origin.err(format!(
-                            "node {}: light position is not finite",
-                            node.index()
-                        )));
-                    }
-                    part.lights.push(PointLight { position, flux });
-                }
-                _ => part.skipped_lights += 1,
-            }
-        }
+        add_light(origin, doc, &node, world, &mut part)?;
         for child in node.children() {
             stack.push((child, world, depth + 1));
         }
     }
     Ok(part)
+}
+
+/// Reads and validates the glTF file (refused first if its size alone would not fit the
+/// memory budget).
+fn read_document(origin: &Origin<'_>, budget: &Budget) -> Result<gltf::Gltf, LoadError> {
+    if let Ok(meta) = std::fs::metadata(origin.path) {
+        budget
+            .check(
+                budget.textures(),
+                meta.len(),
+                "the file's bytes, read whole",
+            )
+            .map_err(|m| origin.err(format!("reading it {m}")))?;
+    }
+    let bytes = crate::files::read_regular(origin.path, crate::limits::MAX_GLTF_BYTES, "glTF file")
+        .map_err(|e| origin.err(e))?;
+    let invalid = |e: gltf::Error| origin.err(format!("not a valid glTF 2.0 file: {e}"));
+    let raw = gltf::Gltf::from_slice_without_validation(&bytes).map_err(invalid)?;
+    // gltf-json 1.4's validator indexes the accessor list with a primitive's POSITION index
+    // before checking it (mesh.rs, primitive_validate_hook), so that case is checked first.
+    let json = raw.document.into_json();
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            for (semantic, index) in &prim.attributes {
+                if index.value() >= json.accessors.len() {
+                    return Err(origin.err(format!(
+                        "not a valid glTF 2.0 file: meshes[{m}].primitives[{p}].attributes: {semantic:?} names accessor {}, which does not exist",
+                        index.value()
+                    )));
+                }
+            }
+        }
+    }
+    Ok(gltf::Gltf {
+        document: gltf::Document::from_json(json).map_err(invalid)?,
+        blob: raw.blob,
+    })
+}
+
+/// The nodes the walk starts from: the default scene's, or the first scene's, or every node
+/// that is nobody's child when there is no scene.
+fn root_nodes(doc: &gltf::Document) -> Vec<Node<'_>> {
+    match doc.default_scene().or_else(|| doc.scenes().next()) {
+        Some(scene) => scene.nodes().collect(),
+        None => {
+            let mut is_child = vec![false; doc.nodes().len()];
+            for node in doc.nodes() {
+                for child in node.children() {
+                    if let Some(flag) = is_child.get_mut(child.index()) {
+                        *flag = true;
+                    }
+                }
+            }
+            doc.nodes()
+                .filter(|n| !is_child.get(n.index()).copied().unwrap_or(false))
+                .collect()
+        }
+    }
+}
+
+/// Adds the KHR_lights_punctual point light of `node` (at `world`'s origin) to `part`, or
+/// counts a spot or directional light as skipped.
+fn add_light(
+    origin: &Origin<'_>,
+    doc: &gltf::Document,
+    node: &Node<'_>,
+    world: Mat4,
+    part: &mut GltfPart,
+) -> Result<(), LoadError> {
+    if let Some(light) = node_light(doc, node) {
+        match light.type_ {
+            Checked::Valid(LightType::Point) => {
+                let flux = 4.0 * PI * light.intensity * Vec3::from_array(light.color);
+                let position = world.transform_point3(Vec3::ZERO);
+                if !(flux.is_finite() && flux.min_element() >= 0.0) {
+                    return Err(origin.err(format!(
+                            "node {}: point light has intensity {} and color {:?}; need finite values >= 0",
+                            node.index(),
+                            light.intensity,
+                            light.color
+                        )));
+                }
+                if !position.is_finite() {
+                    return Err(origin.err(format!(
+                        "node {}: light position is not finite",
+                        node.index()
+                    )));
+                }
+                part.lights.push(PointLight { position, flux });
+            }
+            _ => part.skipped_lights += 1,
+        }
+    }
+    Ok(())
 }
 
 /// The KHR_lights_punctual light a node carries, read from the JSON directly: the crate's
@@ -242,6 +307,7 @@ fn node_light<'a>(
 struct Seen<'a> {
     /// The file's JSON, read directly where the `gltf` crate's accessors would panic.
     json: &'a gltf::json::Root,
+    assets: &'a mut Assets,
     materials: &'a mut HashMap<usize, (u32, Option<u32>)>,
     images: &'a mut HashMap<(usize, Wrap, Wrap), Arc<Texture>>,
     part: &'a mut GltfPart,
@@ -323,8 +389,8 @@ fn base_colour_texture(
     let sampler = texture.sampler();
     let (wrap_u, wrap_v) = (wrap(sampler.wrap_s()), wrap(sampler.wrap_t()));
     let image = texture.source();
-    let key = (image.index(), wrap_u, wrap_v);
-    if let Some(t) = seen.images.get(&key) {
+    let key_per_file = (image.index(), wrap_u, wrap_v);
+    if let Some(t) = seen.images.get(&key_per_file) {
         return Ok(Arc::clone(t));
     }
     let what = format!(
@@ -333,20 +399,67 @@ fn base_colour_texture(
         image.index()
     );
     let err = |m: String| origin.err(format!("{what}: {m}"));
-    let bytes = image_bytes(origin, seen.json, image.index(), buffers, &what)?;
-    let decoded = crate::image::decode(&bytes).map_err(err)?;
-    let texture = Texture::new(
-        decoded.width,
-        decoded.height,
-        decoded.texels,
-        wrap_u,
-        wrap_v,
-    )
-    .map_err(|e| err(e.to_string()))?;
-    let texture = Arc::new(texture);
-    let _ = seen.images.insert(key, Arc::clone(&texture));
-    seen.part.textures += 1;
+    let key = image_key(origin, seen.json, image.index()).map_err(err)?;
+    let texels = match seen.assets.images.get(&key) {
+        Some(texels) => Arc::clone(texels),
+        None => {
+            let bytes = image_bytes(origin, seen.json, image.index(), buffers, &what)?;
+            let header = crate::image::header(&bytes).map_err(err)?;
+            // Before the decoder allocates: the texels kept so far and this file's buffers
+            // are held, so a texture too large for the limit is refused here, not in the
+            // allocation.
+            let held =
+                seen.assets.budget.textures() + buffers.iter().map(|b| b.len() as u64).sum::<u64>();
+            seen.assets
+                .budget
+                .check(
+                    held,
+                    header.decode_bytes,
+                    "3 bytes a texel kept, and the decoder's buffers",
+                )
+                .map_err(|m| {
+                    err(format!(
+                        "decoding its {}×{} texels {m}",
+                        header.width, header.height
+                    ))
+                })?;
+            let decoded = crate::image::decode(&bytes).map_err(err)?;
+            drop(bytes);
+            let texels = Arc::new(
+                TexelImage::srgb8(decoded.width, decoded.height, decoded.rgb)
+                    .map_err(|e| err(e.to_string()))?,
+            );
+            seen.assets.budget.keep_texels(texels.bytes());
+            let _ = seen.assets.images.insert(key, Arc::clone(&texels));
+            texels
+        }
+    };
+    let texture = Arc::new(Texture::with_image(texels, wrap_u, wrap_v));
+    let _ = seen.images.insert(key_per_file, Arc::clone(&texture));
     Ok(texture)
+}
+
+/// The [`ImageKey`] of image `index` of the glTF file `origin`: a file named by its uri
+/// (confined to the glTF file's directory), else the glTF file's own bytes.
+fn image_key(
+    origin: &Origin<'_>,
+    json: &gltf::json::Root,
+    index: usize,
+) -> Result<ImageKey, String> {
+    let canonical = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
+    let image = json
+        .images
+        .get(index)
+        .ok_or_else(|| format!("image {index} does not exist"))?;
+    match (&image.buffer_view, &image.uri) {
+        (None, Some(uri)) if !uri.starts_with("data:") => {
+            let dir = origin.path.parent().unwrap_or(Path::new(""));
+            Ok(ImageKey::File(canonical(&crate::files::confined_uri(
+                dir, uri,
+            )?)))
+        }
+        _ => Ok(ImageKey::Embedded(canonical(origin.path), index)),
+    }
 }
 
 /// The encoded bytes of image `index`: a bufferView's bytes (GLB, or any buffer), a base64
@@ -708,10 +821,24 @@ fn check_accessor(
 
 /// Resolves every buffer: the GLB binary chunk, a base64 `data:` URI, or a file relative to
 /// the glTF file.
-fn load_buffers(origin: &Origin<'_>, gltf: &gltf::Gltf) -> Result<Vec<Vec<u8>>, LoadError> {
-    let mut out = Vec::new();
+fn load_buffers(
+    origin: &Origin<'_>,
+    gltf: &gltf::Gltf,
+    budget: &Budget,
+) -> Result<Vec<Vec<u8>>, LoadError> {
+    let mut out: Vec<Vec<u8>> = Vec::new();
     for buffer in gltf.buffers() {
         let i = buffer.index();
+        // Held until the file's primitives are read: refused before the read if, with the
+        // texels kept and the buffers before it, it would not fit.
+        let held = budget.textures() + out.iter().map(|b| b.len() as u64).sum::<u64>();
+        budget
+            .check(
+                held,
+                buffer.length() as u64,
+                "held while the file's meshes are read",
+            )
+            .map_err(|m| origin.err(format!("buffer {i} ({} bytes) {m}", buffer.length())))?;
         let data = match buffer.source() {
             gltf::buffer::Source::Bin => gltf.blob.clone().ok_or_else(|| {
                 origin.err(format!(

@@ -1,29 +1,76 @@
-//! PNG and JPEG base-colour images → linear RGB texels (sRGB decoded, as glTF specifies for
-//! base colour). PNG through `png`, JPEG through `zune-jpeg`.
+//! PNG and JPEG base-colour images → 8-bit sRGB RGB texels (3 bytes each), which
+//! `bdpm_scene::TexelImage::srgb8` keeps and decodes to linear values when sampled, as glTF
+//! specifies for base colour. PNG through `png`, JPEG through `zune-jpeg`. [`header`] reads
+//! the size and the memory a decode takes before anything of that size is allocated.
 
 use std::io::Cursor;
 
-use bdpm_scene::srgb_to_linear;
-use glam::Vec3;
-
 use crate::limits::MAX_TEXTURE_TEXELS;
 
-/// A decoded image: width, height and row-major linear RGB texels from the top-left.
+/// A decoded image: width, height and row-major 8-bit sRGB R, G, B bytes from the top-left.
 pub(crate) struct Decoded {
     pub(crate) width: u32,
     pub(crate) height: u32,
-    pub(crate) texels: Vec<Vec3>,
+    pub(crate) rgb: Vec<u8>,
 }
 
-/// Decodes a PNG or JPEG (recognised by its first bytes, whatever the file's mimeType says).
-/// Alpha is dropped; grey images become equal RGB channels.
-pub(crate) fn decode(bytes: &[u8]) -> Result<Decoded, String> {
-    if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
-        decode_png(bytes)
-    } else if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
-        decode_jpeg(bytes)
+/// An image's size and what decoding it takes, read from its header alone (the decoded
+/// texels kept are 3 bytes each).
+pub(crate) struct Header {
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    /// The most the decode holds at once, the kept texels included, bytes.
+    pub(crate) decode_bytes: u64,
+}
+
+/// The image's [`Header`] (a PNG or JPEG recognised by its first bytes), after the checks
+/// that need no decoding: a size within [`MAX_TEXTURE_TEXELS`], and for a JPEG the marker
+/// walk of `jpeg_layout` (a frame, a scan, scan data enough for the size claimed).
+pub(crate) fn header(bytes: &[u8]) -> Result<Header, String> {
+    let (width, height, bytes_per_texel, extra) = if is_png(bytes) {
+        let reader = png_reader(bytes)?;
+        let info = reader.info();
+        let channels = reader.output_color_type().0.samples() as u64;
+        // The decoder's buffer (`channels` bytes a texel), compacted in place to RGB, or
+        // expanded into a new RGB array for grey.
+        let peak = if channels >= 3 {
+            channels
+        } else {
+            channels + 3
+        };
+        (info.width, info.height, peak, 0)
+    } else if is_jpeg(bytes) {
+        let layout = jpeg_layout(bytes)?;
+        check_jpeg_data(&layout, bytes.len())?;
+        (layout.width, layout.height, 3, layout.coefficient_bytes())
     } else {
-        Err("image is neither PNG nor JPEG (no PNG or JPEG signature)".into())
+        return Err("image is neither PNG nor JPEG (no PNG or JPEG signature)".into());
+    };
+    check_size(u64::from(width), u64::from(height))?;
+    let texels = u64::from(width) * u64::from(height);
+    Ok(Header {
+        width,
+        height,
+        decode_bytes: bytes_per_texel * texels + extra,
+    })
+}
+
+fn is_png(bytes: &[u8]) -> bool {
+    bytes.starts_with(b"\x89PNG\r\n\x1a\n")
+}
+
+fn is_jpeg(bytes: &[u8]) -> bool {
+    bytes.starts_with(&[0xFF, 0xD8, 0xFF])
+}
+
+/// Decodes a PNG or JPEG (recognised by its first bytes, whatever the file's mimeType says)
+/// after the checks of [`header`]. Alpha is dropped; grey images become equal RGB channels.
+pub(crate) fn decode(bytes: &[u8]) -> Result<Decoded, String> {
+    let _ = header(bytes)?;
+    if is_png(bytes) {
+        decode_png(bytes)
+    } else {
+        decode_jpeg(bytes)
     }
 }
 
@@ -39,51 +86,55 @@ fn check_size(width: u64, height: u64) -> Result<(), String> {
     Ok(())
 }
 
-/// 256-entry table of sRGB-decoded 8-bit values.
-fn srgb_table() -> [f32; 256] {
-    std::array::from_fn(|i| srgb_to_linear(i as f32 / 255.0))
-}
-
-/// Texels from 8-bit samples with `channels` per pixel (1 grey, 2 grey+alpha, 3 RGB, 4 RGBA).
-fn texels(samples: &[u8], channels: usize) -> Vec<Vec3> {
-    let lut = srgb_table();
-    samples
-        .chunks_exact(channels)
-        .map(|px| match channels {
-            1 | 2 => Vec3::splat(lut[px[0] as usize]),
-            _ => Vec3::new(
-                lut[px[0] as usize],
-                lut[px[1] as usize],
-                lut[px[2] as usize],
-            ),
-        })
-        .collect()
-}
-
-fn decode_png(bytes: &[u8]) -> Result<Decoded, String> {
+/// A PNG reader past the header, set to give 8-bit samples: palette and low bit depths expand
+/// to 8 bits; 16-bit samples keep their top byte (texture detail below 1/255 is far below the
+/// renderer's noise).
+fn png_reader(bytes: &[u8]) -> Result<png::Reader<Cursor<&[u8]>>, String> {
     let bad = |e: png::DecodingError| format!("cannot decode PNG: {e}");
     let mut decoder = png::Decoder::new(Cursor::new(bytes));
-    // Palette and low bit depths expand to 8 bits; 16-bit samples keep their top byte
-    // (texture detail below 1/255 is far below the renderer's noise).
     decoder.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
     let header = decoder.read_header_info().map_err(bad)?;
     check_size(u64::from(header.width), u64::from(header.height))?;
-    let mut reader = decoder.read_info().map_err(bad)?;
+    decoder.read_info().map_err(bad)
+}
+
+fn decode_png(bytes: &[u8]) -> Result<Decoded, String> {
+    let mut reader = png_reader(bytes)?;
     let size = reader
         .output_buffer_size()
         .ok_or("PNG image too large for memory")?;
     let mut buf = vec![0; size];
-    let info = reader.next_frame(&mut buf).map_err(bad)?;
+    let info = reader
+        .next_frame(&mut buf)
+        .map_err(|e| format!("cannot decode PNG: {e}"))?;
     let channels = info.color_type.samples();
-    let row = info.width as usize * channels;
-    let mut packed = Vec::with_capacity(row * info.height as usize);
-    for y in 0..info.height as usize {
-        packed.extend_from_slice(&buf[y * info.line_size..][..row]);
-    }
+    let (w, h) = (info.width as usize, info.height as usize);
+    let rgb = if channels >= 3 {
+        // In place: texel i moves from (row, column) of the decoder's layout to 3i, never
+        // after where it was, so a forward pass overwrites only bytes already moved.
+        for y in 0..h {
+            for x in 0..w {
+                let from = y * info.line_size + x * channels;
+                buf.copy_within(from..from + 3, 3 * (y * w + x));
+            }
+        }
+        buf.truncate(3 * w * h);
+        buf.shrink_to_fit();
+        buf
+    } else {
+        let mut rgb = Vec::with_capacity(3 * w * h);
+        for y in 0..h {
+            let row = &buf[y * info.line_size..][..w * channels];
+            for px in row.chunks_exact(channels) {
+                rgb.extend_from_slice(&[px[0]; 3]);
+            }
+        }
+        rgb
+    };
     Ok(Decoded {
         width: info.width,
         height: info.height,
-        texels: texels(&packed, channels),
+        rgb,
     })
 }
 
@@ -102,23 +153,37 @@ struct JpegLayout {
 }
 
 impl JpegLayout {
-    /// The fewest bytes of entropy-coded data that can describe the image: every 8 × 8 block
-    /// of every component costs at least one bit in a progressive file (its DC code) and two
-    /// in a sequential one (a DC code and an AC code or end-of-block), as Huffman codes are at
-    /// least one bit long.
-    fn least_coded_bytes(&self) -> u64 {
+    /// Bytes of the DCT coefficients a decoder holds for the whole image when it cannot turn
+    /// each row of blocks into texels as it goes (progressive files, or components in separate
+    /// scans): 2 bytes per sample of every component, padded to whole blocks; 0 otherwise.
+    fn coefficient_bytes(&self) -> u64 {
+        if !self.progressive && self.scans <= 1 {
+            return 0;
+        }
+        2 * 64 * self.blocks()
+    }
+
+    /// 8 × 8 blocks over all components.
+    fn blocks(&self) -> u64 {
         let h_max = u64::from(self.sampling.iter().map(|s| s.0).max().unwrap_or(1));
         let v_max = u64::from(self.sampling.iter().map(|s| s.1).max().unwrap_or(1));
         let (w, h) = (u64::from(self.width), u64::from(self.height));
-        let blocks: u64 = self
-            .sampling
+        self.sampling
             .iter()
             .map(|&(hc, vc)| {
                 let cw = (w * u64::from(hc)).div_ceil(h_max);
                 let ch = (h * u64::from(vc)).div_ceil(v_max);
                 cw.div_ceil(8) * ch.div_ceil(8)
             })
-            .sum();
+            .sum()
+    }
+
+    /// The fewest bytes of entropy-coded data that can describe the image: every 8 × 8 block
+    /// of every component costs at least one bit in a progressive file (its DC code) and two
+    /// in a sequential one (a DC code and an AC code or end-of-block), as Huffman codes are at
+    /// least one bit long.
+    fn least_coded_bytes(&self) -> u64 {
+        let blocks = self.blocks();
         let bits_per_block = if self.progressive { 1 } else { 2 };
         (blocks * bits_per_block).div_ceil(8)
     }
@@ -214,28 +279,31 @@ fn jpeg_layout(b: &[u8]) -> Result<JpegLayout, String> {
     Ok(layout)
 }
 
+/// A header claiming more texels than the scans can describe is forged, or the data are
+/// missing, and is refused before the decoder allocates the image (a 635-byte file claiming
+/// 16384 × 16384 took 3.9 GB and 15 s to decode to grey).
+fn check_jpeg_data(layout: &JpegLayout, file_bytes: usize) -> Result<(), String> {
+    let least = layout.least_coded_bytes();
+    if layout.coded_bytes < least {
+        return Err(format!(
+            "JPEG header claims {}×{} texels, more than its {file_bytes} bytes can hold ({} bytes of scan data where that size needs at least {least}); the file is truncated or its header forged",
+            layout.width, layout.height, layout.coded_bytes
+        ));
+    }
+    Ok(())
+}
+
 fn decode_jpeg(bytes: &[u8]) -> Result<Decoded, String> {
     use zune_jpeg::zune_core::bytestream::ZCursor;
     use zune_jpeg::zune_core::colorspace::ColorSpace;
     use zune_jpeg::zune_core::options::DecoderOptions;
-    // Strict: a truncated scan, a missing scan or a marker inside the entropy-coded data is an
-    // error; zune-jpeg otherwise fills the rows it could not decode with grey and succeeds.
+    let layout = jpeg_layout(bytes)?;
+    let (width, height) = (layout.width, layout.height);
+    // Strict: a marker inside the entropy-coded data, or data ending without an end-of-image
+    // marker, is an error (zune-jpeg otherwise fills what it could not decode with grey).
     let options = DecoderOptions::default()
         .jpeg_set_out_colorspace(ColorSpace::RGB)
         .set_strict_mode(true);
-    let layout = jpeg_layout(bytes)?;
-    let (width, height) = (layout.width, layout.height);
-    check_size(u64::from(width), u64::from(height))?;
-    // Before the decoder allocates the image: a header claiming more texels than the scans can
-    // describe (a 635-byte file claiming 16384 × 16384 took 3.9 GB and 15 s to decode to grey).
-    let least = layout.least_coded_bytes();
-    if layout.coded_bytes < least {
-        return Err(format!(
-            "JPEG header claims {width}×{height} texels, more than its {} bytes can hold ({} bytes of scan data where that size needs at least {least}); the file is truncated or its header forged",
-            bytes.len(),
-            layout.coded_bytes
-        ));
-    }
     let mut decoder = zune_jpeg::JpegDecoder::new_with_options(ZCursor::new(bytes), options);
     decoder
         .decode_headers()
@@ -247,20 +315,16 @@ fn decode_jpeg(bytes: &[u8]) -> Result<Decoded, String> {
             info.width, info.height
         ));
     }
-    let samples = decoder.decode().map_err(|e| {
+    let rgb = decoder.decode().map_err(|e| {
         format!("cannot decode JPEG ({width}×{height}): {e:?}; the file is truncated or damaged")
     })?;
-    if samples.len() != width as usize * height as usize * 3 {
+    if rgb.len() != width as usize * height as usize * 3 {
         return Err(format!(
             "cannot decode JPEG: {} samples for a {width}×{height} RGB image",
-            samples.len()
+            rgb.len()
         ));
     }
-    Ok(Decoded {
-        width,
-        height,
-        texels: texels(&samples, 3),
-    })
+    Ok(Decoded { width, height, rgb })
 }
 
 #[cfg(test)]
@@ -271,23 +335,22 @@ mod tests {
     /// `cjpeg -quality 100` from a PPM (djpeg reads back exactly those bytes).
     const SOLID_JPEG: &[u8] = include_bytes!("../tests/data/solid-200-100-50.jpg");
 
-    fn srgb(byte: u8) -> f32 {
-        srgb_to_linear(f32::from(byte) / 255.0)
-    }
-
     #[test]
-    fn jpeg_decodes_to_linear_rgb() {
+    fn jpeg_decodes_to_srgb_bytes() {
         let d = decode(SOLID_JPEG).expect("decodes");
-        assert_eq!((d.width, d.height, d.texels.len()), (16, 8, 128));
-        let want = Vec3::new(srgb(200), srgb(100), srgb(50));
-        for t in &d.texels {
+        assert_eq!((d.width, d.height, d.rgb.len()), (16, 8, 3 * 128));
+        for t in d.rgb.chunks_exact(3) {
             // Baseline JPEG at quality 100 may be off by one code value.
-            assert!((*t - want).abs().max_element() < 0.01, "{t} vs {want}");
+            let off = t.iter().zip([200u8, 100, 50]).map(|(a, b)| a.abs_diff(b));
+            assert!(off.max() <= Some(1), "{t:?}");
         }
+        let h = header(SOLID_JPEG).expect("header");
+        // Sequential, one scan: the decoder turns rows of blocks into texels as it goes.
+        assert_eq!((h.width, h.height, h.decode_bytes), (16, 8, 384));
     }
 
     #[test]
-    fn png_grey_and_rgba_decode_to_linear_rgb() {
+    fn png_grey_and_rgba_decode_to_srgb_rgb() {
         let png = |color, bytes: &[u8]| {
             let mut out = Vec::new();
             let mut e = png::Encoder::new(&mut out, 2, 1);
@@ -298,17 +361,17 @@ mod tests {
             w.finish().expect("end");
             out
         };
-        let grey = decode(&png(png::ColorType::Grayscale, &[0, 188])).expect("grey");
-        assert_eq!(grey.texels, vec![Vec3::ZERO, Vec3::splat(srgb(188))]);
-        let rgba =
-            decode(&png(png::ColorType::Rgba, &[255, 0, 10, 0, 1, 2, 3, 255])).expect("rgba");
+        let grey = png(png::ColorType::Grayscale, &[0, 188]);
         assert_eq!(
-            rgba.texels,
-            vec![
-                Vec3::new(1.0, 0.0, srgb(10)),
-                Vec3::new(srgb(1), srgb(2), srgb(3))
-            ]
+            decode(&grey).expect("grey").rgb,
+            vec![0, 0, 0, 188, 188, 188]
         );
+        let h = header(&grey).expect("header");
+        // One byte a texel decoded, expanded into a new RGB array.
+        assert_eq!(h.decode_bytes, 8);
+        let rgba = png(png::ColorType::Rgba, &[255, 0, 10, 0, 1, 2, 3, 255]);
+        assert_eq!(decode(&rgba).expect("rgba").rgb, vec![255, 0, 10, 1, 2, 3]);
+        assert_eq!(header(&rgba).expect("header").decode_bytes, 8);
     }
 
     /// Random byte edits and cuts of the JPEG (its marker walk and the decoder) and of a PNG:
@@ -336,7 +399,7 @@ mod tests {
                 bytes.truncate(cut % (bytes.len() + 1));
             }
             if let Ok(d) = decode(&bytes) {
-                prop_assert_eq!(d.texels.len(), d.width as usize * d.height as usize);
+                prop_assert_eq!(d.rgb.len(), 3 * d.width as usize * d.height as usize);
             }
         });
     }
