@@ -14,7 +14,7 @@ use std::sync::Arc;
 use base64::Engine;
 use bdpm_geometry::TriangleMesh;
 use bdpm_scene::{PointLight, TexelImage, Texture, Wrap};
-use glam::{Mat3, Mat4, Vec2, Vec3};
+use glam::{Affine2, Mat2, Mat3, Mat4, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::json::extensions::scene::khr_lights_punctual::Type as LightType;
 use gltf::json::validation::Checked;
@@ -124,7 +124,7 @@ pub(crate) fn load_gltf(
     let roots = root_nodes(doc);
 
     let mut part = GltfPart::default();
-    let mut material_map: HashMap<usize, (u32, Option<u32>)> = HashMap::new();
+    let mut material_map: HashMap<usize, (u32, Option<TexRead>)> = HashMap::new();
     let mut images: HashMap<(usize, Wrap, Wrap), Arc<Texture>> = HashMap::new();
     let mut stack: Vec<(Node<'_>, Mat4, usize)> =
         roots.into_iter().rev().map(|n| (n, post, 0)).collect();
@@ -152,7 +152,7 @@ pub(crate) fn load_gltf(
                         continue;
                     }
                 }
-                let (m, tex_set) = match material {
+                let (m, tex_read) = match material {
                     Some(m) => (m, None),
                     None => {
                         let mut seen = Seen {
@@ -165,7 +165,9 @@ pub(crate) fn load_gltf(
                         primitive_material(origin, &prim, &buffers, &mut seen, materials)?
                     }
                 };
-                add_primitive(origin, &what, &prim, &buffers, world, m, tex_set, &mut part)?;
+                add_primitive(
+                    origin, &what, &prim, &buffers, world, m, tex_read, &mut part,
+                )?;
             }
         }
         if doc
@@ -198,11 +200,20 @@ fn read_document(origin: &Origin<'_>, budget: &Budget) -> Result<gltf::Gltf, Loa
     }
     let bytes = crate::files::read_regular(origin.path, crate::limits::MAX_GLTF_BYTES, "glTF file")
         .map_err(|e| origin.err(e))?;
-    let invalid = |e: gltf::Error| origin.err(format!("not a valid glTF 2.0 file: {e}"));
-    let raw = gltf::Gltf::from_slice_without_validation(&bytes).map_err(invalid)?;
+    let invalid = |e: gltf::Error| origin.err(format!("not a valid glTF 2.0 file: {}", brief(&e)));
+    let raw = gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| {
+        if is_gltf_1(&bytes) {
+            origin.err(
+                "is a glTF 1.0 file; bdpm reads glTF 2.0 (convert it, e.g. import and export it with Blender)",
+            )
+        } else {
+            invalid(e)
+        }
+    })?;
+    let json = raw.document.into_json();
+    check_required_extensions(&json).map_err(|m| origin.err(m))?;
     // gltf-json 1.4's validator indexes the accessor list with a primitive's POSITION index
     // before checking it (mesh.rs, primitive_validate_hook), so that case is checked first.
-    let json = raw.document.into_json();
     for (m, mesh) in json.meshes.iter().enumerate() {
         for (p, prim) in mesh.primitives.iter().enumerate() {
             for (semantic, index) in &prim.attributes {
@@ -219,6 +230,62 @@ fn read_document(origin: &Origin<'_>, budget: &Budget) -> Result<gltf::Gltf, Loa
         document: gltf::Document::from_json(json).map_err(invalid)?,
         blob: raw.blob,
     })
+}
+
+/// Extensions a file may list in `extensionsRequired` that the loader reads (the material
+/// ones change only what bdpm ignores anyway: it renders base colour).
+const READ_EXTENSIONS: [&str; 2] = ["KHR_lights_punctual", "KHR_texture_transform"];
+
+/// One line for a file whose `extensionsRequired` names an extension bdpm cannot read, with
+/// what to do; the validator would otherwise list every accessor the extension left empty
+/// (a Draco file: 102 clauses).
+fn check_required_extensions(json: &gltf::json::Root) -> Result<(), String> {
+    for ext in &json.extensions_required {
+        let advice = match ext.as_str() {
+            "KHR_draco_mesh_compression" => "export without Draco",
+            "EXT_meshopt_compression" => "export without mesh compression",
+            "KHR_mesh_quantization" => "export with float positions and normals",
+            "KHR_texture_basisu" | "EXT_texture_webp" | "EXT_texture_avif" => {
+                "export PNG or JPEG textures"
+            }
+            e if READ_EXTENSIONS.contains(&e) => continue,
+            _ => "export without it",
+        };
+        return Err(format!("uses {ext}, which bdpm does not decode; {advice}"));
+    }
+    Ok(())
+}
+
+/// Whether `bytes` are a glTF 1.x file: a GLB of container version 1, or JSON whose
+/// `asset.version` is 1.x (or the number 1 of the drafts).
+fn is_gltf_1(bytes: &[u8]) -> bool {
+    if bytes.starts_with(b"glTF") {
+        return bytes.get(4..8) == Some(&1u32.to_le_bytes()[..]);
+    }
+    use gltf::json::Value;
+    // Drafts before 1.0 wrote the version as a number.
+    let v = gltf::json::deserialize::from_slice::<Value>(bytes);
+    match v.as_ref().ok().and_then(|v| v.pointer("/asset/version")) {
+        Some(Value::String(s)) => s == "1" || s.starts_with("1."),
+        Some(Value::Number(n)) => n.as_f64().is_some_and(|x| x < 2.0),
+        _ => false,
+    }
+}
+
+/// A glTF error in one short line: a validation error lists its first three problems and
+/// how many more there are.
+fn brief(e: &gltf::Error) -> String {
+    match e {
+        gltf::Error::Validation(list) if list.len() > 3 => {
+            let first: Vec<String> = list[..3].iter().map(|(p, e)| format!("{p}: {e}")).collect();
+            format!(
+                "invalid glTF: {}; and {} more",
+                first.join("; "),
+                list.len() - 3
+            )
+        }
+        other => other.to_string(),
+    }
 }
 
 /// The nodes the walk starts from: the default scene's, or the first scene's, or every node
@@ -308,7 +375,7 @@ struct Seen<'a> {
     /// The file's JSON, read directly where the `gltf` crate's accessors would panic.
     json: &'a gltf::json::Root,
     assets: &'a mut Assets,
-    materials: &'a mut HashMap<usize, (u32, Option<u32>)>,
+    materials: &'a mut HashMap<usize, (u32, Option<TexRead>)>,
     images: &'a mut HashMap<(usize, Wrap, Wrap), Arc<Texture>>,
     part: &'a mut GltfPart,
 }
@@ -324,7 +391,7 @@ fn primitive_material(
     buffers: &[Vec<u8>],
     seen: &mut Seen<'_>,
     materials: &mut Materials,
-) -> Result<(u32, Option<u32>), LoadError> {
+) -> Result<(u32, Option<TexRead>), LoadError> {
     let mat = prim.material();
     let Some(index) = mat.index() else {
         return Ok((materials.gltf_default()?, None));
@@ -362,13 +429,43 @@ fn primitive_material(
                 let texture = base_colour_texture(origin, index, &info.texture(), buffers, seen)?;
                 materials.set_texture(m, texture);
                 seen.part.textured_materials += 1;
-                (m, Some(info.tex_coord()))
+                (m, Some(TexRead::of(&info)))
             }
             None => (m, None),
         }
     };
     let _ = seen.materials.insert(index, m);
     Ok(m)
+}
+
+/// How a primitive's texture coordinates are read for its material's base-colour texture:
+/// the TEXCOORD set, and the KHR_texture_transform of the texture reference, if any.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct TexRead {
+    set: u32,
+    /// uv ↦ T·R·S·uv of KHR_texture_transform (offset, counter-clockwise rotation, scale).
+    transform: Option<Affine2>,
+}
+
+impl TexRead {
+    fn of(info: &gltf::texture::Info<'_>) -> TexRead {
+        let ext = info.texture_transform();
+        let transform = ext.as_ref().map(|t| {
+            let ([sx, sy], r) = (t.scale(), t.rotation());
+            let (sin, cos) = r.sin_cos();
+            // The extension's matrix translation · rotation · scale, with rotation
+            // [[cos, sin], [−sin, cos]] as it writes it (rows).
+            let linear = Mat2::from_cols(
+                Vec2::new(cos * sx, -sin * sx),
+                Vec2::new(sin * sy, cos * sy),
+            );
+            Affine2::from_mat2_translation(linear, Vec2::from_array(t.offset()))
+        });
+        TexRead {
+            set: ext.and_then(|t| t.tex_coord()).unwrap_or(info.tex_coord()),
+            transform,
+        }
+    }
 }
 
 /// The decoded image of a base-colour texture with its sampler's wrap modes (decoded once per
@@ -526,7 +623,7 @@ fn image_bytes(
 }
 
 /// Appends one triangle primitive, transformed by `world`, to `part`, with the texture
-/// coordinates of set `tex_set` when its material has a texture (zero when the primitive
+/// coordinates `tex_read` asks for when its material has a texture (zero when the primitive
 /// lacks that set).
 #[allow(clippy::too_many_arguments)]
 fn add_primitive(
@@ -536,7 +633,7 @@ fn add_primitive(
     buffers: &[Vec<u8>],
     world: Mat4,
     material: u32,
-    tex_set: Option<u32>,
+    tex_read: Option<TexRead>,
     part: &mut GltfPart,
 ) -> Result<(), LoadError> {
     let err = |m: String| origin.err(format!("{what}: {m}"));
@@ -564,7 +661,7 @@ fn add_primitive(
     }
 
     let normals = read_normals(prim, buffers, world, positions.len(), &err)?;
-    let texcoords = read_texcoords(prim, buffers, tex_set, positions.len(), &err)?;
+    let texcoords = read_texcoords(prim, buffers, tex_read, positions.len(), &err)?;
     let indices = read_indices(prim, buffers, positions.len(), &err)?;
     // Strips and fans become lists (glTF 2.0 §3.7.2.1): strip triangle i is
     // (v[i], v[i+1+i%2], v[i+2-i%2]), which keeps every triangle's winding; fan triangle i is
@@ -676,43 +773,46 @@ fn read_normals(
     })
 }
 
-/// The primitive's texture coordinates of set `tex_set`; empty without a set or when the
-/// primitive lacks it.
+/// The primitive's texture coordinates for `tex_read` (its set, transformed); empty without
+/// a texture or when the primitive lacks the set.
 fn read_texcoords(
     prim: &gltf::Primitive<'_>,
     buffers: &[Vec<u8>],
-    tex_set: Option<u32>,
+    tex_read: Option<TexRead>,
     vertices: usize,
     err: &dyn Fn(String) -> LoadError,
 ) -> Result<Vec<Vec2>, LoadError> {
-    let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
-    Ok(
-        match tex_set.and_then(|set| prim.get(&Semantic::TexCoords(set)).map(|acc| (set, acc))) {
-            Some((set, acc)) if acc.count() > 0 => {
-                check_accessor(
-                    &acc,
-                    &[DataType::F32, DataType::U8, DataType::U16],
-                    Dimensions::Vec2,
-                    buffers,
-                )
-                .map_err(|m| err(format!("TEXCOORD_{set}: {m}")))?;
-                if acc.count() != vertices {
-                    return Err(err(format!(
-                        "{} texture coordinates for {} positions",
-                        acc.count(),
-                        vertices
-                    )));
-                }
-                reader
-                    .read_tex_coords(set)
-                    .ok_or_else(|| err(format!("TEXCOORD_{set} cannot be read")))?
-                    .into_f32()
-                    .map(Vec2::from_array)
-                    .collect()
-            }
-            _ => Vec::new(),
-        },
+    let Some(TexRead { set, transform }) = tex_read else {
+        return Ok(Vec::new());
+    };
+    let acc = match prim.get(&Semantic::TexCoords(set)) {
+        Some(acc) if acc.count() > 0 => acc,
+        _ => return Ok(Vec::new()),
+    };
+    check_accessor(
+        &acc,
+        &[DataType::F32, DataType::U8, DataType::U16],
+        Dimensions::Vec2,
+        buffers,
     )
+    .map_err(|m| err(format!("TEXCOORD_{set}: {m}")))?;
+    if acc.count() != vertices {
+        return Err(err(format!(
+            "{} texture coordinates for {} positions",
+            acc.count(),
+            vertices
+        )));
+    }
+    let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+    let uv = reader
+        .read_tex_coords(set)
+        .ok_or_else(|| err(format!("TEXCOORD_{set} cannot be read")))?
+        .into_f32()
+        .map(Vec2::from_array);
+    Ok(match transform {
+        Some(t) => uv.map(|uv| t.transform_point2(uv)).collect(),
+        None => uv.collect(),
+    })
 }
 
 /// The primitive's indices as given (`0..vertices` when it has none), before strips and fans

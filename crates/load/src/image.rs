@@ -44,7 +44,20 @@ pub(crate) fn header(bytes: &[u8]) -> Result<Header, String> {
         check_jpeg_data(&layout, bytes.len())?;
         (layout.width, layout.height, 3, layout.coefficient_bytes())
     } else {
-        return Err("image is neither PNG nor JPEG (no PNG or JPEG signature)".into());
+        let kind = if bytes.starts_with(b"RIFF") && bytes.get(8..12) == Some(b"WEBP") {
+            "a WebP image"
+        } else if bytes.starts_with(b"\xABKTX 20") {
+            "a KTX2 (Basis) texture"
+        } else if bytes.starts_with(b"GIF8") {
+            "a GIF image"
+        } else if bytes.starts_with(b"BM") {
+            "a BMP image"
+        } else {
+            "neither PNG nor JPEG (no PNG or JPEG signature)"
+        };
+        return Err(format!(
+            "image is {kind}; bdpm reads PNG and JPEG base-colour images"
+        ));
     };
     check_size(u64::from(width), u64::from(height))?;
     let texels = u64::from(width) * u64::from(height);
@@ -406,7 +419,13 @@ mod tests {
 
     #[test]
     fn other_bytes_are_an_error_not_a_panic() {
-        assert!(decode(b"GIF89a").is_err());
+        let gif = decode(b"GIF89a").err().expect("GIF refused");
+        assert!(
+            gif.contains("is a GIF image; bdpm reads PNG and JPEG"),
+            "{gif}"
+        );
+        let webp = decode(b"RIFF\0\0\0\0WEBPVP8 ").err().expect("WebP refused");
+        assert!(webp.contains("is a WebP image"), "{webp}");
         assert!(decode(&SOLID_JPEG[..100]).is_err());
         assert!(decode(b"\x89PNG\r\n\x1a\n\0\0").is_err());
     }

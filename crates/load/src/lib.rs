@@ -145,10 +145,17 @@ pub struct LoadReport {
 }
 
 impl LoadReport {
-    /// One line for each kind of glTF content that was skipped or simplified, for the
-    /// driver to print as warnings; empty when nothing was.
+    /// One line for each kind of content that was left out, skipped or simplified
+    /// (zero-area triangles, glTF primitives, lights, cameras, textures), for the driver to
+    /// print as warnings; empty when nothing was.
     pub fn warnings(&self) -> Vec<String> {
         let mut out = Vec::new();
+        if self.degenerate_triangles > 0 {
+            out.push(format!(
+                "{} of the scene's {} triangles have zero area and are left out (degenerate_triangles in the report)",
+                self.degenerate_triangles, self.triangles
+            ));
+        }
         if self.skipped_primitives > 0 {
             out.push(format!(
                 "glTF: {} point or line primitive(s) skipped (only triangles are rendered)",

@@ -461,3 +461,82 @@ fn a_huge_texture_or_mesh_is_refused_before_it_is_decoded_or_built() {
         json["memory"]
     );
 }
+
+/// The glTF messages of the review: a Draco file's cause was the last of 103 clauses; a
+/// glTF 1.0 file said `invalid type: map, expected a sequence`; zero-area triangles were only
+/// counted in the report. Each is one line naming the file and the cause now, and the
+/// degenerate triangles get a warning line.
+#[test]
+fn gltf_messages_name_the_cause_in_one_line() {
+    let (_t, dir) = temp();
+    // Draco: the accessors have no bufferView (the extension holds the data).
+    let accessors: Vec<String> = (0..6)
+        .map(|_| r#"{ "componentType": 5126, "count": 3, "type": "VEC3" }"#.to_string())
+        .collect();
+    let draco = format!(
+        r#"{{ "asset": {{ "version": "2.0" }},
+  "extensionsUsed": ["KHR_draco_mesh_compression"],
+  "extensionsRequired": ["KHR_draco_mesh_compression"],
+  "accessors": [ {} ],
+  "meshes": [ {{ "primitives": [ {{ "attributes": {{ "POSITION": 0 }} }} ] }} ],
+  "nodes": [ {{ "mesh": 0 }} ], "scenes": [ {{ "nodes": [0] }} ] }}"#,
+        accessors.join(", ")
+    );
+    std::fs::write(dir.join("draco.gltf"), &draco).expect("write");
+    let out = render(&dir, "draco", &scene_text(&["draco.gltf"]), &[]);
+    assert_one_line_error(
+        &out,
+        &[
+            "draco.gltf",
+            "uses KHR_draco_mesh_compression, which bdpm does not decode; export without Draco",
+        ],
+    );
+    // The same accessors without the extension: eight validation errors (six accessors
+    // without data, the POSITION accessor without min and max), three shown.
+    let plain = draco.replace(
+        r#""extensionsRequired": ["KHR_draco_mesh_compression"],"#,
+        "",
+    );
+    std::fs::write(dir.join("nodata.gltf"), plain).expect("write");
+    let out = render(&dir, "nodata", &scene_text(&["nodata.gltf"]), &[]);
+    assert_one_line_error(
+        &out,
+        &["nodata.gltf", "accessors[0].bufferView", "; and 5 more"],
+    );
+    assert!(
+        !text(&out.stderr).contains("accessors[3]"),
+        "{}",
+        text(&out.stderr)
+    );
+    // glTF 1.0: objects where 2.0 has arrays.
+    let v1 = r#"{ "asset": { "version": "1.0" }, "buffers": { "b": { "uri": "x.bin" } }, "meshes": {} }"#;
+    std::fs::write(dir.join("v1.gltf"), v1).expect("write");
+    let out = render(&dir, "v1", &scene_text(&["v1.gltf"]), &[]);
+    assert_one_line_error(
+        &out,
+        &["v1.gltf", "is a glTF 1.0 file; bdpm reads glTF 2.0"],
+    );
+
+    // Two zero-area triangles (repeated vertices) beside the textured quad.
+    let mut bin = Vec::new();
+    for c in [0.0f32, 0.0, 0.1, 0.1, 0.0, 0.1, 0.0, 0.0, 0.1] {
+        bin.extend_from_slice(&c.to_le_bytes());
+    }
+    std::fs::write(dir.join("flat.bin"), &bin).expect("write");
+    let flat = r#"{ "asset": { "version": "2.0" },
+  "buffers": [ { "byteLength": 36, "uri": "flat.bin" } ],
+  "bufferViews": [ { "buffer": 0, "byteLength": 36 } ],
+  "accessors": [ { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0.1], "max": [0.1, 0, 0.1] } ],
+  "meshes": [ { "primitives": [ { "attributes": { "POSITION": 0 } } ] } ],
+  "nodes": [ { "mesh": 0 }, { "mesh": 0 } ], "scenes": [ { "nodes": [0, 1] } ] }"#;
+    std::fs::write(dir.join("flat.gltf"), flat).expect("write");
+    std::fs::write(dir.join("quad.png"), png_rgb(2, 2)).expect("write png");
+    textured_quad(&dir, "quad", r#"{ "uri": "quad.png" }"#, &[], 1);
+    let out = render(&dir, "flat", &scene_text(&["quad.gltf", "flat.gltf"]), &[]);
+    assert_success(&out);
+    let stdout = text(&out.stdout);
+    assert!(
+        stdout.contains("warning: 2 of the scene's 4 triangles have zero area and are left out"),
+        "{stdout}"
+    );
+}
