@@ -101,7 +101,10 @@ pub(crate) struct Prepared {
 pub(crate) fn prepare(job: Job) -> CliResult<(Prepared, Vec<PassRecord>)> {
     let started = SystemTime::now();
     let t_start = Instant::now();
-    let mut loaded = cli::prepare(&job.scene, &job.overrides)?;
+    // The loader checks each texture, glTF buffer and the geometry against the limit before
+    // allocating it; the render's estimate below adds the rest.
+    let limit = cli::memory_limit(job.max_memory);
+    let mut loaded = cli::prepare_within(&job.scene, &job.overrides, limit)?;
     let load_seconds = t_start.elapsed().as_secs_f64();
     let gltf = &loaded.report.gltf_files;
     let identity = Identity::of(&job.scene, gltf, &loaded.settings, &job.overrides)?;

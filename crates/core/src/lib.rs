@@ -6,7 +6,7 @@
 //! - [`Frame`] and the [`sampling`] warps (uniform sphere, concentric disk);
 //! - [`Shading`] and [`WeightVertex`]: a surface point as shading and the MIS weights see it;
 //!   [`PointLight`];
-//! - [`luminance`] (Rec. 709) and [`prefetch`].
+//! - [`luminance`] (Rec. 709), [`prefetch`] and [`human_bytes`].
 //!
 //! Units: positions and distances in metres, flux in W per RGB channel, solid angles in sr.
 //!
@@ -42,6 +42,21 @@ pub const LUMINANCE_WEIGHTS: [f64; 3] = [0.2126, 0.7152, 0.0722];
 pub fn luminance(c: glam::Vec3) -> f32 {
     let [r, g, b] = LUMINANCE_WEIGHTS;
     c.dot(glam::Vec3::new(r as f32, g as f32, b as f32))
+}
+
+/// `bytes` for people: `1.5 GiB`, `320.0 MiB`, `12.0 KiB` (binary units, one decimal).
+pub fn human_bytes(bytes: u64) -> String {
+    let b = bytes as f64;
+    let (value, unit) = if b >= (1u64 << 40) as f64 {
+        (b / (1u64 << 40) as f64, "TiB")
+    } else if b >= (1u64 << 30) as f64 {
+        (b / (1u64 << 30) as f64, "GiB")
+    } else if b >= (1u64 << 20) as f64 {
+        (b / (1u64 << 20) as f64, "MiB")
+    } else {
+        (b / 1024.0, "KiB")
+    };
+    format!("{value:.1} {unit}")
 }
 
 #[cfg(test)]

@@ -38,5 +38,8 @@ mod wide;
 // Frames, warps, random streams and prefetch live in bdpm-core (crates below the BVH use
 // them); re-exported so that a user of the geometry needs one dependency.
 pub use bdpm_core::{Domain, Frame, Rng, prefetch, sampling};
-pub use mesh::{Geometry, GeometryError, Hit, Kernel, MAX_COORDINATE, SurfaceSample, TriangleMesh};
+pub use mesh::{
+    BVH_BYTES_PER_TRIANGLE, Geometry, GeometryBytes, GeometryError, Hit, Kernel, MAX_COORDINATE,
+    SurfaceSample, TriangleMesh,
+};
 pub use shapes::{BOX_FACES, BoxFace, geodesic_sphere_triangle_count, rect_corners};

@@ -157,6 +157,48 @@ struct Tri {
     inset: [f32; 3],
 }
 
+impl Tri {
+    /// The triangle of vertices `v` (local frame) with the mesh's vertex `normals` if it has
+    /// any, and its spawn offset; a triangle without area has `area` 0.
+    fn new(v: [Vec3; 3], normals: Option<[Vec3; 3]>, material: u32) -> (Tri, f32) {
+        let magnitude = v.iter().fold(0.0f32, |m, p| m.max(p.abs().max_element()));
+        let offset = magnitude * RELATIVE_OFFSET;
+        let cross = (v[1] - v[0]).cross(v[2] - v[0]);
+        let area = 0.5 * cross.length();
+        let ng = cross.normalize_or_zero();
+        let valid = area.is_finite() && area > MIN_AREA && ng != Vec3::ZERO;
+        // Vertex normals: zero or non-finite ones mean "flat"; orient each with ng.
+        let mut n = [ng; 3];
+        let mut smooth = false;
+        if let Some(raw) = normals
+            && raw
+                .iter()
+                .all(|m| m.is_finite() && m.length_squared() > 1e-12)
+        {
+            n = raw.map(|m| m.normalize());
+            smooth = true;
+        }
+        // Vertex i's height over the opposite edge is 2·area / |edge|, so a weight of
+        // offset / height holds the point one offset from that edge.
+        let inset = if valid {
+            [(v[1], v[2]), (v[2], v[0]), (v[0], v[1])]
+                .map(|(a, b)| (offset * (b - a).length() / (2.0 * area)).min(MAX_INSET))
+        } else {
+            [0.0; 3]
+        };
+        let tri = Tri {
+            v,
+            n,
+            ng,
+            area: if valid { area } else { 0.0 },
+            material,
+            smooth,
+            inset,
+        };
+        (tri, offset)
+    }
+}
+
 /// Largest inset weight: three of them sum to less than one, so every triangle keeps a
 /// non-empty inset region (a very small triangle's hits all move near its centroid).
 const MAX_INSET: f32 = 0.3;
@@ -307,6 +349,29 @@ enum Accel {
     Bvh4(Bvh4),
     Cwbvh(CwBvh),
 }
+
+/// Bytes a [`Geometry`] holds ([`Geometry::memory`]) or is expected to hold
+/// ([`Geometry::planned_bytes`]), by part.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct GeometryBytes {
+    /// Per-triangle data (vertices, normals, areas, spawn offsets, the area CDF), bytes.
+    pub triangles: u64,
+    /// The BVH: nodes, leaf triangles and the leaf-to-triangle map, bytes.
+    pub bvh: u64,
+}
+
+impl GeometryBytes {
+    /// Both parts, bytes.
+    pub fn total(&self) -> u64 {
+        self.triangles + self.bvh
+    }
+}
+
+/// BVH bytes per triangle that [`Geometry::planned_bytes`] assumes for the default kernel:
+/// measured 72–78 B on a geodesic sphere, a grid and a random soup of 5·10⁴–8·10⁴ triangles
+/// (`planned_bytes_bound_what_the_geometry_keeps`) and 74 B on a 10⁶-triangle grid (4-wide
+/// leaves of 144 B, nodes of 112 B, the leaf map), rounded up.
+pub const BVH_BYTES_PER_TRIANGLE: u64 = 96;
 
 /// A mesh with its BVH: closest-hit and occlusion queries, areas and surface sampling.
 ///
@@ -607,13 +672,10 @@ impl Geometry {
             // Local coordinates: exact (Sterbenz) for vertices within a factor of two of the
             // origin, which is where a far-away scene's vertices are.
             let v = idx.map(|k| mesh.positions[k as usize] - origin);
-            let magnitude = v.iter().fold(0.0f32, |m, p| m.max(p.abs().max_element()));
-            offsets.push(magnitude * RELATIVE_OFFSET);
-            let cross = (v[1] - v[0]).cross(v[2] - v[0]);
-            let area = 0.5 * cross.length();
-            let ng = cross.normalize_or_zero();
-            let valid = area.is_finite() && area > MIN_AREA && ng != Vec3::ZERO;
-            if !valid {
+            let normals = (!mesh.normals.is_empty()).then(|| idx.map(|k| mesh.normals[k as usize]));
+            let (tri, offset) = Tri::new(v, normals, mesh.materials[i]);
+            offsets.push(offset);
+            if tri.area == 0.0 {
                 degenerate += 1;
             } else {
                 for p in v {
@@ -621,38 +683,10 @@ impl Geometry {
                     bounds.1 = bounds.1.max(p);
                 }
             }
-            // Vertex normals: zero or non-finite ones mean "flat"; orient each with ng.
-            let mut n = [ng; 3];
-            let mut smooth = false;
-            if !mesh.normals.is_empty() {
-                let raw = idx.map(|k| mesh.normals[k as usize]);
-                if raw
-                    .iter()
-                    .all(|m| m.is_finite() && m.length_squared() > 1e-12)
-                {
-                    n = raw.map(|m| m.normalize());
-                    smooth = true;
-                }
-            }
-            // Vertex i's height over the opposite edge is 2·area / |edge|, so a weight of
-            // offset / height holds the point one offset from that edge.
-            let offset = magnitude * RELATIVE_OFFSET;
-            let inset = if valid {
-                [(v[1], v[2]), (v[2], v[0]), (v[0], v[1])]
-                    .map(|(a, b)| (offset * (b - a).length() / (2.0 * area)).min(MAX_INSET))
-            } else {
-                [0.0; 3]
-            };
-            tris.push(Tri {
-                v,
-                n,
-                ng,
-                area: if valid { area } else { 0.0 },
-                material: mesh.materials[i],
-                smooth,
-                inset,
-            });
+            tris.push(tri);
         }
+        // The mesh's arrays are not read again; freed before the BVH build's own.
+        drop(mesh);
         let live: Vec<u32> = (0..tris.len() as u32)
             .filter(|&i| tris[i as usize].area > 0.0)
             .collect();
@@ -672,6 +706,8 @@ impl Geometry {
                 seen.insert(key)
             })
             .collect();
+        // 36-byte keys in a table of 2^k ≥ 8n/7 slots: freed before the BVH build.
+        drop(seen);
         let duplicates = tris.len() - degenerate - live.len();
         let live_vertices: Vec<[Vec3; 3]> = live.iter().map(|&i| tris[i as usize].v).collect();
         let (accel, order) = match kernel {
@@ -719,6 +755,52 @@ impl Geometry {
             offsets,
             origin,
         })
+    }
+
+    /// Bytes this geometry holds, by part (capacities of its arrays).
+    pub fn memory(&self) -> GeometryBytes {
+        let bytes = |n: usize, size: usize| (n * size) as u64;
+        let triangles = bytes(self.tris.capacity(), size_of::<Tri>())
+            + bytes(self.offsets.capacity(), size_of::<f32>())
+            + bytes(self.area_cdf.capacity(), size_of::<f64>());
+        let accel = match &self.accel {
+            Accel::Bvh4(bvh) => bvh.bytes(),
+            Accel::Cwbvh(bvh) => {
+                bytes(
+                    bvh.nodes.capacity(),
+                    size_of::<obvhs::cwbvh::node::CwBvhNode>(),
+                ) + bytes(bvh.primitive_indices.capacity(), size_of::<u32>())
+            }
+        };
+        let bvh = accel
+            + bytes(self.rt.capacity(), size_of::<LeafTri>())
+            + bytes(self.leaf_to_prim.capacity(), size_of::<u32>());
+        GeometryBytes { triangles, bvh }
+    }
+
+    /// Bytes a geometry of `triangles` triangles is expected to hold, for a check before it is
+    /// built: the per-triangle data exactly, the default kernel's BVH at
+    /// [`BVH_BYTES_PER_TRIANGLE`] (its size depends on how the leaves fill).
+    pub fn planned_bytes(triangles: usize) -> GeometryBytes {
+        let n = triangles as u64;
+        GeometryBytes {
+            triangles: n * (size_of::<Tri>() + size_of::<f32>() + size_of::<f64>()) as u64,
+            bvh: n * BVH_BYTES_PER_TRIANGLE,
+        }
+    }
+
+    /// The most bytes building a geometry of `triangles` triangles allocates beside what the
+    /// geometry keeps (then frees): the BVH build's list of live triangles, their vertices,
+    /// boxes, centroids and order, and the binary tree of 2n − 1 nodes, alive together while
+    /// the binary tree is built (the duplicate test's table, freed before, is smaller).
+    pub fn build_transient_bytes(triangles: usize) -> u64 {
+        let per = size_of::<u32>()
+            + size_of::<[Vec3; 3]>()
+            + size_of::<obvhs::aabb::Aabb>()
+            + size_of::<Vec3A>()
+            + size_of::<u32>()
+            + 2 * size_of::<obvhs::bvh2::node::Bvh2Node>();
+        (triangles * per) as u64
     }
 
     /// World position of the origin of this geometry's frame, metres. Every position that
@@ -1047,6 +1129,52 @@ impl Geometry {
 mod tests {
     use super::*;
     use crate::{Domain, Rng};
+
+    /// The BVH a geometry keeps on a sphere, a grid and a random soup is within the
+    /// planning figure [`BVH_BYTES_PER_TRIANGLE`] and at least half of it (so a check made
+    /// before the build with it is neither loose nor far too strict), and the per-triangle
+    /// part is exactly the planned one.
+    #[test]
+    fn planned_bytes_bound_what_the_geometry_keeps() {
+        let mut sphere = TriangleMesh::default();
+        sphere.push_geodesic_sphere(Vec3::ZERO, 1.0, 64, false, 0);
+        let mut grid = TriangleMesh::default();
+        for j in 0..200 {
+            for i in 0..200 {
+                let (x, y) = (i as f32 * 0.01, j as f32 * 0.01);
+                grid.push_quad(
+                    [
+                        Vec3::new(x, y, 0.0),
+                        Vec3::new(x + 0.01, y, 0.0),
+                        Vec3::new(x + 0.01, y + 0.01, 0.0),
+                        Vec3::new(x, y + 0.01, 0.0),
+                    ],
+                    0,
+                );
+            }
+        }
+        let mut soup = TriangleMesh::default();
+        let mut rng = Rng::new(7, Domain::Other, [0, 0, 0]);
+        for _ in 0..50_000 {
+            let c = Vec3::from(rng.uniform3());
+            let base = soup.positions.len() as u32;
+            for _ in 0..3 {
+                soup.positions.push(c + 0.02 * Vec3::from(rng.uniform3()));
+            }
+            soup.indices.push([base, base + 1, base + 2]);
+            soup.materials.push(0);
+        }
+        for (name, mesh) in [("sphere", sphere), ("grid", grid), ("soup", soup)] {
+            let n = mesh.indices.len();
+            let g = Geometry::new(mesh).expect("geometry");
+            let (kept, planned) = (g.memory(), Geometry::planned_bytes(n));
+            assert_eq!(kept.triangles, planned.triangles, "{name}");
+            assert!(
+                kept.bvh <= planned.bvh && 2 * kept.bvh >= planned.bvh,
+                "{name}: {kept:?} vs {planned:?}"
+            );
+        }
+    }
 
     /// The six inward-facing faces of [0,1]³ with material = face index.
     fn unit_box() -> TriangleMesh {

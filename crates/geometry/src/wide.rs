@@ -235,6 +235,15 @@ struct Entry {
 }
 
 impl Bvh4 {
+    /// Bytes of the nodes, leaf triangles and leaf order: their lengths, not the capacities
+    /// `collapse` reserves for the worst case (one triangle a leaf), whose pages beyond the
+    /// length are never written and so never resident (shrinking them would copy).
+    pub(crate) fn bytes(&self) -> u64 {
+        (self.nodes.len() * size_of::<Node4>()
+            + self.tris.len() * size_of::<Tri4>()
+            + self.order.len() * size_of::<u32>()) as u64
+    }
+
     /// Number of node levels (1 for a root alone).
     pub(crate) fn depth(&self) -> usize {
         fn walk(nodes: &[Node4], i: usize) -> usize {

@@ -33,7 +33,8 @@ pub use correction::{CANDIDATES, Correction, PILOT_PASSES, pilot_seed};
 pub use direct::DirectSamples;
 pub use film::{Film, PassSums, PassValue};
 pub use memory::{
-    MemoryEstimate, MemoryItem, PILOT_PHOTONS, estimate_memory, human_bytes, model_cache_item,
+    MemoryEstimate, MemoryItem, PILOT_PHOTONS, estimate_memory, human_bytes, loading_item,
+    model_cache_item, scene_items,
 };
 pub use predict::{JITTER_RAYS, Prediction};
 pub use radius::RadiusMap;

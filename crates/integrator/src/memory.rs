@@ -9,6 +9,7 @@
 //! photon and the bytes per stored photon depend on the scene, so a pilot of
 //! [`PILOT_PHOTONS`] photons is traced to measure them.
 
+pub use bdpm_core::human_bytes;
 use bdpm_geometry::Domain;
 use bdpm_mis::NoiseModel;
 use bdpm_photon::{PhotonMap, TraceOptions};
@@ -35,9 +36,13 @@ const PHOTON_MAP_PEAK_FACTOR: f64 = 2.0;
 /// record in thread-local parts and their merged copy.
 const ARRIVAL_RECORD_BYTES: f64 = 32.0;
 /// Name of the fixed part of the estimate.
-const BASE_NAME: &str = "program and scene";
+const BASE_NAME: &str = "program";
 /// Program, scene-independent buffers and thread stacks (measured ~9 MB at 8×8 pixels).
 const BASE_BYTES: u64 = 16 << 20;
+/// Names of the scene's items, which the scene holds already when the estimate is made.
+const SCENE_ITEMS: [&str; 3] = ["geometry", "BVH", "textures"];
+/// Name of the item for the scene's load, which peaks before the render's own allocations.
+const LOADING_NAME: &str = "BVH build while loading, beyond the render's own";
 
 /// One part of the estimate.
 #[derive(Clone, Debug, PartialEq)]
@@ -67,8 +72,8 @@ impl MemoryEstimate {
         self.items.iter().map(|i| i.bytes).sum()
     }
 
-    /// The largest item that a render setting scales (not the fixed program and scene part):
-    /// the one to name when the estimate is too large.
+    /// The largest item that a render setting or the scene scales (not the fixed program
+    /// part): the one to name when the estimate is too large.
     pub fn scalable_largest(&self) -> &MemoryItem {
         self.items
             .iter()
@@ -77,8 +82,47 @@ impl MemoryEstimate {
     }
 }
 
+/// The items of `scene` itself: its per-triangle data, its BVH and its decoded textures
+/// ([`Scene::memory`]), bytes held. A caller that sizes work on a loaded scene other than a
+/// render (`bdpm study`, `bench`, `predict`) adds these to its own items; [`estimate_memory`]
+/// does, with [`loading_item`] for the load's peak.
+pub fn scene_items(scene: &Scene) -> Vec<MemoryItem> {
+    let m = scene.memory();
+    vec![
+        MemoryItem {
+            name: SCENE_ITEMS[0],
+            bytes: m.triangles,
+            lower: "the scene's triangle count",
+        },
+        MemoryItem {
+            name: SCENE_ITEMS[1],
+            bytes: m.bvh,
+            lower: "the scene's triangle count",
+        },
+        MemoryItem {
+            name: SCENE_ITEMS[2],
+            bytes: m.textures,
+            lower: "the scene's texture sizes (texels)",
+        },
+    ]
+}
+
+/// The part of the scene's load that the render's items do not cover: loading peaks while
+/// the BVH is built (its temporaries, [`bdpm_scene::SceneMemory::bvh_build`], beside the kept
+/// scene), before any of the render's allocations, so the estimate's peak is the kept scene
+/// plus the larger of the two; this item is the build's excess over `render` bytes of the
+/// other items (0 when the render needs more).
+pub fn loading_item(scene: &Scene, render: u64) -> MemoryItem {
+    MemoryItem {
+        name: LOADING_NAME,
+        bytes: scene.memory().bvh_build.saturating_sub(render),
+        lower: "the scene's triangle count",
+    }
+}
+
 /// Estimates the peak memory of rendering `scene` with `settings` (with technique layers
-/// when `techniques`). Traces a pilot of [`PILOT_PHOTONS`] photons for BDPM and light modes;
+/// when `techniques`): the program, the scene's own items ([`scene_items`], [`loading_item`])
+/// and the render's. Traces a pilot of [`PILOT_PHOTONS`] photons for BDPM and light modes;
 /// allocates nothing in proportion to the resolution or N_F.
 pub fn estimate_memory(
     scene: &Scene,
@@ -169,42 +213,59 @@ pub fn estimate_memory(
         }
     };
     if let Some(h) = heuristic {
-        let footprint = s.noise_model == NoiseModel::Footprint && s.pixel_jitter;
-        let needs = h.needs();
-        if needs.pixel_table || (footprint && needs.effective_samples) {
-            items.push(MemoryItem {
-                name: "per-pixel weight table",
-                bytes: pixels * size_of::<PixelWeights>() as u64,
-                lower: "--resolution",
-            });
-        }
-        if s.adaptive_radius {
-            // At the pilot's peak: its technique sums and one pass's layers and estimates;
-            // then the table at each pixel's radius is built beside the one at r.
-            items.push(MemoryItem {
-                name: "adaptive-radius pilot",
-                bytes: pixels
-                    * (2 * size_of::<Techniques>()
-                        + size_of::<[f64; 3]>()
-                        + size_of::<PixelWeights>()) as u64,
-                lower: "--resolution (or leave out --adaptive-radius)",
-            });
-        }
-        if needs.balance_correction {
-            // Per pixel and candidate, at the pilot's peak: the pass's per-row sums, their
-            // concatenation, and the second moments.
-            items.push(MemoryItem {
-                name: "balance-correction pilot",
-                bytes: pixels * (3 * CANDIDATES.len() * size_of::<f64>()) as u64,
-                lower: "--resolution",
-            });
-        }
+        items.extend(pixel_items(s, h, pixels));
     }
-    items.sort_by_key(|i| std::cmp::Reverse(i.bytes));
+    add_scene_items(scene, &mut items);
     MemoryEstimate {
         items,
         stored_per_emitted,
     }
+}
+
+/// Adds the scene's items and its load's to the program's and the render's `items` (the
+/// program first), drops empty ones and sorts them, largest first.
+fn add_scene_items(scene: &Scene, items: &mut Vec<MemoryItem>) {
+    let render: u64 = items.iter().skip(1).map(|i| i.bytes).sum();
+    items.push(loading_item(scene, render));
+    items.extend(scene_items(scene));
+    items.retain(|i| i.bytes > 0 || i.name == BASE_NAME);
+    items.sort_by_key(|i| std::cmp::Reverse(i.bytes));
+}
+
+/// The per-pixel items of a mode with weights `h`: its weight table, adaptive-radius pilot
+/// and balance-correction pilot, as it needs them.
+fn pixel_items(s: &RenderSettings, h: bdpm_mis::Heuristic, pixels: u64) -> Vec<MemoryItem> {
+    let mut items = Vec::new();
+    let footprint = s.noise_model == NoiseModel::Footprint && s.pixel_jitter;
+    let needs = h.needs();
+    if needs.pixel_table || (footprint && needs.effective_samples) {
+        items.push(MemoryItem {
+            name: "per-pixel weight table",
+            bytes: pixels * size_of::<PixelWeights>() as u64,
+            lower: "--resolution",
+        });
+    }
+    if s.adaptive_radius {
+        // At the pilot's peak: its technique sums and one pass's layers and estimates;
+        // then the table at each pixel's radius is built beside the one at r.
+        items.push(MemoryItem {
+            name: "adaptive-radius pilot",
+            bytes: pixels
+                * (2 * size_of::<Techniques>() + size_of::<[f64; 3]>() + size_of::<PixelWeights>())
+                    as u64,
+            lower: "--resolution (or leave out --adaptive-radius)",
+        });
+    }
+    if needs.balance_correction {
+        // Per pixel and candidate, at the pilot's peak: the pass's per-row sums, their
+        // concatenation, and the second moments.
+        items.push(MemoryItem {
+            name: "balance-correction pilot",
+            bytes: pixels * (3 * CANDIDATES.len() * size_of::<f64>()) as u64,
+            lower: "--resolution",
+        });
+    }
+    items
 }
 
 /// The build of the noise model's radiance cache of `photons` photons
@@ -219,19 +280,4 @@ pub fn model_cache_item(estimate: &MemoryEstimate, photons: u64) -> MemoryItem {
         bytes: (photons as f64 * arrivals_per_emitted * ARRIVAL_RECORD_BYTES) as u64,
         lower: "--model-cache-photons",
     }
-}
-
-/// `bytes` for people: `1.5 GiB`, `320 MiB`, `12 KiB`.
-pub fn human_bytes(bytes: u64) -> String {
-    let b = bytes as f64;
-    let (value, unit) = if b >= (1u64 << 40) as f64 {
-        (b / (1u64 << 40) as f64, "TiB")
-    } else if b >= (1u64 << 30) as f64 {
-        (b / (1u64 << 30) as f64, "GiB")
-    } else if b >= (1u64 << 20) as f64 {
-        (b / (1u64 << 20) as f64, "MiB")
-    } else {
-        (b / 1024.0, "KiB")
-    };
-    format!("{value:.1} {unit}")
 }

@@ -18,7 +18,8 @@ use bdpm_settings::number_text as num;
 use bdpm_settings::{PartialSettings, RenderSettings};
 use glam::{Mat4, Vec2, Vec3};
 
-use crate::gltf_mesh::{Origin, load_gltf};
+use crate::gltf_mesh::{Assets, Origin, load_gltf};
+use crate::memory::{Budget, MemoryLimit};
 use crate::schema::{CameraDef, MaterialDef, Point, SceneFile, ShapeDef, Triple};
 use crate::{LoadError, LoadReport, LoadedScene, limits};
 
@@ -219,6 +220,7 @@ pub(crate) fn build(
     file: SceneFile,
     base_dir: &Path,
     display_path: &Path,
+    limit: Option<MemoryLimit>,
 ) -> Result<LoadedScene, LoadError> {
     let ctx = Ctx { file: display_path };
     let mut report = LoadReport::default();
@@ -227,88 +229,38 @@ pub(crate) fn build(
     report.radius_given = render.radius.is_some();
     let (settings, output) = render_settings(&ctx, render)?;
     let mut materials = materials(&ctx, &file.material)?;
-
     let mut lights = point_lights(&ctx, &file.light)?;
-
-    let mut parts: Vec<TriangleMesh> = Vec::with_capacity(file.shape.len());
-    let mut total_triangles: u64 = 0;
-    // Texture coordinates per triangle, in the order `merge` concatenates the parts.
-    let mut texcoords: Vec<[Vec2; 3]> = Vec::new();
+    let mut assets = Assets::new(Budget::new(limit));
+    let mut shapes = Shapes::default();
     for (i, shape) in file.shape.iter().enumerate() {
         let prefix = format!("shape[{i}]");
-        let mut mesh = TriangleMesh::default();
-        match shape {
-            ShapeDef::Quad(q) => {
-                let material = shape_material(
-                    &ctx,
-                    &prefix,
-                    q.material.as_deref(),
-                    &materials,
-                    shape.type_name(),
-                )?;
-                quad(&ctx, &prefix, q, material, &mut mesh)?;
-            }
-            ShapeDef::Box(b) => {
-                let material = shape_material(
-                    &ctx,
-                    &prefix,
-                    b.material.as_deref(),
-                    &materials,
-                    shape.type_name(),
-                )?;
-                cuboid(&ctx, &prefix, b, material, &mut mesh)?;
-            }
-            ShapeDef::Sphere(s) => {
-                let material = shape_material(
-                    &ctx,
-                    &prefix,
-                    s.material.as_deref(),
-                    &materials,
-                    shape.type_name(),
-                )?;
-                sphere(&ctx, &prefix, s, material, &mut total_triangles, &mut mesh)?;
-            }
+        let mesh = match shape {
             ShapeDef::Mesh(g) => {
-                let override_material = match g.material.as_deref() {
-                    Some(name) => Some(shape_material(
-                        &ctx,
-                        &prefix,
-                        Some(name),
-                        &materials,
-                        "mesh",
-                    )?),
-                    None => None,
-                };
-                let field = format!("{prefix}.file");
-                let written = ctx.required(
-                    &field,
-                    g.file.as_ref(),
-                    "path of a .gltf or .glb file, relative to the scene file",
-                )?;
-                let path = base_dir.join(written);
-                let post = ctx.placement(&prefix, g.scale, g.translate)?;
-                let origin = Origin {
-                    path: &path,
-                    field: &field,
-                    written,
-                };
-                let part = load_gltf(&origin, post, override_material, &mut materials)?;
-                report.gltf_files.push(path.clone());
+                let part = gltf_shape(&ctx, &prefix, g, base_dir, &mut materials, &mut assets)?;
+                report
+                    .gltf_files
+                    .push(base_dir.join(g.file.as_deref().unwrap_or(Path::new(""))));
                 count_gltf(&mut report, &part);
-                texcoords.extend_from_slice(&part.texcoords);
+                shapes.texcoords.extend_from_slice(&part.texcoords);
                 lights.extend(part.lights);
-                mesh = part.mesh;
+                part.mesh
             }
-        }
-        texcoords.resize(
-            texcoords.len().max(total_of(&parts) + mesh.indices.len()),
-            [Vec2::ZERO; 3],
-        );
+            _ => builtin_shape(
+                &ctx,
+                &prefix,
+                shape,
+                &materials,
+                &mut shapes.builtin_triangles,
+            )?,
+        };
         check_placed(&ctx, &prefix, &mesh)?;
-        parts.push(mesh);
+        shapes.append(&ctx, mesh)?;
     }
-
-    let mesh = merge(&ctx, parts)?;
+    report.textures = assets.decoded();
+    check_geometry_fits(&ctx, &shapes, &assets.budget)?;
+    let Shapes {
+        mesh, texcoords, ..
+    } = shapes;
     let geometry =
         Geometry::new(mesh).map_err(|e| geometry_error(&ctx, e, report.skipped_primitives))?;
 
@@ -333,6 +285,134 @@ pub(crate) fn build(
         output,
         report,
     })
+}
+
+/// The shapes so far, joined into one mesh as they are read (no second copy of every part),
+/// with the texture coordinates of each triangle.
+#[derive(Default)]
+struct Shapes {
+    mesh: TriangleMesh,
+    texcoords: Vec<[Vec2; 3]>,
+    /// Triangles generated by built-in spheres, against their limit.
+    builtin_triangles: u64,
+    /// Whether any shape so far has vertex normals (then every vertex has one, zero = flat).
+    normals: bool,
+}
+
+impl Shapes {
+    /// Appends a shape's mesh. Normals are kept per vertex (zero = flat) once any shape has
+    /// them, so the result does not depend on the order of the shapes.
+    fn append(&mut self, ctx: &Ctx<'_>, part: TriangleMesh) -> Result<(), LoadError> {
+        let out = &mut self.mesh;
+        let vertices = out.positions.len() + part.positions.len();
+        if vertices > u32::MAX as usize {
+            return Err(ctx.bad(
+                "shape",
+                format!("{vertices} vertices in total; at most 2^32 - 1 are supported"),
+            ));
+        }
+        if !part.normals.is_empty() && !self.normals {
+            self.normals = true;
+            out.normals.resize(out.positions.len(), Vec3::ZERO);
+        }
+        if self.normals {
+            if part.normals.is_empty() {
+                out.normals
+                    .extend(std::iter::repeat_n(Vec3::ZERO, part.positions.len()));
+            } else {
+                out.normals.extend_from_slice(&part.normals);
+            }
+        }
+        let base = out.positions.len() as u32;
+        out.positions.extend_from_slice(&part.positions);
+        out.indices
+            .extend(part.indices.iter().map(|t| t.map(|k| k + base)));
+        out.materials.extend_from_slice(&part.materials);
+        self.texcoords
+            .resize(self.texcoords.len().max(out.indices.len()), [Vec2::ZERO; 3]);
+        Ok(())
+    }
+
+    /// Bytes the joined mesh and texture coordinates hold.
+    fn bytes(&self) -> u64 {
+        let m = &self.mesh;
+        (m.positions.capacity() * size_of::<Vec3>()
+            + m.normals.capacity() * size_of::<Vec3>()
+            + m.indices.capacity() * size_of::<[u32; 3]>()
+            + m.materials.capacity() * size_of::<u32>()
+            + self.texcoords.capacity() * size_of::<[Vec2; 3]>()) as u64
+    }
+}
+
+/// Refuses, before the BVH is built, a geometry that with the texels and the mesh held would
+/// not fit in the memory limit: what it keeps (per-triangle data and BVH) and what its build
+/// allocates beside that.
+fn check_geometry_fits(ctx: &Ctx<'_>, shapes: &Shapes, budget: &Budget) -> Result<(), LoadError> {
+    let n = shapes.mesh.indices.len();
+    let needs = Geometry::planned_bytes(n).total() + Geometry::build_transient_bytes(n);
+    budget
+        .check(
+            budget.textures() + shapes.bytes(),
+            needs,
+            "per-triangle data, BVH and the BVH build",
+        )
+        .map_err(|m| ctx.bad("shape", format!("building the scene's {n} triangles {m}")))
+}
+
+/// A `[[shape]]` of type `mesh`: its glTF file, placed, with an optional material override.
+fn gltf_shape(
+    ctx: &Ctx<'_>,
+    prefix: &str,
+    g: &crate::schema::MeshDef,
+    base_dir: &Path,
+    materials: &mut Materials,
+    assets: &mut Assets,
+) -> Result<crate::gltf_mesh::GltfPart, LoadError> {
+    let override_material = match g.material.as_deref() {
+        Some(name) => Some(shape_material(ctx, prefix, Some(name), materials, "mesh")?),
+        None => None,
+    };
+    let field = format!("{prefix}.file");
+    let written = ctx.required(
+        &field,
+        g.file.as_ref(),
+        "path of a .gltf or .glb file, relative to the scene file",
+    )?;
+    let path = base_dir.join(written);
+    let post = ctx.placement(prefix, g.scale, g.translate)?;
+    let origin = Origin {
+        path: &path,
+        field: &field,
+        written,
+    };
+    load_gltf(&origin, post, override_material, materials, assets)
+}
+
+/// A built-in `quad`, `box` or `sphere` shape as a mesh.
+fn builtin_shape(
+    ctx: &Ctx<'_>,
+    prefix: &str,
+    shape: &ShapeDef,
+    materials: &Materials,
+    builtin_triangles: &mut u64,
+) -> Result<TriangleMesh, LoadError> {
+    let mut mesh = TriangleMesh::default();
+    let material =
+        |name: Option<&str>| shape_material(ctx, prefix, name, materials, shape.type_name());
+    match shape {
+        ShapeDef::Quad(q) => quad(ctx, prefix, q, material(q.material.as_deref())?, &mut mesh)?,
+        ShapeDef::Box(b) => cuboid(ctx, prefix, b, material(b.material.as_deref())?, &mut mesh)?,
+        ShapeDef::Sphere(sp) => sphere(
+            ctx,
+            prefix,
+            sp,
+            material(sp.material.as_deref())?,
+            builtin_triangles,
+            &mut mesh,
+        )?,
+        ShapeDef::Mesh(_) => unreachable!("glTF shapes are loaded by gltf_shape"),
+    }
+    Ok(mesh)
 }
 
 /// A `quad` shape: its four corners, placed, as two triangles.
@@ -499,7 +579,6 @@ fn count_gltf(report: &mut LoadReport, part: &crate::gltf_mesh::GltfPart) {
     report.skipped_lights += part.skipped_lights;
     report.skipped_cameras += part.skipped_cameras;
     report.textured_materials += part.textured_materials;
-    report.textures += part.textures;
     report.other_textures += part.other_textures;
     report.flat_primitives += part.flat_primitives;
 }
@@ -694,39 +773,4 @@ fn camera(
         }
         other => ctx.bad("camera", other.to_string()),
     })
-}
-
-/// Joins the parts into one mesh. Normals are kept per vertex (zero = flat) if any part has
-/// them, so the result does not depend on the order of the shapes.
-/// Triangles in `parts`.
-fn total_of(parts: &[TriangleMesh]) -> usize {
-    parts.iter().map(|p| p.indices.len()).sum()
-}
-
-fn merge(ctx: &Ctx<'_>, parts: Vec<TriangleMesh>) -> Result<TriangleMesh, LoadError> {
-    let vertices: usize = parts.iter().map(|p| p.positions.len()).sum();
-    if vertices > u32::MAX as usize {
-        return Err(ctx.bad(
-            "shape",
-            format!("{vertices} vertices in total; at most 2^32 - 1 are supported"),
-        ));
-    }
-    let any_normals = parts.iter().any(|p| !p.normals.is_empty());
-    let mut out = TriangleMesh::default();
-    for p in parts {
-        let base = out.positions.len() as u32;
-        if any_normals {
-            if p.normals.is_empty() {
-                out.normals
-                    .extend(std::iter::repeat_n(Vec3::ZERO, p.positions.len()));
-            } else {
-                out.normals.extend_from_slice(&p.normals);
-            }
-        }
-        out.positions.extend_from_slice(&p.positions);
-        out.indices
-            .extend(p.indices.iter().map(|t| t.map(|k| k + base)));
-        out.materials.extend_from_slice(&p.materials);
-    }
-    Ok(out)
 }

@@ -13,8 +13,8 @@ use std::sync::Arc;
 
 use base64::Engine;
 use bdpm_geometry::TriangleMesh;
-use bdpm_scene::{PointLight, Texture, Wrap};
-use glam::{Mat3, Mat4, Vec2, Vec3};
+use bdpm_scene::{PointLight, TexelImage, Texture, Wrap};
+use glam::{Affine2, Mat2, Mat3, Mat4, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::json::extensions::scene::khr_lights_punctual::Type as LightType;
 use gltf::json::validation::Checked;
@@ -23,6 +23,7 @@ use gltf::{Accessor, Node, Semantic};
 
 use crate::LoadError;
 use crate::build::Materials;
+use crate::memory::Budget;
 
 /// Deepest node nesting accepted. glTF forbids cycles but the parser does not check for them,
 /// so the walk stops here instead of running forever.
@@ -49,8 +50,6 @@ pub(crate) struct GltfPart {
     pub(crate) texcoords: Vec<[Vec2; 3]>,
     /// Materials made from this file that use a base-colour texture.
     pub(crate) textured_materials: usize,
-    /// Distinct base-colour images decoded (one per image and sampler).
-    pub(crate) textures: usize,
     /// Materials made from this file with normal, occlusion, emissive or metallic-roughness
     /// textures, which are ignored.
     pub(crate) other_textures: usize,
@@ -78,6 +77,37 @@ impl Origin<'_> {
     }
 }
 
+/// What the glTF files of one scene share while it loads: the decoded images, each decoded
+/// once whatever the samplers, materials, files and `[[shape]]`s that show it, and the memory
+/// budget every large allocation is checked against.
+#[derive(Default)]
+pub(crate) struct Assets {
+    images: HashMap<ImageKey, Arc<TexelImage>>,
+    pub(crate) budget: Budget,
+}
+
+impl Assets {
+    pub(crate) fn new(budget: Budget) -> Assets {
+        Assets {
+            images: HashMap::new(),
+            budget,
+        }
+    }
+
+    /// Images decoded.
+    pub(crate) fn decoded(&self) -> usize {
+        self.images.len()
+    }
+}
+
+/// Where an image's bytes come from: a file (canonical path), or a glTF file's own bytes
+/// (its canonical path and the image's index: a bufferView or a data URI).
+#[derive(Debug, PartialEq, Eq, Hash)]
+enum ImageKey {
+    File(PathBuf),
+    Embedded(PathBuf, usize),
+}
+
 /// Loads every triangle primitive and KHR_lights_punctual point light of the default scene
 /// (or the first scene, or every root node when there is no scene). `post` is applied after
 /// each node's world matrix; `material` replaces every glTF material when given.
@@ -86,52 +116,15 @@ pub(crate) fn load_gltf(
     post: Mat4,
     material: Option<u32>,
     materials: &mut Materials,
+    assets: &mut Assets,
 ) -> Result<GltfPart, LoadError> {
-    let bytes = crate::files::read_regular(origin.path, crate::limits::MAX_GLTF_BYTES, "glTF file")
-        .map_err(|e| origin.err(e))?;
-    let invalid = |e: gltf::Error| origin.err(format!("not a valid glTF 2.0 file: {e}"));
-    let raw = gltf::Gltf::from_slice_without_validation(&bytes).map_err(invalid)?;
-    // gltf-json 1.4's validator indexes the accessor list with a primitive's POSITION index
-    // before checking it (mesh.rs, primitive_validate_hook), so that case is checked first.
-    let json = raw.document.into_json();
-    for (m, mesh) in json.meshes.iter().enumerate() {
-        for (p, prim) in mesh.primitives.iter().enumerate() {
-            for (semantic, index) in &prim.attributes {
-                if index.value() >= json.accessors.len() {
-                    return Err(origin.err(format!(
-                        "not a valid glTF 2.0 file: meshes[{m}].primitives[{p}].attributes: {semantic:?} names accessor {}, which does not exist",
-                        index.value()
-                    )));
-                }
-            }
-        }
-    }
-    let gltf = gltf::Gltf {
-        document: gltf::Document::from_json(json).map_err(invalid)?,
-        blob: raw.blob,
-    };
-    let buffers = load_buffers(origin, &gltf)?;
+    let gltf = read_document(origin, &assets.budget)?;
+    let buffers = load_buffers(origin, &gltf, &assets.budget)?;
     let doc = &gltf.document;
-
-    let roots: Vec<Node<'_>> = match doc.default_scene().or_else(|| doc.scenes().next()) {
-        Some(scene) => scene.nodes().collect(),
-        None => {
-            let mut is_child = vec![false; doc.nodes().len()];
-            for node in doc.nodes() {
-                for child in node.children() {
-                    if let Some(flag) = is_child.get_mut(child.index()) {
-                        *flag = true;
-                    }
-                }
-            }
-            doc.nodes()
-                .filter(|n| !is_child.get(n.index()).copied().unwrap_or(false))
-                .collect()
-        }
-    };
+    let roots = root_nodes(doc);
 
     let mut part = GltfPart::default();
-    let mut material_map: HashMap<usize, (u32, Option<u32>)> = HashMap::new();
+    let mut material_map: HashMap<usize, (u32, Option<TexRead>)> = HashMap::new();
     let mut images: HashMap<(usize, Wrap, Wrap), Arc<Texture>> = HashMap::new();
     let mut stack: Vec<(Node<'_>, Mat4, usize)> =
         roots.into_iter().rev().map(|n| (n, post, 0)).collect();
@@ -159,10 +152,12 @@ pub(crate) fn load_gltf(
                         continue;
                     }
                 }
-                let (m, tex_set) = match material {
+                let (m, tex_read) = match material {
                     Some(m) => (m, None),
                     None => {
                         let mut seen = Seen {
+                            json: doc.as_json(),
+                            assets: &mut *assets,
                             materials: &mut material_map,
                             images: &mut images,
                             part: &mut part,
@@ -170,7 +165,9 @@ pub(crate) fn load_gltf(
                         primitive_material(origin, &prim, &buffers, &mut seen, materials)?
                     }
                 };
-                add_primitive(origin, &what, &prim, &buffers, world, m, tex_set, &mut part)?;
+                add_primitive(
+                    origin, &what, &prim, &buffers, world, m, tex_read, &mut part,
+                )?;
             }
         }
         if doc
@@ -181,35 +178,171 @@ pub(crate) fn load_gltf(
         {
             part.skipped_cameras += 1;
         }
-        if let Some(light) = node_light(doc, &node) {
-            match light.type_ {
-                Checked::Valid(LightType::Point) => {
-                    let flux = 4.0 * PI * light.intensity * Vec3::from_array(light.color);
-                    let position = world.transform_point3(Vec3::ZERO);
-                    if !(flux.is_finite() && flux.min_element() >= 0.0) {
-                        return Err(origin.err(format!(
-                            "node {}: point light has intensity {} and color {:?}; need finite values >= 0",
-                            node.index(),
-                            light.intensity,
-                            light.color
-                        )));
-                    }
-                    if !position.is_finite() {
-                        return Err(origin.err(format!(
-                            "node {}: light position is not finite",
-                            node.index()
-                        )));
-                    }
-                    part.lights.push(PointLight { position, flux });
-                }
-                _ => part.skipped_lights += 1,
-            }
-        }
+        add_light(origin, doc, &node, world, &mut part)?;
         for child in node.children() {
             stack.push((child, world, depth + 1));
         }
     }
     Ok(part)
+}
+
+/// Reads and validates the glTF file (refused first if its size alone would not fit the
+/// memory budget).
+fn read_document(origin: &Origin<'_>, budget: &Budget) -> Result<gltf::Gltf, LoadError> {
+    if let Ok(meta) = std::fs::metadata(origin.path) {
+        budget
+            .check(
+                budget.textures(),
+                meta.len(),
+                "the file's bytes, read whole",
+            )
+            .map_err(|m| origin.err(format!("reading it {m}")))?;
+    }
+    let bytes = crate::files::read_regular(origin.path, crate::limits::MAX_GLTF_BYTES, "glTF file")
+        .map_err(|e| origin.err(e))?;
+    let invalid = |e: gltf::Error| origin.err(format!("not a valid glTF 2.0 file: {}", brief(&e)));
+    let raw = gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| {
+        if is_gltf_1(&bytes) {
+            origin.err(
+                "is a glTF 1.0 file; bdpm reads glTF 2.0 (convert it, e.g. import and export it with Blender)",
+            )
+        } else {
+            invalid(e)
+        }
+    })?;
+    let json = raw.document.into_json();
+    check_required_extensions(&json).map_err(|m| origin.err(m))?;
+    // gltf-json 1.4's validator indexes the accessor list with a primitive's POSITION index
+    // before checking it (mesh.rs, primitive_validate_hook), so that case is checked first.
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            for (semantic, index) in &prim.attributes {
+                if index.value() >= json.accessors.len() {
+                    return Err(origin.err(format!(
+                        "not a valid glTF 2.0 file: meshes[{m}].primitives[{p}].attributes: {semantic:?} names accessor {}, which does not exist",
+                        index.value()
+                    )));
+                }
+            }
+        }
+    }
+    Ok(gltf::Gltf {
+        document: gltf::Document::from_json(json).map_err(invalid)?,
+        blob: raw.blob,
+    })
+}
+
+/// Extensions a file may list in `extensionsRequired` that the loader reads (the material
+/// ones change only what bdpm ignores anyway: it renders base colour).
+const READ_EXTENSIONS: [&str; 2] = ["KHR_lights_punctual", "KHR_texture_transform"];
+
+/// One line for a file whose `extensionsRequired` names an extension bdpm cannot read, with
+/// what to do; the validator would otherwise list every accessor the extension left empty
+/// (a Draco file: 102 clauses).
+fn check_required_extensions(json: &gltf::json::Root) -> Result<(), String> {
+    for ext in &json.extensions_required {
+        let advice = match ext.as_str() {
+            "KHR_draco_mesh_compression" => "export without Draco",
+            "EXT_meshopt_compression" => "export without mesh compression",
+            "KHR_mesh_quantization" => "export with float positions and normals",
+            "KHR_texture_basisu" | "EXT_texture_webp" | "EXT_texture_avif" => {
+                "export PNG or JPEG textures"
+            }
+            e if READ_EXTENSIONS.contains(&e) => continue,
+            _ => "export without it",
+        };
+        return Err(format!("uses {ext}, which bdpm does not decode; {advice}"));
+    }
+    Ok(())
+}
+
+/// Whether `bytes` are a glTF 1.x file: a GLB of container version 1, or JSON whose
+/// `asset.version` is 1.x (or the number 1 of the drafts).
+fn is_gltf_1(bytes: &[u8]) -> bool {
+    if bytes.starts_with(b"glTF") {
+        return bytes.get(4..8) == Some(&1u32.to_le_bytes()[..]);
+    }
+    use gltf::json::Value;
+    // Drafts before 1.0 wrote the version as a number.
+    let v = gltf::json::deserialize::from_slice::<Value>(bytes);
+    match v.as_ref().ok().and_then(|v| v.pointer("/asset/version")) {
+        Some(Value::String(s)) => s == "1" || s.starts_with("1."),
+        Some(Value::Number(n)) => n.as_f64().is_some_and(|x| x < 2.0),
+        _ => false,
+    }
+}
+
+/// A glTF error in one short line: a validation error lists its first three problems and
+/// how many more there are.
+fn brief(e: &gltf::Error) -> String {
+    match e {
+        gltf::Error::Validation(list) if list.len() > 3 => {
+            let first: Vec<String> = list[..3].iter().map(|(p, e)| format!("{p}: {e}")).collect();
+            format!(
+                "invalid glTF: {}; and {} more",
+                first.join("; "),
+                list.len() - 3
+            )
+        }
+        other => other.to_string(),
+    }
+}
+
+/// The nodes the walk starts from: the default scene's, or the first scene's, or every node
+/// that is nobody's child when there is no scene.
+fn root_nodes(doc: &gltf::Document) -> Vec<Node<'_>> {
+    match doc.default_scene().or_else(|| doc.scenes().next()) {
+        Some(scene) => scene.nodes().collect(),
+        None => {
+            let mut is_child = vec![false; doc.nodes().len()];
+            for node in doc.nodes() {
+                for child in node.children() {
+                    if let Some(flag) = is_child.get_mut(child.index()) {
+                        *flag = true;
+                    }
+                }
+            }
+            doc.nodes()
+                .filter(|n| !is_child.get(n.index()).copied().unwrap_or(false))
+                .collect()
+        }
+    }
+}
+
+/// Adds the KHR_lights_punctual point light of `node` (at `world`'s origin) to `part`, or
+/// counts a spot or directional light as skipped.
+fn add_light(
+    origin: &Origin<'_>,
+    doc: &gltf::Document,
+    node: &Node<'_>,
+    world: Mat4,
+    part: &mut GltfPart,
+) -> Result<(), LoadError> {
+    if let Some(light) = node_light(doc, node) {
+        match light.type_ {
+            Checked::Valid(LightType::Point) => {
+                let flux = 4.0 * PI * light.intensity * Vec3::from_array(light.color);
+                let position = world.transform_point3(Vec3::ZERO);
+                if !(flux.is_finite() && flux.min_element() >= 0.0) {
+                    return Err(origin.err(format!(
+                            "node {}: point light has intensity {} and color {:?}; need finite values >= 0",
+                            node.index(),
+                            light.intensity,
+                            light.color
+                        )));
+                }
+                if !position.is_finite() {
+                    return Err(origin.err(format!(
+                        "node {}: light position is not finite",
+                        node.index()
+                    )));
+                }
+                part.lights.push(PointLight { position, flux });
+            }
+            _ => part.skipped_lights += 1,
+        }
+    }
+    Ok(())
 }
 
 /// The KHR_lights_punctual light a node carries, read from the JSON directly: the crate's
@@ -239,7 +372,10 @@ fn node_light<'a>(
 /// What one file's walk has met so far: its materials (scene index and the texture-coordinate
 /// set of their base-colour texture), its decoded images, and the counts in `part`.
 struct Seen<'a> {
-    materials: &'a mut HashMap<usize, (u32, Option<u32>)>,
+    /// The file's JSON, read directly where the `gltf` crate's accessors would panic.
+    json: &'a gltf::json::Root,
+    assets: &'a mut Assets,
+    materials: &'a mut HashMap<usize, (u32, Option<TexRead>)>,
     images: &'a mut HashMap<(usize, Wrap, Wrap), Arc<Texture>>,
     part: &'a mut GltfPart,
 }
@@ -255,7 +391,7 @@ fn primitive_material(
     buffers: &[Vec<u8>],
     seen: &mut Seen<'_>,
     materials: &mut Materials,
-) -> Result<(u32, Option<u32>), LoadError> {
+) -> Result<(u32, Option<TexRead>), LoadError> {
     let mat = prim.material();
     let Some(index) = mat.index() else {
         return Ok((materials.gltf_default()?, None));
@@ -293,13 +429,43 @@ fn primitive_material(
                 let texture = base_colour_texture(origin, index, &info.texture(), buffers, seen)?;
                 materials.set_texture(m, texture);
                 seen.part.textured_materials += 1;
-                (m, Some(info.tex_coord()))
+                (m, Some(TexRead::of(&info)))
             }
             None => (m, None),
         }
     };
     let _ = seen.materials.insert(index, m);
     Ok(m)
+}
+
+/// How a primitive's texture coordinates are read for its material's base-colour texture:
+/// the TEXCOORD set, and the KHR_texture_transform of the texture reference, if any.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct TexRead {
+    set: u32,
+    /// uv ↦ T·R·S·uv of KHR_texture_transform (offset, counter-clockwise rotation, scale).
+    transform: Option<Affine2>,
+}
+
+impl TexRead {
+    fn of(info: &gltf::texture::Info<'_>) -> TexRead {
+        let ext = info.texture_transform();
+        let transform = ext.as_ref().map(|t| {
+            let ([sx, sy], r) = (t.scale(), t.rotation());
+            let (sin, cos) = r.sin_cos();
+            // The extension's matrix translation · rotation · scale, with rotation
+            // [[cos, sin], [−sin, cos]] as it writes it (rows).
+            let linear = Mat2::from_cols(
+                Vec2::new(cos * sx, -sin * sx),
+                Vec2::new(sin * sy, cos * sy),
+            );
+            Affine2::from_mat2_translation(linear, Vec2::from_array(t.offset()))
+        });
+        TexRead {
+            set: ext.and_then(|t| t.tex_coord()).unwrap_or(info.tex_coord()),
+            transform,
+        }
+    }
 }
 
 /// The decoded image of a base-colour texture with its sampler's wrap modes (decoded once per
@@ -320,8 +486,8 @@ fn base_colour_texture(
     let sampler = texture.sampler();
     let (wrap_u, wrap_v) = (wrap(sampler.wrap_s()), wrap(sampler.wrap_t()));
     let image = texture.source();
-    let key = (image.index(), wrap_u, wrap_v);
-    if let Some(t) = seen.images.get(&key) {
+    let key_per_file = (image.index(), wrap_u, wrap_v);
+    if let Some(t) = seen.images.get(&key_per_file) {
         return Ok(Arc::clone(t));
     }
     let what = format!(
@@ -330,62 +496,134 @@ fn base_colour_texture(
         image.index()
     );
     let err = |m: String| origin.err(format!("{what}: {m}"));
-    let bytes: Vec<u8> = match image.source() {
-        gltf::image::Source::View { view, .. } => {
-            let data = buffers
-                .get(view.buffer().index())
-                .ok_or_else(|| err("its bufferView's buffer is missing".into()))?;
-            let end = view.offset().checked_add(view.length());
-            match end {
-                Some(end) if end <= data.len() => data[view.offset()..end].to_vec(),
-                _ => {
-                    return Err(err(format!(
-                        "bufferView {} reaches past the end of buffer {}",
-                        view.index(),
-                        view.buffer().index()
-                    )));
-                }
-            }
-        }
-        gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => {
-            let (header, payload) = uri
-                .split_once(',')
-                .ok_or_else(|| err("malformed data URI".into()))?;
-            if !header.ends_with(";base64") {
-                return Err(err("only base64 data URIs are supported".into()));
-            }
-            base64::engine::general_purpose::STANDARD
-                .decode(payload)
-                .map_err(|e| err(format!("bad base64 in data URI: {e}")))?
-        }
-        gltf::image::Source::Uri { uri, .. } => {
-            let dir = origin.path.parent().unwrap_or(Path::new(""));
-            let file = crate::files::confined_uri(dir, uri).map_err(|e| err(e.to_string()))?;
-            crate::files::read_regular(&file, crate::limits::MAX_GLTF_BYTES, "texture image")
-                .map_err(|message| LoadError::Gltf {
-                    path: file.clone(),
-                    field: format!("{}, {what} of {}", origin.field, origin.path.display()),
-                    message,
-                })?
+    let key = image_key(origin, seen.json, image.index()).map_err(err)?;
+    let texels = match seen.assets.images.get(&key) {
+        Some(texels) => Arc::clone(texels),
+        None => {
+            let bytes = image_bytes(origin, seen.json, image.index(), buffers, &what)?;
+            let header = crate::image::header(&bytes).map_err(err)?;
+            // Before the decoder allocates: the texels kept so far and this file's buffers
+            // are held, so a texture too large for the limit is refused here, not in the
+            // allocation.
+            let held =
+                seen.assets.budget.textures() + buffers.iter().map(|b| b.len() as u64).sum::<u64>();
+            seen.assets
+                .budget
+                .check(
+                    held,
+                    header.decode_bytes,
+                    "3 bytes a texel kept, and the decoder's buffers",
+                )
+                .map_err(|m| {
+                    err(format!(
+                        "decoding its {}×{} texels {m}",
+                        header.width, header.height
+                    ))
+                })?;
+            let decoded = crate::image::decode(&bytes).map_err(err)?;
+            drop(bytes);
+            let texels = Arc::new(
+                TexelImage::srgb8(decoded.width, decoded.height, decoded.rgb)
+                    .map_err(|e| err(e.to_string()))?,
+            );
+            seen.assets.budget.keep_texels(texels.bytes());
+            let _ = seen.assets.images.insert(key, Arc::clone(&texels));
+            texels
         }
     };
-    let decoded = crate::image::decode(&bytes).map_err(err)?;
-    let texture = Texture::new(
-        decoded.width,
-        decoded.height,
-        decoded.texels,
-        wrap_u,
-        wrap_v,
-    )
-    .map_err(|e| err(e.to_string()))?;
-    let texture = Arc::new(texture);
-    let _ = seen.images.insert(key, Arc::clone(&texture));
-    seen.part.textures += 1;
+    let texture = Arc::new(Texture::with_image(texels, wrap_u, wrap_v));
+    let _ = seen.images.insert(key_per_file, Arc::clone(&texture));
     Ok(texture)
 }
 
+/// The [`ImageKey`] of image `index` of the glTF file `origin`: a file named by its uri
+/// (confined to the glTF file's directory), else the glTF file's own bytes.
+fn image_key(
+    origin: &Origin<'_>,
+    json: &gltf::json::Root,
+    index: usize,
+) -> Result<ImageKey, String> {
+    let canonical = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
+    let image = json
+        .images
+        .get(index)
+        .ok_or_else(|| format!("image {index} does not exist"))?;
+    match (&image.buffer_view, &image.uri) {
+        (None, Some(uri)) if !uri.starts_with("data:") => {
+            let dir = origin.path.parent().unwrap_or(Path::new(""));
+            Ok(ImageKey::File(canonical(&crate::files::confined_uri(
+                dir, uri,
+            )?)))
+        }
+        _ => Ok(ImageKey::Embedded(canonical(origin.path), index)),
+    }
+}
+
+/// The encoded bytes of image `index`: a bufferView's bytes (GLB, or any buffer), a base64
+/// `data:` URI, or a PNG or JPEG file next to the glTF file. Read from the JSON directly: the
+/// `gltf` crate's `Image::source` panics on an image with a bufferView but no mimeType, and on
+/// one with neither a bufferView nor a uri. The mimeType is not needed (images are recognised
+/// by their first bytes).
+fn image_bytes(
+    origin: &Origin<'_>,
+    json: &gltf::json::Root,
+    index: usize,
+    buffers: &[Vec<u8>],
+    what: &str,
+) -> Result<Vec<u8>, LoadError> {
+    let err = |m: String| origin.err(format!("{what}: {m}"));
+    let image = json
+        .images
+        .get(index)
+        .ok_or_else(|| err(format!("image {index} does not exist")))?;
+    if let Some(view) = &image.buffer_view {
+        let v = view.value();
+        let view = json
+            .buffer_views
+            .get(v)
+            .ok_or_else(|| err(format!("bufferView {v} does not exist")))?;
+        let b = view.buffer.value();
+        let data = buffers
+            .get(b)
+            .ok_or_else(|| err(format!("bufferView {v}: buffer {b} does not exist")))?;
+        let start = view.byte_offset.map_or(0, |o| o.0) as usize;
+        return match start.checked_add(view.byte_length.0 as usize) {
+            Some(end) if end <= data.len() => Ok(data[start..end].to_vec()),
+            _ => Err(err(format!(
+                "bufferView {v} reaches past the end of buffer {b} ({} bytes)",
+                data.len()
+            ))),
+        };
+    }
+    let Some(uri) = &image.uri else {
+        return Err(err(
+            "has neither a uri nor a bufferView, so there are no image bytes to read".into(),
+        ));
+    };
+    if uri.starts_with("data:") {
+        let (header, payload) = uri
+            .split_once(',')
+            .ok_or_else(|| err("malformed data URI (no comma)".into()))?;
+        if !header.ends_with(";base64") {
+            return Err(err("only base64 data URIs are supported".into()));
+        }
+        return base64::engine::general_purpose::STANDARD
+            .decode(payload)
+            .map_err(|e| err(format!("bad base64 in data URI: {e}")));
+    }
+    let dir = origin.path.parent().unwrap_or(Path::new(""));
+    let file = crate::files::confined_uri(dir, uri).map_err(err)?;
+    crate::files::read_regular(&file, crate::limits::MAX_GLTF_BYTES, "texture image").map_err(
+        |message| LoadError::Gltf {
+            path: file.clone(),
+            field: format!("{}, {what} of {}", origin.field, origin.path.display()),
+            message,
+        },
+    )
+}
+
 /// Appends one triangle primitive, transformed by `world`, to `part`, with the texture
-/// coordinates of set `tex_set` when its material has a texture (zero when the primitive
+/// coordinates `tex_read` asks for when its material has a texture (zero when the primitive
 /// lacks that set).
 #[allow(clippy::too_many_arguments)]
 fn add_primitive(
@@ -395,7 +633,7 @@ fn add_primitive(
     buffers: &[Vec<u8>],
     world: Mat4,
     material: u32,
-    tex_set: Option<u32>,
+    tex_read: Option<TexRead>,
     part: &mut GltfPart,
 ) -> Result<(), LoadError> {
     let err = |m: String| origin.err(format!("{what}: {m}"));
@@ -423,7 +661,7 @@ fn add_primitive(
     }
 
     let normals = read_normals(prim, buffers, world, positions.len(), &err)?;
-    let texcoords = read_texcoords(prim, buffers, tex_set, positions.len(), &err)?;
+    let texcoords = read_texcoords(prim, buffers, tex_read, positions.len(), &err)?;
     let indices = read_indices(prim, buffers, positions.len(), &err)?;
     // Strips and fans become lists (glTF 2.0 §3.7.2.1): strip triangle i is
     // (v[i], v[i+1+i%2], v[i+2-i%2]), which keeps every triangle's winding; fan triangle i is
@@ -535,43 +773,46 @@ fn read_normals(
     })
 }
 
-/// The primitive's texture coordinates of set `tex_set`; empty without a set or when the
-/// primitive lacks it.
+/// The primitive's texture coordinates for `tex_read` (its set, transformed); empty without
+/// a texture or when the primitive lacks the set.
 fn read_texcoords(
     prim: &gltf::Primitive<'_>,
     buffers: &[Vec<u8>],
-    tex_set: Option<u32>,
+    tex_read: Option<TexRead>,
     vertices: usize,
     err: &dyn Fn(String) -> LoadError,
 ) -> Result<Vec<Vec2>, LoadError> {
-    let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
-    Ok(
-        match tex_set.and_then(|set| prim.get(&Semantic::TexCoords(set)).map(|acc| (set, acc))) {
-            Some((set, acc)) if acc.count() > 0 => {
-                check_accessor(
-                    &acc,
-                    &[DataType::F32, DataType::U8, DataType::U16],
-                    Dimensions::Vec2,
-                    buffers,
-                )
-                .map_err(|m| err(format!("TEXCOORD_{set}: {m}")))?;
-                if acc.count() != vertices {
-                    return Err(err(format!(
-                        "{} texture coordinates for {} positions",
-                        acc.count(),
-                        vertices
-                    )));
-                }
-                reader
-                    .read_tex_coords(set)
-                    .ok_or_else(|| err(format!("TEXCOORD_{set} cannot be read")))?
-                    .into_f32()
-                    .map(Vec2::from_array)
-                    .collect()
-            }
-            _ => Vec::new(),
-        },
+    let Some(TexRead { set, transform }) = tex_read else {
+        return Ok(Vec::new());
+    };
+    let acc = match prim.get(&Semantic::TexCoords(set)) {
+        Some(acc) if acc.count() > 0 => acc,
+        _ => return Ok(Vec::new()),
+    };
+    check_accessor(
+        &acc,
+        &[DataType::F32, DataType::U8, DataType::U16],
+        Dimensions::Vec2,
+        buffers,
     )
+    .map_err(|m| err(format!("TEXCOORD_{set}: {m}")))?;
+    if acc.count() != vertices {
+        return Err(err(format!(
+            "{} texture coordinates for {} positions",
+            acc.count(),
+            vertices
+        )));
+    }
+    let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+    let uv = reader
+        .read_tex_coords(set)
+        .ok_or_else(|| err(format!("TEXCOORD_{set} cannot be read")))?
+        .into_f32()
+        .map(Vec2::from_array);
+    Ok(match transform {
+        Some(t) => uv.map(|uv| t.transform_point2(uv)).collect(),
+        None => uv.collect(),
+    })
 }
 
 /// The primitive's indices as given (`0..vertices` when it has none), before strips and fans
@@ -680,10 +921,24 @@ fn check_accessor(
 
 /// Resolves every buffer: the GLB binary chunk, a base64 `data:` URI, or a file relative to
 /// the glTF file.
-fn load_buffers(origin: &Origin<'_>, gltf: &gltf::Gltf) -> Result<Vec<Vec<u8>>, LoadError> {
-    let mut out = Vec::new();
+fn load_buffers(
+    origin: &Origin<'_>,
+    gltf: &gltf::Gltf,
+    budget: &Budget,
+) -> Result<Vec<Vec<u8>>, LoadError> {
+    let mut out: Vec<Vec<u8>> = Vec::new();
     for buffer in gltf.buffers() {
         let i = buffer.index();
+        // Held until the file's primitives are read: refused before the read if, with the
+        // texels kept and the buffers before it, it would not fit.
+        let held = budget.textures() + out.iter().map(|b| b.len() as u64).sum::<u64>();
+        budget
+            .check(
+                held,
+                buffer.length() as u64,
+                "held while the file's meshes are read",
+            )
+            .map_err(|m| origin.err(format!("buffer {i} ({} bytes) {m}", buffer.length())))?;
         let data = match buffer.source() {
             gltf::buffer::Source::Bin => gltf.blob.clone().ok_or_else(|| {
                 origin.err(format!(

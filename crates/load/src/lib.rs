@@ -50,11 +50,13 @@ mod error;
 mod files;
 mod gltf_mesh;
 mod image;
+mod memory;
 mod schema;
 
 use std::path::{Path, PathBuf};
 
 pub use error::LoadError;
+pub use memory::MemoryLimit;
 
 /// Caps on values that size allocations or loops, so that a typo cannot exhaust memory.
 pub mod limits {
@@ -134,7 +136,8 @@ pub struct LoadReport {
     pub skipped_cameras: usize,
     /// glTF materials with a base-colour texture: kd = `baseColorFactor` × the texture.
     pub textured_materials: usize,
-    /// Base-colour texture images decoded (one per image and sampler).
+    /// Base-colour texture images decoded: each once, whatever the samplers, materials, glTF
+    /// files and shapes that show it.
     pub textures: usize,
     /// glTF materials with normal, occlusion, emissive or metallic-roughness textures, which
     /// are ignored.
@@ -144,10 +147,17 @@ pub struct LoadReport {
 }
 
 impl LoadReport {
-    /// One line for each kind of glTF content that was skipped or simplified, for the
-    /// driver to print as warnings; empty when nothing was.
+    /// One line for each kind of content that was left out, skipped or simplified
+    /// (zero-area triangles, glTF primitives, lights, cameras, textures), for the driver to
+    /// print as warnings; empty when nothing was.
     pub fn warnings(&self) -> Vec<String> {
         let mut out = Vec::new();
+        if self.degenerate_triangles > 0 {
+            out.push(format!(
+                "{} of the scene's {} triangles have zero area and are left out (degenerate_triangles in the report)",
+                self.degenerate_triangles, self.triangles
+            ));
+        }
         if self.skipped_primitives > 0 {
             out.push(format!(
                 "glTF: {} point or line primitive(s) skipped (only triangles are rendered)",
@@ -177,9 +187,24 @@ impl LoadReport {
     }
 }
 
+/// How to load a scene.
+#[derive(Clone, Debug, Default)]
+pub struct LoadOptions {
+    /// The memory the process may use. Before each large allocation of the load (a texture's
+    /// texels, a glTF file or buffer, the geometry and its BVH) the loader compares what it
+    /// holds plus what the allocation needs with it, and refuses the scene in one line naming
+    /// the item and the bound rather than running out of memory. `None`: no check.
+    pub memory_limit: Option<MemoryLimit>,
+}
+
 /// Loads the scene file at `path`; glTF files it names are found relative to its directory.
 /// The file must be a regular file of at most [`limits::MAX_SCENE_FILE_BYTES`].
 pub fn load_scene(path: &Path) -> Result<LoadedScene, LoadError> {
+    load_scene_with(path, &LoadOptions::default())
+}
+
+/// [`load_scene`] with options (a memory limit).
+pub fn load_scene_with(path: &Path, options: &LoadOptions) -> Result<LoadedScene, LoadError> {
     let read_error = |message: String| LoadError::Read {
         path: path.to_path_buf(),
         source: std::io::Error::other(message.trim_start_matches("cannot read: ").to_string()),
@@ -188,7 +213,7 @@ pub fn load_scene(path: &Path) -> Result<LoadedScene, LoadError> {
         .map_err(read_error)?;
     let text = String::from_utf8(bytes).map_err(|e| read_error(format!("not UTF-8 text: {e}")))?;
     let base_dir = path.parent().unwrap_or(Path::new(""));
-    load_scene_str(&text, base_dir, path)
+    load_str_with(&text, base_dir, path, options)
 }
 
 /// Loads a scene from TOML text. `base_dir` resolves the relative glTF paths; `display_path`
@@ -197,6 +222,15 @@ pub fn load_scene_str(
     toml_text: &str,
     base_dir: &Path,
     display_path: &Path,
+) -> Result<LoadedScene, LoadError> {
+    load_str_with(toml_text, base_dir, display_path, &LoadOptions::default())
+}
+
+fn load_str_with(
+    toml_text: &str,
+    base_dir: &Path,
+    display_path: &Path,
+    options: &LoadOptions,
 ) -> Result<LoadedScene, LoadError> {
     let file: schema::SceneFile = toml::from_str(toml_text).map_err(|e| {
         let (line, column) = e
@@ -216,7 +250,7 @@ pub fn load_scene_str(
             message,
         }
     })?;
-    build::build(file, base_dir, display_path)
+    build::build(file, base_dir, display_path, options.memory_limit.clone())
 }
 
 /// The key that `span` of `text` points at (the start of a `key = value` line or a

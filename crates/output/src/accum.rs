@@ -145,10 +145,14 @@ pub fn assets_hash(gltf_files: &[PathBuf]) -> String {
             gltf::buffer::Source::Uri(uri) => Some(uri.to_string()),
             gltf::buffer::Source::Bin => None,
         });
-        let images = doc.images().filter_map(|i| match i.source() {
-            gltf::image::Source::Uri { uri, .. } => Some(uri.to_string()),
-            gltf::image::Source::View { .. } => None,
-        });
+        // From the JSON: the crate's `Image::source` panics on an image with a bufferView but
+        // no mimeType, or with neither a bufferView nor a uri (the loader accepts the first).
+        let images = doc
+            .as_json()
+            .images
+            .iter()
+            .filter(|i| i.buffer_view.is_none())
+            .filter_map(|i| i.uri.clone());
         for uri in buffers.chain(images) {
             if uri.starts_with("data:") {
                 continue;

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use bdpm_integrator::{
     PartialSettings, RadiusInput, RenderSettings, Setting, SettingsError, Stage, StageProbe,
 };
-use bdpm_load::{LoadReport, load_scene};
+use bdpm_load::{LoadOptions, LoadReport, MemoryLimit, load_scene_with};
 use bdpm_scene::Scene;
 use bdpm_settings::{Written, limits};
 use clap::Args;
@@ -277,9 +277,38 @@ pub struct Prepared {
     pub report: LoadReport,
 }
 
-/// Loads a scene file and applies the overrides.
+/// Loads a scene file and applies the overrides, refusing a scene whose textures, glTF
+/// buffers or geometry would not fit in the available memory before allocating them.
 pub fn prepare(path: &Path, overrides: &Overrides) -> CliResult<Prepared> {
-    let loaded = load_scene(path).map_err(|e| e.to_string())?;
+    prepare_within(path, overrides, memory_limit(None))
+}
+
+/// The memory limit of a command: `--max-memory` when given, else the available memory
+/// (none where it cannot be read).
+pub fn memory_limit(max_memory: Option<u64>) -> Option<MemoryLimit> {
+    match max_memory {
+        Some(bytes) => Some(MemoryLimit {
+            bytes,
+            source: "--max-memory".into(),
+        }),
+        None => available_memory().map(|bytes| MemoryLimit {
+            bytes,
+            source: "available memory".into(),
+        }),
+    }
+}
+
+/// [`prepare`] with the loader's memory check against `limit` (see
+/// [`bdpm_load::LoadOptions::memory_limit`]).
+pub fn prepare_within(
+    path: &Path,
+    overrides: &Overrides,
+    limit: Option<MemoryLimit>,
+) -> CliResult<Prepared> {
+    let options = LoadOptions {
+        memory_limit: limit,
+    };
+    let loaded = load_scene_with(path, &options).map_err(|e| e.to_string())?;
     let mut scene = loaded.scene;
     let mut settings = loaded.settings;
     apply_overrides(&mut settings, overrides, path)?;

@@ -31,7 +31,7 @@ mod traits;
 mod vertex;
 
 pub use camera::Camera;
-pub use texture::{SceneTextures, Texture, TextureError, Wrap, srgb_to_linear};
+pub use texture::{SceneTextures, TexelImage, Texture, TextureError, Wrap, srgb_to_linear};
 // The plain data the photon tracer, the cache and the weights share lives in bdpm-core.
 pub use bdpm_core::{MASKED_LIGHTS, PointLight, Shading, WeightVertex};
 
@@ -170,6 +170,21 @@ impl fmt::Display for LightNearSurface {
     }
 }
 
+/// What a [`Scene`] holds in memory ([`Scene::memory`]), bytes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SceneMemory {
+    /// Per-triangle data: vertices, normals, areas, spawn offsets, the area CDF and texture
+    /// coordinates, bytes.
+    pub triangles: u64,
+    /// The BVH, bytes.
+    pub bvh: u64,
+    /// Decoded texels, each image counted once, bytes.
+    pub textures: u64,
+    /// The most the BVH build allocated beside what the geometry keeps, while the scene was
+    /// loaded (freed since), bytes ([`Geometry::build_transient_bytes`]).
+    pub bvh_build: u64,
+}
+
 /// Geometry, materials, lights and camera of one render.
 ///
 /// The parts are read through accessors and fixed at [`Scene::new`]: the light-selection
@@ -265,7 +280,31 @@ impl Scene {
             });
         }
         self.textures = textures;
+        if !any {
+            // Read only where a material is textured: 24 bytes a triangle for nothing.
+            self.textures.texcoords = Vec::new();
+        }
         Ok(self)
+    }
+
+    /// Bytes the scene holds in its large parts, and the most its geometry's build allocated
+    /// beside them: what a memory estimate of a render adds for the scene.
+    pub fn memory(&self) -> SceneMemory {
+        let g = self.geometry.memory();
+        let texcoords = (self.textures.texcoords.capacity() * size_of::<[Vec2; 3]>()) as u64;
+        // Each image once, however many textures (samplers, materials) show it.
+        let mut images: Vec<&std::sync::Arc<TexelImage>> = Vec::new();
+        for t in self.textures.base_colour.iter().flatten() {
+            if !images.iter().any(|i| std::sync::Arc::ptr_eq(i, t.image())) {
+                images.push(t.image());
+            }
+        }
+        SceneMemory {
+            triangles: g.triangles + texcoords,
+            bvh: g.bvh,
+            textures: images.iter().map(|i| i.bytes()).sum(),
+            bvh_build: Geometry::build_transient_bytes(self.geometry.triangle_count()),
+        }
     }
 
     /// The base-colour texture of a material index, if it has one.

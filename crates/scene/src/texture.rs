@@ -1,7 +1,7 @@
 //! Base-colour textures: kd(u, v) = (the material's kd) × texture(u, v), linear RGB texels
 //! sampled bilinearly with the glTF sampler's wrap modes.
 
-use std::sync::Arc;
+use std::sync::{Arc, LazyLock};
 
 use glam::{Vec2, Vec3};
 
@@ -69,46 +69,61 @@ impl std::fmt::Display for TextureError {
 
 impl std::error::Error for TextureError {}
 
-/// An RGB image of linear reflectances in [0, 1] (already decoded from sRGB), row 0 at
-/// texture coordinate v = 0, as glTF lays images out.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Texture {
+/// The texels of one decoded image, shared (through an `Arc`) by every [`Texture`] that
+/// shows it, whatever its sampler: an image used by nine samplers is held once.
+#[derive(Debug, PartialEq)]
+pub struct TexelImage {
     width: u32,
     height: u32,
-    texels: Vec<Vec3>,
-    wrap_u: Wrap,
-    wrap_v: Wrap,
+    texels: Texels,
 }
 
-impl Texture {
-    /// A texture of `width` × `height` texels, row-major from the top-left (v = 0).
-    pub fn new(
-        width: u32,
-        height: u32,
-        texels: Vec<Vec3>,
-        wrap_u: Wrap,
-        wrap_v: Wrap,
-    ) -> Result<Self, TextureError> {
-        if width == 0 || height == 0 || texels.len() as u64 != u64::from(width) * u64::from(height)
-        {
-            return Err(TextureError::Size {
-                width,
-                height,
-                texels: texels.len(),
-            });
-        }
+/// How texels are stored: linear f32 (12 bytes a texel, for images made in code), or 8-bit
+/// sRGB (3 bytes a texel, as PNG and JPEG images are decoded), turned into linear values
+/// through a 256-entry table when read, so a read gives the same number as decoding the image
+/// to linear f32 up front would.
+#[derive(Debug, PartialEq)]
+enum Texels {
+    Linear(Vec<Vec3>),
+    Srgb8(Vec<u8>),
+}
+
+/// The linear value of each 8-bit sRGB code, `srgb_to_linear(i / 255)`.
+static SRGB8_TO_LINEAR: LazyLock<[f32; 256]> =
+    LazyLock::new(|| std::array::from_fn(|i| srgb_to_linear(i as f32 / 255.0)));
+
+impl TexelImage {
+    /// `width` × `height` linear RGB texels in [0, 1], row-major from the top-left.
+    pub fn linear(width: u32, height: u32, texels: Vec<Vec3>) -> Result<Self, TextureError> {
+        check_size(width, height, texels.len())?;
         if let Some(index) = texels
             .iter()
             .position(|t| !(t.is_finite() && t.min_element() >= 0.0 && t.max_element() <= 1.0))
         {
             return Err(TextureError::Texel { index });
         }
-        Ok(Texture {
+        Ok(TexelImage {
             width,
             height,
-            texels,
-            wrap_u,
-            wrap_v,
+            texels: Texels::Linear(texels),
+        })
+    }
+
+    /// `width` × `height` texels given as 8-bit sRGB-encoded R, G, B bytes (3 per texel),
+    /// row-major from the top-left; decoded to linear values when sampled.
+    pub fn srgb8(width: u32, height: u32, rgb: Vec<u8>) -> Result<Self, TextureError> {
+        if !rgb.len().is_multiple_of(3) {
+            return Err(TextureError::Size {
+                width,
+                height,
+                texels: rgb.len() / 3,
+            });
+        }
+        check_size(width, height, rgb.len() / 3)?;
+        Ok(TexelImage {
+            width,
+            height,
+            texels: Texels::Srgb8(rgb),
         })
     }
 
@@ -117,31 +132,108 @@ impl Texture {
         (self.width, self.height)
     }
 
+    /// Bytes held by the texels.
+    pub fn bytes(&self) -> u64 {
+        match &self.texels {
+            Texels::Linear(t) => (t.capacity() * size_of::<Vec3>()) as u64,
+            Texels::Srgb8(t) => t.capacity() as u64,
+        }
+    }
+
+    /// Texel `i` (row-major), linear RGB.
+    #[inline]
+    fn at(&self, i: usize) -> Vec3 {
+        match &self.texels {
+            Texels::Linear(t) => t[i],
+            Texels::Srgb8(t) => {
+                let lut = &*SRGB8_TO_LINEAR;
+                let p = &t[3 * i..3 * i + 3];
+                Vec3::new(lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize])
+            }
+        }
+    }
+}
+
+fn check_size(width: u32, height: u32, texels: usize) -> Result<(), TextureError> {
+    if width == 0 || height == 0 || texels as u64 != u64::from(width) * u64::from(height) {
+        return Err(TextureError::Size {
+            width,
+            height,
+            texels,
+        });
+    }
+    Ok(())
+}
+
+/// An RGB image of linear reflectances in [0, 1] (already decoded from sRGB), row 0 at
+/// texture coordinate v = 0, as glTF lays images out, with a sampler's wrap modes. The texels
+/// are shared with every other texture of the same image ([`Texture::with_image`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    image: Arc<TexelImage>,
+    wrap_u: Wrap,
+    wrap_v: Wrap,
+}
+
+impl Texture {
+    /// A texture of `width` × `height` linear texels, row-major from the top-left (v = 0).
+    pub fn new(
+        width: u32,
+        height: u32,
+        texels: Vec<Vec3>,
+        wrap_u: Wrap,
+        wrap_v: Wrap,
+    ) -> Result<Self, TextureError> {
+        let image = Arc::new(TexelImage::linear(width, height, texels)?);
+        Ok(Texture::with_image(image, wrap_u, wrap_v))
+    }
+
+    /// A texture showing `image` with a sampler's wrap modes; the texels are not copied.
+    pub fn with_image(image: Arc<TexelImage>, wrap_u: Wrap, wrap_v: Wrap) -> Self {
+        Texture {
+            image,
+            wrap_u,
+            wrap_v,
+        }
+    }
+
+    /// The image this texture shows (shared with the other textures of the same image).
+    pub fn image(&self) -> &Arc<TexelImage> {
+        &self.image
+    }
+
+    /// Width and height, texels.
+    pub fn size(&self) -> (u32, u32) {
+        self.image.size()
+    }
+
     /// The texel at column `x`, row `y` (unwrapped).
     pub fn texel(&self, x: u32, y: u32) -> Vec3 {
-        self.texels[y as usize * self.width as usize + x as usize]
+        self.image
+            .at(y as usize * self.image.width as usize + x as usize)
     }
 
     /// Bilinear value at texture coordinates `uv` (texel centres at ((i + ½)/w, (j + ½)/h)),
     /// each of the four texels wrapped by the sampler's mode. A non-finite coordinate reads
     /// as 0. The result is in [0, 1] per channel.
     pub fn sample(&self, uv: Vec2) -> Vec3 {
+        let (width, height) = self.image.size();
         let axis = |c: f32, n: u32| -> (i64, f32) {
             let x = if c.is_finite() { c } else { 0.0 } as f64 * f64::from(n) - 0.5;
             let i = x.floor();
             (i as i64, (x - i) as f32)
         };
-        let (x0, fx) = axis(uv.x, self.width);
-        let (y0, fy) = axis(uv.y, self.height);
+        let (x0, fx) = axis(uv.x, width);
+        let (y0, fy) = axis(uv.y, height);
         let xs = [
-            self.wrap_u.index(x0, self.width),
-            self.wrap_u.index(x0.saturating_add(1), self.width),
+            self.wrap_u.index(x0, width),
+            self.wrap_u.index(x0.saturating_add(1), width),
         ];
         let ys = [
-            self.wrap_v.index(y0, self.height),
-            self.wrap_v.index(y0.saturating_add(1), self.height),
+            self.wrap_v.index(y0, height),
+            self.wrap_v.index(y0.saturating_add(1), height),
         ];
-        let at = |x: usize, y: usize| self.texels[y * self.width as usize + x];
+        let at = |x: usize, y: usize| self.image.at(y * width as usize + x);
         let top = at(xs[0], ys[0]).lerp(at(xs[1], ys[0]), fx);
         let bottom = at(xs[0], ys[1]).lerp(at(xs[1], ys[1]), fx);
         top.lerp(bottom, fy).clamp(Vec3::ZERO, Vec3::ONE)
@@ -219,6 +311,32 @@ mod tests {
             Texture::new(1, 1, bad, Wrap::Repeat, Wrap::Repeat),
             Err(TextureError::Texel { index: 0 })
         );
+    }
+
+    #[test]
+    fn srgb8_texels_read_as_their_linear_values_and_share_the_image() {
+        let image = Arc::new(TexelImage::srgb8(2, 1, vec![0, 128, 255, 10, 20, 30]).unwrap());
+        assert_eq!(image.bytes(), 6);
+        let a = Texture::with_image(Arc::clone(&image), Wrap::Repeat, Wrap::Repeat);
+        let b = Texture::with_image(Arc::clone(&image), Wrap::ClampToEdge, Wrap::Repeat);
+        assert!(Arc::ptr_eq(a.image(), b.image()));
+        let lin = |c: u8| srgb_to_linear(f32::from(c) / 255.0);
+        assert_eq!(a.texel(0, 0), Vec3::new(0.0, lin(128), 1.0));
+        assert_eq!(b.texel(1, 0), Vec3::new(lin(10), lin(20), lin(30)));
+        // The same texels given as linear values sample to the same bits.
+        let linear = Texture::new(
+            2,
+            1,
+            vec![a.texel(0, 0), a.texel(1, 0)],
+            Wrap::Repeat,
+            Wrap::Repeat,
+        )
+        .unwrap();
+        for u in [0.1, 0.4, 0.75, 1.3] {
+            let uv = Vec2::new(u, 0.5);
+            assert_eq!(a.sample(uv), linear.sample(uv));
+        }
+        assert!(TexelImage::srgb8(2, 2, vec![0; 9]).is_err());
     }
 
     #[test]

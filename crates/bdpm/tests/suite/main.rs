@@ -7,6 +7,7 @@ mod cli;
 mod round4_lab;
 mod round4_light;
 mod round4_settings;
+mod round4_textures;
 mod scripts;
 mod study;
 

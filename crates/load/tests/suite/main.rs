@@ -6,5 +6,6 @@
 mod errors;
 mod fuzz;
 mod gltf;
+mod round4;
 mod scenes;
 mod shapes;
