@@ -42,12 +42,17 @@
 
 mod bdf;
 mod error;
+mod fresnel;
 mod lobe;
 mod quadrature;
 mod survival;
 
 pub use bdf::{Bdf, BdfSample, Outgoing};
 pub use error::BdfError;
+pub use fresnel::{
+    Polarised, fresnel_conductor, fresnel_conductor_polarised, fresnel_dielectric,
+    fresnel_dielectric_polarised, reflect, refract,
+};
 pub use lobe::{LOBE_EPSILON, LOBE_WIDTH_MAX, LOBE_WIDTH_MIN};
 pub use survival::{MAX_SURVIVAL, survival_at, survival_probability};
 
