@@ -45,6 +45,7 @@ mod error;
 mod fresnel;
 mod lobe;
 mod quadrature;
+mod specular;
 mod survival;
 
 pub use bdf::{Bdf, BdfSample, Outgoing};
@@ -54,6 +55,9 @@ pub use fresnel::{
     fresnel_dielectric_polarised, reflect, refract,
 };
 pub use lobe::{LOBE_EPSILON, LOBE_WIDTH_MAX, LOBE_WIDTH_MIN};
+pub use specular::{
+    Dielectric, ETA_MAX, ETA_MIN, Mirror, SpecularError, SpecularSample, Transport,
+};
 pub use survival::{MAX_SURVIVAL, survival_at, survival_probability};
 
 // Luminance is shared with the crates below the BDFs (photon tracing, the cache).

@@ -9,3 +9,4 @@ mod fresnel;
 mod properties;
 mod proptests;
 mod sampling;
+mod specular;
