@@ -44,6 +44,7 @@ mod bdf;
 mod error;
 mod fresnel;
 mod lobe;
+mod material;
 mod quadrature;
 mod specular;
 mod survival;
@@ -55,6 +56,7 @@ pub use fresnel::{
     fresnel_dielectric_polarised, reflect, refract,
 };
 pub use lobe::{LOBE_EPSILON, LOBE_WIDTH_MAX, LOBE_WIDTH_MIN};
+pub use material::Material;
 pub use specular::{
     Dielectric, ETA_MAX, ETA_MIN, Mirror, SpecularError, SpecularSample, Transport,
 };

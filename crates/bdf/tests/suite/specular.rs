@@ -210,3 +210,42 @@ fn display_names_the_parameters() {
     let m = Mirror::new(Vec3::splat(0.5)).unwrap();
     assert!(m.to_string().starts_with("Mirror[reflectance = "));
 }
+
+#[test]
+fn material_dispatches_and_says_which_models_are_delta() {
+    use bdpm_bdf::{Bdf, Material};
+    fn send_sync<T: Send + Sync + Clone>() {}
+    send_sync::<Material>();
+
+    let bdf = Bdf::new(Vec3::splat(0.3), Vec3::splat(0.5), 10f32.to_radians()).unwrap();
+    let smooth = Material::from(bdf.clone());
+    let mirror = Material::from(Mirror::new(Vec3::splat(0.9)).unwrap());
+    let glass = Material::from(Dielectric::new(1.5).unwrap());
+    assert!(!smooth.is_delta() && mirror.is_delta() && glass.is_delta());
+    assert!(smooth.bdf().is_some() && mirror.bdf().is_none() && glass.bdf().is_none());
+
+    let (wo, wi) = (direction(30.0), direction(50.0));
+    // The smooth model is the Bdf, bit for bit.
+    assert_eq!(smooth.eval(wo, wi), bdf.eval(wo, wi));
+    assert_eq!(smooth.pdf(wo, wi), bdf.pdf(wo, wi));
+    assert_eq!(smooth.albedo(wo), bdf.albedo(wo));
+    assert_eq!(smooth.sample_delta(wo, 0.5, Transport::Radiance), None);
+    // The delta models: zero eval and pdf, sampling through the enum is the model's.
+    for m in [&mirror, &glass] {
+        let r = Vec3::new(-wo.x, -wo.y, wo.z);
+        assert_eq!((m.eval(wo, r), m.pdf(wo, r)), (Vec3::ZERO, 0.0));
+    }
+    let s = glass.sample_delta(wo, 0.9, Transport::Radiance).unwrap();
+    let d = Dielectric::new(1.5).unwrap();
+    assert_eq!(Some(s), d.sample(wo, 0.9, Transport::Radiance));
+    assert_eq!(glass.albedo(wo), d.albedo(wo));
+    assert_eq!(
+        mirror
+            .sample_delta(wo, 0.1, Transport::Importance)
+            .unwrap()
+            .weight,
+        Vec3::splat(0.9)
+    );
+    assert_eq!(glass.to_string(), "Dielectric[eta = 1.5]");
+    assert_eq!(smooth.to_string(), bdf.to_string());
+}
