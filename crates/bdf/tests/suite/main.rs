@@ -6,6 +6,7 @@
 
 mod common;
 mod fresnel;
+mod glass;
 mod properties;
 mod proptests;
 mod sampling;
