@@ -55,3 +55,31 @@ proptest! {
         }
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 4000, failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// Any direction on either side, any index in range, any tint: a delta sample is a unit
+    /// direction on the right side, with a finite non-negative weight and a probability in
+    /// (0, 1]; never a NaN.
+    #[test]
+    fn delta_samples_are_well_formed(
+        eta in bdpm_bdf::ETA_MIN..=bdpm_bdf::ETA_MAX, tint in 0.0f32..=1.0,
+        a in (0.0f32..1.0, 0.0f32..1.0), u in 0.0f32..1.0, radiance in any::<bool>(),
+    ) {
+        use bdpm_bdf::{Dielectric, Mirror, Transport};
+        let mode = if radiance { Transport::Radiance } else { Transport::Importance };
+        let wo = dir(a.0, a.1, false);
+        let glass = Dielectric::tinted(eta, Vec3::splat(tint), Vec3::ONE).unwrap();
+        let metal = Mirror::conductor(Vec3::ONE, Vec3::splat(eta), Vec3::splat(tint * 5.0)).unwrap();
+        for s in [glass.sample(wo, u, mode), metal.sample(wo, u, mode)].into_iter().flatten() {
+            prop_assert!((s.wi.length() - 1.0).abs() < 1e-5, "wi = {}", s.wi);
+            prop_assert_eq!(s.refracted, s.wi.z * wo.z < 0.0);
+            prop_assert!(s.weight.is_finite() && s.weight.min_element() >= 0.0, "weight {}", s.weight);
+            prop_assert!(s.probability > 0.0 && s.probability <= 1.0);
+            prop_assert!(s.eta.is_finite() && s.eta > 0.0);
+        }
+        let f = glass.fresnel(wo);
+        prop_assert!((0.0..=1.0).contains(&f));
+    }
+}
