@@ -22,7 +22,7 @@ use gltf::mesh::Mode;
 use gltf::{Accessor, Node, Semantic};
 
 use crate::LoadError;
-use crate::build::Materials;
+use crate::materials::Materials;
 use crate::memory::Budget;
 
 /// Deepest node nesting accepted. glTF forbids cycles but the parser does not check for them,

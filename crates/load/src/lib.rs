@@ -50,6 +50,7 @@ mod error;
 mod files;
 mod gltf_mesh;
 mod image;
+mod materials;
 mod memory;
 mod schema;
 
