@@ -11,9 +11,10 @@ use clap::{ArgGroup, Args};
 use glam::Vec3;
 
 use bdpm_output::cli::{CliResult, Overrides, parse_bytes, prepare, thread_pool};
-use bdpm_output::colormap::{Canvas, ColourMap, Legend, compose};
+use bdpm_output::colormap::{ColourMap, Legend, compose};
 use bdpm_output::files::stem_of;
 use bdpm_output::memory::{self, MemoryLimit};
+use bdpm_output::raster::Canvas;
 use bdpm_output::{exr, say};
 
 /// Bottom of the PNG's colour scale: w₀ at or below it gets the bottom colour. 2⁻⁷, the

@@ -384,7 +384,7 @@ impl RunReport {
 }
 
 /// The settings as EXR header attributes (`bdpm.mode`, `bdpm.seed`, …), and the scene's
-/// identity `bdpm.scene_hash` ([`crate::accum::scene_hash`]), which `predict --measured` and
+/// identity `bdpm.scene_hash` ([`bdpm_load::scene_hash`]), which `predict --measured` and
 /// `study --reference` check, and `bdpm.estimator_hash` ([`crate::accum::estimator_hash`]),
 /// which `predict --measured` checks.
 pub fn header_attributes(
