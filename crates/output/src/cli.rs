@@ -6,7 +6,8 @@ use std::path::{Path, PathBuf};
 
 use bdpm_integrator::{PartialSettings, RadiusInput, Setting, SettingsError};
 use bdpm_load::{LoadError, LoadOptions, LoadedScene, load_scene_overridden};
-use bdpm_settings::{Written, limits};
+use bdpm_mis::Needs;
+use bdpm_settings::{Mode, Written, limits};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -46,9 +47,9 @@ pub type CliResult<T> = Result<T, String>;
 /// check and message of a value is the scene file's.
 #[derive(Args, Debug, Clone, Default)]
 pub struct Overrides {
-    /// Integrator and weight mode: path, light, bdd0, bdd1, threshold, algebraic-direct, algebraic,
-    /// optimal, optimal-split, optimal-path, balance, power, camis, corrected-balance.
-    #[arg(long)]
+    /// Integrator and weight mode; the help lists every name of the mode table
+    /// ([`bdpm_settings::Mode::names`]).
+    #[arg(long, help = mode_help())]
     pub mode: Option<String>,
     /// Number of passes.
     #[arg(long, allow_negative_numbers = true, value_parser = count::<u32>(Setting::Passes))]
@@ -75,11 +76,9 @@ pub struct Overrides {
     /// model assumes) instead of jittering them over the pixel.
     #[arg(long)]
     pub no_jitter: bool,
-    /// Noise model of the model-based weights (algebraic-direct, algebraic, optimal,
-    /// optimal-split, optimal-path): footprint
-    /// (N_eff per pixel from the overlap of the samples' merge disks) or pinhole (the preprint's
-    /// N_B; its weights assume every sample of a pixel shares x0).
-    #[arg(long)]
+    /// Noise model of the model-based weights: footprint or pinhole; the help names the modes
+    /// it applies to, those whose heuristic needs N_B (`Needs::effective_samples`).
+    #[arg(long, help = noise_model_help())]
     pub noise_model: Option<String>,
     /// How a pixel's camera samples are placed within a pass: stratified (default; one
     /// jittered sample per stratum of the pixel and of the direction at x0) or independent
@@ -113,6 +112,35 @@ pub struct Overrides {
     /// Worker threads (default: all cores; at most 8 per core, and at least 64 allowed).
     #[arg(long, allow_negative_numbers = true, value_parser = whole::<usize>)]
     pub threads: Option<usize>,
+}
+
+/// The help of `--mode`: every mode name, in the mode table's order.
+fn mode_help() -> String {
+    format!("Integrator and weight mode: {}", Mode::names().join(", "))
+}
+
+/// The names of the weighting modes whose heuristic needs `what` of [`Needs`], in the mode
+/// table's order.
+fn modes_that(what: impl Fn(&Needs) -> bool) -> Vec<&'static str> {
+    Mode::names()
+        .into_iter()
+        .filter(|name| {
+            Mode::parse(name)
+                .and_then(|m| m.kind())
+                .is_some_and(|k| what(&k.heuristic().needs()))
+        })
+        .collect()
+}
+
+/// The help of `--noise-model`, naming the modes whose weights read N_B (the modes it
+/// applies to) from the mode table.
+fn noise_model_help() -> String {
+    format!(
+        "Noise model of the model-based weights ({}): footprint (N_eff per pixel from the \
+         overlap of the samples' merge disks) or pinhole (the preprint's N_B; its weights \
+         assume every sample of a pixel shares x0)",
+        modes_that(|n| n.effective_samples).join(", ")
+    )
 }
 
 /// A whole number for a flag, with a message that says so: the parser's own ("invalid digit
