@@ -208,13 +208,20 @@ pub fn load_scene(path: &Path) -> Result<LoadedScene, LoadError> {
 
 /// [`load_scene`] with options (a memory limit).
 pub fn load_scene_with(path: &Path, options: &LoadOptions) -> Result<LoadedScene, LoadError> {
-    let read_error = |message: String| LoadError::Read {
+    // The system's error as it is; what is wrong with the file as an error of its own.
+    let read_error = |e: files::ReadError| LoadError::Read {
         path: path.to_path_buf(),
-        source: std::io::Error::other(message.trim_start_matches("cannot read: ").to_string()),
+        source: match e {
+            files::ReadError::Io(e) => e,
+            other => std::io::Error::other(other.to_string()),
+        },
     };
     let bytes = files::read_regular(path, limits::MAX_SCENE_FILE_BYTES, "scene file")
         .map_err(read_error)?;
-    let text = String::from_utf8(bytes).map_err(|e| read_error(format!("not UTF-8 text: {e}")))?;
+    let text = String::from_utf8(bytes).map_err(|e| LoadError::Read {
+        path: path.to_path_buf(),
+        source: std::io::Error::other(format!("not UTF-8 text: {e}")),
+    })?;
     let base_dir = path.parent().unwrap_or(Path::new(""));
     load_str_with(&text, base_dir, path, options)
 }
