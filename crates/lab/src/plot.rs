@@ -1,7 +1,8 @@
-//! Plots for `bdpm study` (the lab's alone): error against time (log-log, one line per mode) and a bar chart of
+//! Plots for `bdpm study`: error against time (log-log, one line per mode) and a bar chart of
 //! one number per mode. Each plot is written twice from the same drawing code: a PNG through
-//! plotters' bitmap backend, with the DejaVu Sans font embedded in the binary (the `dejavu`
-//! crate), so that no system font is needed; and an SVG, whose text the viewer renders.
+//! plotters' bitmap backend, in the DejaVu Sans font that bdpm-output embeds and registers
+//! (`bdpm_output::font`), so that no system font is needed; and an SVG, whose text the viewer
+//! renders.
 use std::path::Path;
 
 use plotters::coord::Shift;
