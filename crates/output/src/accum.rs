@@ -12,7 +12,7 @@
 //! and low 32 bits of each f64 (EXR has no 64-bit float type); text attributes `accum.*`.
 use std::path::{Path, PathBuf};
 
-use exr::prelude::{AnyChannel, FlatSamples};
+use exr::prelude::{AnyChannel, AnyChannels, FlatSamples};
 use glam::DVec3;
 
 use bdpm_integrator::RenderSettings;
@@ -374,6 +374,53 @@ pub fn read(path: &Path) -> Result<Accumulation, String> {
         })
         .collect();
     let (width, height) = (layer.size.width(), layer.size.height());
+    let header = read_header(&attributes, &bad)?;
+    let mut words = channel_words(layer.channel_data, header.indices.len(), &bad)?;
+    let mut passes = Vec::with_capacity(header.indices.len());
+    for (i, &index) in header.indices.iter().enumerate() {
+        let mut channels = Vec::with_capacity(6);
+        for name in ["R", "G", "B"] {
+            for half in ["hi", "lo"] {
+                let c = format!("p{index:06}.{name}.{half}");
+                channels.push(
+                    words
+                        .remove(&c)
+                        .ok_or_else(|| bad(&format!("pass {index} has no channel {c}")))?,
+                );
+            }
+        }
+        passes.push(PassRecord {
+            index,
+            estimates: pass_estimates(path, index, &channels, (width, height))?,
+            dropped: header.dropped[i],
+            samples: header.samples[i],
+            photons_stored: header.photons[i],
+        });
+    }
+    Ok(Accumulation {
+        path: path.to_path_buf(),
+        size: (width as u32, height as u32),
+        identity: header.identity,
+        passes,
+    })
+}
+
+/// What an accumulation file's attributes say: which render it is part of, and per pass its
+/// index and counts.
+struct Header {
+    identity: Identity,
+    indices: Vec<u32>,
+    dropped: Vec<u64>,
+    samples: Vec<u64>,
+    photons: Vec<u64>,
+}
+
+/// Reads the `accum.*` attributes (`bdpm.` prefix removed); `bad` makes the message of a
+/// file that is not an accumulation file.
+fn read_header(
+    attributes: &[(String, String)],
+    bad: &dyn Fn(&str) -> String,
+) -> Result<Header, String> {
     let attr = |k: &str| {
         attributes
             .iter()
@@ -425,18 +472,32 @@ pub fn read(path: &Path) -> Result<Accumulation, String> {
         seed,
         overrides,
     };
-    // The channels by name, as u32 words; each is moved out once into its pass, so that the
-    // decoded file and the records built from it are not both held whole.
-    let expected = indices.len() * 6;
-    let found = layer.channel_data.list.len();
+    Ok(Header {
+        identity,
+        indices,
+        dropped,
+        samples,
+        photons,
+    })
+}
+
+/// The channels of `passes` passes by name, as u32 words; each is moved out once into its
+/// pass by the caller, so that the decoded file and the records built from it are not both
+/// held whole.
+fn channel_words(
+    channels: AnyChannels<FlatSamples>,
+    passes: usize,
+    bad: &dyn Fn(&str) -> String,
+) -> Result<std::collections::HashMap<String, Vec<u32>>, String> {
+    let expected = passes * 6;
+    let found = channels.list.len();
     if found != expected {
         return Err(bad(&format!(
-            "{found} channels for {} passes, which have {expected}",
-            indices.len()
+            "{found} channels for {passes} passes, which have {expected}"
         )));
     }
     let mut words: std::collections::HashMap<String, Vec<u32>> = Default::default();
-    for c in layer.channel_data.list {
+    for c in channels.list {
         let name = c.name.to_string();
         match c.sample_data {
             FlatSamples::U32(v) => {
@@ -450,54 +511,46 @@ pub fn read(path: &Path) -> Result<Accumulation, String> {
             }
         }
     }
-    let mut passes = Vec::with_capacity(indices.len());
-    for (i, &index) in indices.iter().enumerate() {
-        let mut channels = Vec::with_capacity(6);
-        for name in ["R", "G", "B"] {
-            for half in ["hi", "lo"] {
-                let c = format!("p{index:06}.{name}.{half}");
-                channels.push(
-                    words
-                        .remove(&c)
-                        .ok_or_else(|| bad(&format!("pass {index} has no channel {c}")))?,
-                );
-            }
-        }
-        let word = |c: usize, px: usize| {
-            f64::from_bits(((channels[2 * c][px] as u64) << 32) | channels[2 * c + 1][px] as u64)
-        };
-        let mut estimates = Vec::with_capacity(width * height);
-        for px in 0..width * height {
-            let e = DVec3::new(word(0, px), word(1, px), word(2, px));
-            if !e.is_finite() {
-                return Err(format!(
-                    "{}: pass {index} holds a non-finite estimate ({}, {}, {}) at pixel ({}, {}) \
-                     (x, y from the top left): the file is damaged",
-                    path.display(),
-                    e.x,
-                    e.y,
-                    e.z,
-                    px % width,
-                    px / width
-                ));
-            }
-            estimates.push(e);
-        }
-        drop(channels);
-        passes.push(PassRecord {
-            index,
-            estimates,
-            dropped: dropped[i],
-            samples: samples[i],
-            photons_stored: photons[i],
-        });
+    Ok(words)
+}
+
+/// The estimates of pass `index` from its six channels (the high and low words of R, G and
+/// B, `width`×`height` samples each), every one finite.
+fn pass_estimates(
+    path: &Path,
+    index: u32,
+    channels: &[Vec<u32>],
+    (width, height): (usize, usize),
+) -> Result<Vec<DVec3>, String> {
+    let pixels = width * height;
+    if channels.len() != 6 || channels.iter().any(|c| c.len() != pixels) {
+        return Err(format!(
+            "{}: not a bdpm accumulation file (pass {index}'s channels do not hold one sample \
+             per pixel)",
+            path.display()
+        ));
     }
-    Ok(Accumulation {
-        path: path.to_path_buf(),
-        size: (width as u32, height as u32),
-        identity,
-        passes,
-    })
+    let word = |c: usize, px: usize| {
+        f64::from_bits(((channels[2 * c][px] as u64) << 32) | channels[2 * c + 1][px] as u64)
+    };
+    let mut estimates = Vec::with_capacity(pixels);
+    for px in 0..pixels {
+        let e = DVec3::new(word(0, px), word(1, px), word(2, px));
+        if !e.is_finite() {
+            return Err(format!(
+                "{}: pass {index} holds a non-finite estimate ({}, {}, {}) at pixel ({}, {}) \
+                 (x, y from the top left): the file is damaged",
+                path.display(),
+                e.x,
+                e.y,
+                e.z,
+                px % width,
+                px / width
+            ));
+        }
+        estimates.push(e);
+    }
+    Ok(estimates)
 }
 
 /// Checks that `parts` are parts of one render with disjoint pass sets, and returns them as
