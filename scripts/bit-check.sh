@@ -18,7 +18,11 @@ bin=${BDPM:-target/release/bdpm}
 compare_bin=target/release/bdpm
 # Every mode of the mode table, as the binary lists it (`bdpm modes`, hidden); a binary older
 # than that command is answered for by this checkout's.
-list_modes() { "$bin" modes 2>/dev/null || "$compare_bin" modes; }
+list_modes() {
+  local m
+  m=$("$bin" modes 2>/dev/null) || m=$("$compare_bin" modes 2>/dev/null) || m=
+  [ -n "$m" ] && printf '%s\n' "$m"
+}
 case "${1:-}" in
   render)
     dir=${2:?usage: $0 render DIR}; mkdir -p "$dir"
