@@ -16,10 +16,17 @@ cd "$(dirname "$0")/.."
 bin=${BDPM:-target/release/bdpm}
 # `compare` needs a binary that has the compare command, i.e. this checkout's.
 compare_bin=target/release/bdpm
-modes="path light bdd0 bdd1 threshold algebraic-direct algebraic optimal optimal-split optimal-path balance power camis corrected-balance"
+# Every mode of the mode table, as the binary lists it (`bdpm modes`, hidden); a binary older
+# than that command is answered for by this checkout's.
+list_modes() {
+  local m
+  m=$("$bin" modes 2>/dev/null) || m=$("$compare_bin" modes 2>/dev/null) || m=
+  [ -n "$m" ] && printf '%s\n' "$m"
+}
 case "${1:-}" in
   render)
     dir=${2:?usage: $0 render DIR}; mkdir -p "$dir"
+    modes=$(list_modes) || { echo "cannot list the modes: build this checkout (cargo build --release)" >&2; exit 2; }
     for m in $modes; do
       "$bin" render scenes/preprint/cornell-lambert.toml --mode "$m" --resolution 64x64 --passes 2 \
         --photons 200000 --spp 4 -o "$dir/lambert-$m.exr" --quiet > /dev/null

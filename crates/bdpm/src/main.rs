@@ -32,10 +32,14 @@ enum Command {
     /// outputs of one render of all their passes, bit for bit: same scene, settings and seed
     /// required, pass sets must not overlap, argument order does not matter.
     Merge(render::MergeArgs),
-    /// Map the weight w₀ = 1 − w₁ over every visible x₁ for a fixed x₀ (the preprint's Fig. 5):
-    /// OUT.exr (channel w0) and OUT.png (log scale 0.008–1, x₀ marked). Modes whose weights
-    /// depend on x₁ alone: bdd0, bdd1, threshold, algebraic-direct, algebraic, optimal.
+    /// Map the weight w₀ = 1 − w₁ over every visible x₁ for a fixed x₀ (the preprint's Fig. 5);
+    /// the help names the modes that have one ([`weights::about`]).
+    #[command(about = weights::about())]
     Weights(weights::WeightsArgs),
+    /// Every mode name, one per line, in the mode table's order: for scripts
+    /// (scripts/bit-check.sh renders each), so that no script keeps a list of its own.
+    #[command(hide = true)]
+    Modes,
     /// The lab: study, bench, compare, predict.
     #[cfg(feature = "lab")]
     #[command(flatten)]
@@ -52,6 +56,12 @@ fn main() -> ExitCode {
         Command::Render(args) => render::run(args),
         Command::Merge(args) => render::merge(args),
         Command::Weights(args) => weights::run(args).map(success),
+        Command::Modes => {
+            for name in bdpm_settings::Mode::names() {
+                bdpm_output::say!("{name}");
+            }
+            Ok(ExitCode::SUCCESS)
+        }
         #[cfg(feature = "lab")]
         Command::Lab(command) => bdpm_lab::run(command),
     };

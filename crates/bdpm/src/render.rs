@@ -6,8 +6,9 @@ use std::process::ExitCode;
 
 use bdpm_integrator::human_bytes;
 use bdpm_output::accum;
-use bdpm_output::cli::{CliResult, Overrides, available_memory, parse_bytes, positive, whole};
+use bdpm_output::cli::{CliResult, Overrides, parse_bytes, positive, whole};
 use bdpm_output::exr::Precision;
+use bdpm_output::system::available_memory;
 use clap::Args;
 
 use crate::session::{self, Job, RenderSession, StopReason};

@@ -15,19 +15,18 @@ use bdpm_integrator::{
     Film, MemoryEstimate, MemoryItem, Mode, RenderError, Renderer, Stage, StageProbe, WeightStats,
     estimate_memory, first_hit_layers, human_bytes,
 };
+use bdpm_load::LoadedScene;
 use bdpm_output::accum::{self, Identity, PassRecord};
-use bdpm_output::cli::{
-    self, CliResult, Overrides, StagePeaks, available_memory, default_output, progress_bar,
-    thread_pool,
-};
+use bdpm_output::cli::{self, CliResult, Overrides, default_output, progress_bar, thread_pool};
 use bdpm_output::exr::{self as exr_file, Precision, RGB, TechniqueSums};
 use bdpm_output::files::{self, OutputLock, Outputs, Staged};
-use bdpm_output::memory;
+use bdpm_output::memory::{self, MemoryLimit};
 use bdpm_output::preview;
 pub(crate) use bdpm_output::report::StopReason;
 use bdpm_output::report::{self, PassPlan};
 use bdpm_output::say;
 use bdpm_output::stats::{PixelStats, image_mean};
+use bdpm_output::system::{StagePeaks, available_memory};
 use glam::DVec3;
 use indicatif::ProgressBar;
 
@@ -72,7 +71,7 @@ pub(crate) struct Job {
 /// render, the claimed outputs and the memory estimate. The session borrows it.
 pub(crate) struct Prepared {
     job: Job,
-    loaded: cli::Prepared,
+    loaded: LoadedScene,
     identity: Identity,
     scene_hash: String,
     /// The files the held passes came from.
@@ -103,12 +102,12 @@ pub(crate) fn prepare(job: Job) -> CliResult<(Prepared, Vec<PassRecord>)> {
     let t_start = Instant::now();
     // The loader checks each texture, glTF buffer and the geometry against the limit before
     // allocating it; the render's estimate below adds the rest.
-    let limit = cli::memory_limit(job.max_memory);
+    let limit = MemoryLimit::of(job.max_memory);
     let mut loaded = cli::prepare_within(&job.scene, &job.overrides, limit)?;
     let load_seconds = t_start.elapsed().as_secs_f64();
     let gltf = &loaded.report.gltf_files;
     let identity = Identity::of(&job.scene, gltf, &loaded.settings, &job.overrides)?;
-    let scene_hash = accum::scene_hash(&job.scene, gltf)?;
+    let scene_hash = bdpm_load::scene_hash(&job.scene, gltf).map_err(|e| e.to_string())?;
     let mut job = job;
     let (held, held_from) = held_passes(
         job.held.take(),
@@ -183,7 +182,7 @@ fn held_passes(
     held_from: Vec<PathBuf>,
     scene: &Path,
     identity: &Identity,
-    loaded: &cli::Prepared,
+    loaded: &LoadedScene,
 ) -> CliResult<(Vec<PassRecord>, Vec<PathBuf>)> {
     let Some(h) = held else {
         return Ok((Vec::new(), Vec::new()));
@@ -215,7 +214,7 @@ fn held_passes(
 /// that would run out of memory after minutes of work is refused now.
 fn memory_gate(
     job: &Job,
-    loaded: &cli::Prepared,
+    loaded: &LoadedScene,
     pool: &rayon::ThreadPool,
     kept: u64,
 ) -> CliResult<(MemoryEstimate, (Option<u64>, &'static str))> {

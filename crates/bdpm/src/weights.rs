@@ -11,9 +11,10 @@ use clap::{ArgGroup, Args};
 use glam::Vec3;
 
 use bdpm_output::cli::{CliResult, Overrides, parse_bytes, prepare, thread_pool};
-use bdpm_output::colormap::{Canvas, ColourMap, Legend, compose};
+use bdpm_output::colormap::{ColourMap, Legend, compose};
 use bdpm_output::files::stem_of;
 use bdpm_output::memory::{self, MemoryLimit};
+use bdpm_output::raster::Canvas;
 use bdpm_output::{exr, say};
 
 /// Bottom of the PNG's colour scale: w₀ at or below it gets the bottom colour. 2⁻⁷, the
@@ -34,6 +35,28 @@ const TICKS: [(f64, &str); 8] = [
 const NO_SURFACE: [u8; 3] = [0, 0, 0];
 /// Colour of the cross that marks x₀: red, which viridis does not contain.
 const MARK: [u8; 3] = [255, 40, 40];
+
+/// The subcommand's help: what it writes, and the modes that have a weight map (those
+/// [`weight_map_heuristic`] accepts), from the mode table.
+pub(crate) fn about() -> String {
+    let modes: Vec<&str> = Mode::names()
+        .into_iter()
+        .filter(|name| {
+            let settings = RenderSettings {
+                mode: Mode::parse(name).unwrap_or(Mode::Path),
+                light_tracing: false,
+                ..RenderSettings::default()
+            };
+            weight_map_heuristic(&settings).is_ok()
+        })
+        .collect();
+    format!(
+        "Map the weight w₀ = 1 − w₁ over every visible x₁ for a fixed x₀ (the preprint's \
+         Fig. 5): OUT.exr (channel w0) and OUT.png (log scale 0.008–1, x₀ marked). Modes whose \
+         weights depend on x₁ alone: {}",
+        modes.join(", ")
+    )
+}
 
 // The field docs are clap's help text, printed in a terminal: `<scene>` there is a
 // placeholder, not an HTML tag.

@@ -703,8 +703,9 @@ mod tests {
 }
 
 /// A measurement, not a test: the two sort paths timed side by side (interleaved, medians and
-/// fastest of 25), which sets [`PARALLEL_SORT_MIN`] and the one-thread rule. Run:
-/// `cargo test --release -p bdpm-grid --lib measure_sort_paths -- --ignored --nocapture`.
+/// fastest of 25), which sets [`PARALLEL_SORT_MIN`] and the one-thread rule. Run it as an
+/// ignored library test of this crate in release, with its output shown (the command is in
+/// docs/performance.md).
 #[cfg(test)]
 mod measure {
     use super::*;

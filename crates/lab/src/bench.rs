@@ -14,11 +14,11 @@ use bdpm_integrator::{Mode, RenderSettings, Renderer, Stage, human_bytes};
 use clap::Args;
 
 use bdpm_output::cli::{
-    CliResult, Overrides, cpu_model, load_average, parse_bytes, parse_resolution,
-    peak_resident_memory, prepare, thread_pool, whole,
+    CliResult, Overrides, parse_bytes, parse_resolution, prepare, thread_pool, whole,
 };
 use bdpm_output::files::stem_of;
 use bdpm_output::memory::MemoryLimit;
+use bdpm_output::system::{cpu_model, load_average, peak_resident_memory};
 
 // The field docs are clap's help text, printed in a terminal: `<scene>` there is a
 // placeholder, not an HTML tag.

@@ -21,6 +21,7 @@ use clap::Subcommand;
 
 mod bench;
 mod compare;
+mod plot;
 mod predict;
 mod reference;
 mod study;

@@ -30,13 +30,13 @@ use bdpm_mis::Heuristic;
 use clap::Args;
 use serde::Serialize;
 
-use bdpm_output::accum::{check_scene_hash, estimator_hash, scene_hash};
-use bdpm_output::cli::{
-    CliResult, Overrides, Prepared, parse_bytes, prepare as cli_prepare, thread_pool,
-};
-use bdpm_output::colormap::{Canvas, ColourMap, Legend, compose, format_value};
+use bdpm_load::{LoadedScene, scene_hash};
+use bdpm_output::accum::{check_scene_hash, estimator_hash};
+use bdpm_output::cli::{CliResult, Overrides, parse_bytes, prepare as cli_prepare, thread_pool};
+use bdpm_output::colormap::{ColourMap, Legend, compose, format_value};
 use bdpm_output::files::stem_of;
 use bdpm_output::memory::{self, MemoryLimit};
+use bdpm_output::raster::Canvas;
 use bdpm_output::{exr, files, say};
 
 /// Side of the pixel blocks over which V is also compared (summed over the block's pixels):
@@ -392,7 +392,7 @@ pub(crate) fn run(args: PredictArgs) -> CliResult<()> {
 /// output paths, all checked.
 struct Setup<'a> {
     args: &'a PredictArgs,
-    loaded: Prepared,
+    loaded: LoadedScene,
     measured: Measured,
     /// Passes the measured render did.
     passes: u32,
@@ -473,7 +473,8 @@ fn prepare(args: &PredictArgs) -> CliResult<Setup<'_>> {
             args.measured.display()
         ));
     }
-    let expected_hash = scene_hash(&args.scene, &loaded.report.gltf_files)?;
+    let expected_hash =
+        scene_hash(&args.scene, &loaded.report.gltf_files).map_err(|e| e.to_string())?;
     check_scene_hash(
         &args.measured,
         &measured.attributes,

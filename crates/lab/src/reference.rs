@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use bdpm_integrator::{Film, Mode, RenderSettings, Renderer};
-use bdpm_output::accum::fnv1a;
+use bdpm_load::fnv1a;
 use bdpm_output::cli::progress_bar;
 use bdpm_output::exr::{ExrLayer, write_exr};
 use bdpm_output::files::stem_of;

@@ -13,14 +13,17 @@ use std::time::Instant;
 use bdpm_integrator::{
     Film, MemoryEstimate, MemoryItem, RenderSettings, Renderer, estimate_memory, human_bytes,
 };
-use bdpm_output::accum::{check_scene_hash, scene_hash};
+use bdpm_load::{LoadedScene, scene_hash};
+use bdpm_output::accum::check_scene_hash;
 use bdpm_output::cli::{
-    CliResult, Overrides, Prepared, load_average, parse_bytes, peak_resident_memory, positive,
-    prepare as cli_prepare, process_cpu_seconds, progress_bar, thread_pool, whole,
+    CliResult, Overrides, parse_bytes, positive, prepare as cli_prepare, progress_bar, thread_pool,
+    whole,
 };
 use bdpm_output::files::{refuse_inputs, stem_of, write_atomic};
 use bdpm_output::memory::{self, MemoryLimit};
-use bdpm_output::plot;
+use bdpm_output::system::{load_average, peak_resident_memory, process_cpu_seconds};
+
+use crate::plot;
 use bdpm_output::preview::write_png;
 use bdpm_output::stats::{PixelStats, luminance};
 use clap::Args;
@@ -822,7 +825,7 @@ pub(crate) fn run(args: StudyArgs) -> CliResult<()> {
 struct Study<'a> {
     args: &'a StudyArgs,
     variants: Vec<crate::Variant>,
-    loaded: Prepared,
+    loaded: LoadedScene,
     pool: rayon::ThreadPool,
     /// The scene file's stem, for titles.
     stem: String,
@@ -977,7 +980,7 @@ fn check_preview_names(variants: &[crate::Variant]) -> CliResult<()> {
 fn memory_gate(
     args: &StudyArgs,
     variants: &[crate::Variant],
-    loaded: &Prepared,
+    loaded: &LoadedScene,
     pool: &rayon::ThreadPool,
     limit: MemoryLimit,
 ) -> CliResult<MemoryEstimate> {
@@ -1007,13 +1010,13 @@ const REFERENCE_BYTES_PER_PIXEL: u64 = 2 * 24 + 2 * 8;
 fn study_reference(
     args: &StudyArgs,
     variants: &[crate::Variant],
-    loaded: &Prepared,
+    loaded: &LoadedScene,
     dir: &Path,
     pool: &rayon::ThreadPool,
     limit: MemoryLimit,
 ) -> CliResult<(reference::Reference, Option<MemoryEstimate>)> {
     let settings = &loaded.settings;
-    let hash = scene_hash(&args.scene, &loaded.report.gltf_files)?;
+    let hash = scene_hash(&args.scene, &loaded.report.gltf_files).map_err(|e| e.to_string())?;
     if let Some(path) = &args.reference {
         let mut members: Vec<PathBuf> = variants
             .iter()
@@ -1068,7 +1071,7 @@ fn study_reference(
 /// flags that shape it; returns its estimate.
 fn reference_memory_gate(
     args: &StudyArgs,
-    loaded: &Prepared,
+    loaded: &LoadedScene,
     rs: &RenderSettings,
     pool: &rayon::ThreadPool,
     limit: MemoryLimit,

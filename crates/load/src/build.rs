@@ -1,24 +1,21 @@
 //! Validation of the parsed file and assembly of the [`Scene`]: every check names the dotted
 //! field it concerns.
 
-use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use bdpm_bdf::Bdf;
 use bdpm_geometry::{
     BOX_FACES, Geometry, GeometryError, TriangleMesh, geodesic_sphere_triangle_count,
 };
-use std::sync::Arc;
 
-use bdpm_scene::{
-    Camera, CameraError, Material, PointLight, Scene, SceneError, SceneTextures, Texture,
-};
+use bdpm_scene::{Camera, CameraError, Material, PointLight, Scene, SceneError, SceneTextures};
 // Numbers in messages as written, the same way the settings' messages write them.
 use bdpm_settings::number_text as num;
 use bdpm_settings::{PartialSettings, RenderSettings};
 use glam::{Mat4, Vec2, Vec3};
 
 use crate::gltf_mesh::{Assets, Origin, load_gltf};
+use crate::materials::Materials;
 use crate::memory::{Budget, MemoryLimit};
 use crate::schema::{CameraDef, MaterialDef, Point, SceneFile, ShapeDef, Triple};
 use crate::{LoadError, LoadReport, LoadedScene, limits};
@@ -168,54 +165,6 @@ fn point_text(p: [f64; 3]) -> String {
     format!("[{}, {}, {}]", num(p[0]), num(p[1]), num(p[2]))
 }
 
-/// The scene's materials: TOML ones first (sorted by name), then those made from glTF files.
-pub(crate) struct Materials {
-    list: Vec<Material>,
-    by_name: HashMap<String, u32>,
-    gltf_default: Option<u32>,
-    /// Base-colour textures by material index (shorter than `list` where the rest have none).
-    textures: Vec<Option<Arc<Texture>>>,
-}
-
-impl Materials {
-    /// Index of the TOML material `name`.
-    pub(crate) fn lookup(&self, name: &str) -> Option<u32> {
-        self.by_name.get(name).copied()
-    }
-
-    /// Adds a Lambert material made from a glTF file (not reachable by name from shapes).
-    pub(crate) fn add_lambert(&mut self, name: String, kd: Vec3) -> Result<u32, String> {
-        let bdf = Bdf::lambert(kd).map_err(|e| e.to_string())?;
-        self.list.push(Material { name, bdf });
-        Ok(self.list.len() as u32 - 1)
-    }
-
-    /// Gives material `m` a base-colour texture.
-    pub(crate) fn set_texture(&mut self, m: u32, texture: Arc<Texture>) {
-        let m = m as usize;
-        if self.textures.len() <= m {
-            self.textures.resize(m + 1, None);
-        }
-        self.textures[m] = Some(texture);
-    }
-
-    /// The material of glTF primitives without one: Lambert, kd = 0.8 in every channel.
-    pub(crate) fn gltf_default(&mut self) -> Result<u32, LoadError> {
-        if let Some(m) = self.gltf_default {
-            return Ok(m);
-        }
-        let m = self
-            .add_lambert("gltf:default".into(), Vec3::splat(crate::GLTF_DEFAULT_KD))
-            .map_err(|e| LoadError::Invalid {
-                path: PathBuf::new(),
-                field: "gltf:default".into(),
-                message: e,
-            })?;
-        self.gltf_default = Some(m);
-        Ok(m)
-    }
-}
-
 pub(crate) fn build(
     file: SceneFile,
     base_dir: &Path,
@@ -268,15 +217,16 @@ pub(crate) fn build(
 
     report.triangles = geometry.triangle_count();
     report.degenerate_triangles = geometry.degenerate_count();
-    report.materials = materials.list.len();
+    report.materials = materials.len();
     report.lights = lights.len();
 
     let light_count = lights.len();
+    let (materials, base_colour) = materials.into_parts();
     let textures = SceneTextures {
-        base_colour: materials.textures,
+        base_colour,
         texcoords,
     };
-    let scene = Scene::new(geometry, materials.list, lights, camera)
+    let scene = Scene::new(geometry, materials, lights, camera)
         .and_then(|s| s.with_textures(textures))
         .map_err(|e| scene_error(&ctx, e, light_count))?;
     Ok(LoadedScene {
@@ -643,8 +593,7 @@ fn shape_material(
         &format!("the name of a [material.NAME] for this {kind}"),
     )?;
     materials.lookup(name).ok_or_else(|| {
-        let mut known: Vec<&str> = materials.by_name.keys().map(String::as_str).collect();
-        known.sort_unstable();
+        let known = materials.names();
         let known = if known.is_empty() {
             "none are defined".to_string()
         } else {
@@ -658,12 +607,7 @@ fn materials(
     ctx: &Ctx<'_>,
     defs: &std::collections::BTreeMap<String, MaterialDef>,
 ) -> Result<Materials, LoadError> {
-    let mut out = Materials {
-        list: Vec::with_capacity(defs.len()),
-        by_name: HashMap::new(),
-        gltf_default: None,
-        textures: Vec::new(),
-    };
+    let mut out = Materials::with_capacity(defs.len());
     for (name, def) in defs {
         let prefix = format!("material.{name}");
         let kd = ctx.required(
@@ -706,8 +650,7 @@ fn materials(
             Bdf::new(kd, gr, delta.to_radians())
         }
         .map_err(|e| ctx.bad(&prefix, e.to_string()))?;
-        let _ = out.by_name.insert(name.clone(), out.list.len() as u32);
-        out.list.push(Material {
+        out.add_named(Material {
             name: name.clone(),
             bdf,
         });

@@ -3,6 +3,9 @@
 
 use std::path::PathBuf;
 
+use bdpm_scene::SceneError;
+use bdpm_settings::SettingsError;
+
 /// Why a scene could not be loaded.
 ///
 /// `Display` gives one line of the form `FILE: FIELD: WHAT`, for example
@@ -38,6 +41,25 @@ pub enum LoadError {
         field: String,
         /// What is wrong with it.
         message: String,
+    },
+    /// A setting given beside the scene file ([`crate::load_scene_overridden`]) is not
+    /// acceptable, or the final settings, the file's with those put over them, do not go
+    /// together. The error says which setting ([`SettingsError::setting`]), so that a caller
+    /// names it its own way (a command line by its option).
+    #[error("{path}: render.{} as overridden: {source}", source.setting().key())]
+    Override {
+        /// The scene file.
+        path: PathBuf,
+        /// What is wrong, and with which setting.
+        source: SettingsError,
+    },
+    /// The camera cannot take the resolution the overrides ask for.
+    #[error("{path}: render.resolution as overridden: {source}")]
+    Resolution {
+        /// The scene file.
+        path: PathBuf,
+        /// Why the camera refused it.
+        source: SceneError,
     },
     /// A glTF file referenced by a shape could not be read or is not acceptable.
     #[error("{path} (from {field}): {message}")]

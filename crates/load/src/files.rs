@@ -7,11 +7,38 @@ use std::fs;
 use std::io::Read as _;
 use std::path::{Component, Path, PathBuf};
 
+/// Why a file could not be read: the system's error, kept whole for a caller that reports it
+/// as one, or what is wrong with the file. `what` names the kind of file ("scene file",
+/// "glTF file", "glTF buffer").
+#[derive(Debug, thiserror::Error)]
+pub(crate) enum ReadError {
+    /// The system refused to open or read it.
+    #[error("cannot read: {0}")]
+    Io(#[from] std::io::Error),
+    /// A directory.
+    #[error("is a directory, not a {0}")]
+    Directory(&'static str),
+    /// A FIFO, socket or device.
+    #[error("is not a regular file (a FIFO, socket or device), so it cannot be a {0}")]
+    NotRegular(&'static str),
+    /// Larger than the limit for its kind, bytes.
+    #[error("is {len} bytes, more than the {limit}-byte limit for a {what}")]
+    TooLarge {
+        len: u64,
+        limit: u64,
+        what: &'static str,
+    },
+}
+
 /// Reads at most `limit` bytes of the regular file at `path`; a larger file is an error.
 /// `what` names the kind of file in messages ("scene file", "glTF file", "glTF buffer").
-pub(crate) fn read_regular(path: &Path, limit: u64, what: &str) -> Result<Vec<u8>, String> {
+pub(crate) fn read_regular(
+    path: &Path,
+    limit: u64,
+    what: &'static str,
+) -> Result<Vec<u8>, ReadError> {
     // Checked before opening: opening a FIFO for reading blocks until a writer appears.
-    let meta = fs::metadata(path).map_err(|e| format!("cannot read: {e}"))?;
+    let meta = fs::metadata(path)?;
     check_kind(&meta, what)?;
     let mut options = fs::OpenOptions::new();
     let _ = options.read(true);
@@ -21,40 +48,33 @@ pub(crate) fn read_regular(path: &Path, limit: u64, what: &str) -> Result<Vec<u8
         use std::os::unix::fs::OpenOptionsExt as _;
         let _ = options.custom_flags(libc::O_NONBLOCK);
     }
-    let file = options
-        .open(path)
-        .map_err(|e| format!("cannot read: {e}"))?;
-    let meta = file.metadata().map_err(|e| format!("cannot read: {e}"))?;
+    let file = options.open(path)?;
+    let meta = file.metadata()?;
     check_kind(&meta, what)?;
     if meta.len() > limit {
         return Err(too_large(meta.len(), limit, what));
     }
     let mut bytes = Vec::with_capacity(meta.len() as usize);
     // One byte past the limit shows a file that grew after the check.
-    let _ = file
-        .take(limit + 1)
-        .read_to_end(&mut bytes)
-        .map_err(|e| format!("cannot read: {e}"))?;
+    let _ = file.take(limit + 1).read_to_end(&mut bytes)?;
     if bytes.len() as u64 > limit {
         return Err(too_large(bytes.len() as u64, limit, what));
     }
     Ok(bytes)
 }
 
-fn check_kind(meta: &fs::Metadata, what: &str) -> Result<(), String> {
+fn check_kind(meta: &fs::Metadata, what: &'static str) -> Result<(), ReadError> {
     if meta.is_dir() {
-        return Err(format!("is a directory, not a {what}"));
+        return Err(ReadError::Directory(what));
     }
     if !meta.is_file() {
-        return Err(format!(
-            "is not a regular file (a FIFO, socket or device), so it cannot be a {what}"
-        ));
+        return Err(ReadError::NotRegular(what));
     }
     Ok(())
 }
 
-fn too_large(len: u64, limit: u64, what: &str) -> String {
-    format!("is {len} bytes, more than the {limit}-byte limit for a {what}")
+fn too_large(len: u64, limit: u64, what: &'static str) -> ReadError {
+    ReadError::TooLarge { len, limit, what }
 }
 
 /// Resolves a glTF buffer URI against the glTF file's directory `dir`, confined to it: the
@@ -99,7 +119,7 @@ pub(crate) fn confined_uri(dir: &Path, uri: &str) -> Result<PathBuf, String> {
 }
 
 /// Decodes `%XX` escapes; `None` for a malformed escape or bytes that are not UTF-8.
-fn percent_decode(s: &str) -> Option<String> {
+pub(crate) fn percent_decode(s: &str) -> Option<String> {
     let bytes = s.as_bytes();
     let mut out = Vec::with_capacity(bytes.len());
     let mut i = 0;

@@ -22,7 +22,7 @@ use gltf::mesh::Mode;
 use gltf::{Accessor, Node, Semantic};
 
 use crate::LoadError;
-use crate::build::Materials;
+use crate::materials::Materials;
 use crate::memory::Budget;
 
 /// Deepest node nesting accepted. glTF forbids cycles but the parser does not check for them,
@@ -199,7 +199,7 @@ fn read_document(origin: &Origin<'_>, budget: &Budget) -> Result<gltf::Gltf, Loa
             .map_err(|m| origin.err(format!("reading it {m}")))?;
     }
     let bytes = crate::files::read_regular(origin.path, crate::limits::MAX_GLTF_BYTES, "glTF file")
-        .map_err(|e| origin.err(e))?;
+        .map_err(|e| origin.err(e.to_string()))?;
     let invalid = |e: gltf::Error| origin.err(format!("not a valid glTF 2.0 file: {}", brief(&e)));
     let raw = gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| {
         if is_gltf_1(&bytes) {
@@ -613,13 +613,13 @@ fn image_bytes(
     }
     let dir = origin.path.parent().unwrap_or(Path::new(""));
     let file = crate::files::confined_uri(dir, uri).map_err(err)?;
-    crate::files::read_regular(&file, crate::limits::MAX_GLTF_BYTES, "texture image").map_err(
-        |message| LoadError::Gltf {
+    crate::files::read_regular(&file, crate::limits::MAX_GLTF_BYTES, "texture image").map_err(|e| {
+        LoadError::Gltf {
             path: file.clone(),
             field: format!("{}, {what} of {}", origin.field, origin.path.display()),
-            message,
-        },
-    )
+            message: e.to_string(),
+        }
+    })
 }
 
 /// Appends one triangle primitive, transformed by `world`, to `part`, with the texture
@@ -969,10 +969,10 @@ fn load_buffers(
                         bytes.truncate(limit as usize);
                         bytes
                     })
-                    .map_err(|message| LoadError::Gltf {
+                    .map_err(|e| LoadError::Gltf {
                         path: file.clone(),
                         field: format!("{}, buffer {i} of {}", origin.field, origin.path.display()),
-                        message,
+                        message: e.to_string(),
                     })?
             }
         };

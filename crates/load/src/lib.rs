@@ -49,13 +49,16 @@ mod build;
 mod error;
 mod files;
 mod gltf_mesh;
+mod identity;
 mod image;
+mod materials;
 mod memory;
 mod schema;
 
 use std::path::{Path, PathBuf};
 
 pub use error::LoadError;
+pub use identity::{assets_hash, fnv1a, scene_hash};
 pub use memory::MemoryLimit;
 
 /// Caps on values that size allocations or loops, so that a typo cannot exhaust memory.
@@ -205,15 +208,58 @@ pub fn load_scene(path: &Path) -> Result<LoadedScene, LoadError> {
 
 /// [`load_scene`] with options (a memory limit).
 pub fn load_scene_with(path: &Path, options: &LoadOptions) -> Result<LoadedScene, LoadError> {
-    let read_error = |message: String| LoadError::Read {
+    // The system's error as it is; what is wrong with the file as an error of its own.
+    let read_error = |e: files::ReadError| LoadError::Read {
         path: path.to_path_buf(),
-        source: std::io::Error::other(message.trim_start_matches("cannot read: ").to_string()),
+        source: match e {
+            files::ReadError::Io(e) => e,
+            other => std::io::Error::other(other.to_string()),
+        },
     };
     let bytes = files::read_regular(path, limits::MAX_SCENE_FILE_BYTES, "scene file")
         .map_err(read_error)?;
-    let text = String::from_utf8(bytes).map_err(|e| read_error(format!("not UTF-8 text: {e}")))?;
+    let text = String::from_utf8(bytes).map_err(|e| LoadError::Read {
+        path: path.to_path_buf(),
+        source: std::io::Error::other(format!("not UTF-8 text: {e}")),
+    })?;
     let base_dir = path.parent().unwrap_or(Path::new(""));
     load_str_with(&text, base_dir, path, options)
+}
+
+/// [`load_scene_with`], then the settings `overrides` (a command line's, in the shape of a
+/// `[render]` table) put over the file's ([`PartialSettings::apply`], with the checks the
+/// file's own values get), the final settings checked together once
+/// ([`RenderSettings::validate`]: a combination the file gets wrong may be put right by an
+/// override) and the camera set to the final resolution. An error in the overrides or in
+/// the final combination is a [`LoadError::Override`] naming the setting, which the caller
+/// names its own way.
+///
+/// [`PartialSettings::apply`]: bdpm_settings::PartialSettings::apply
+/// [`RenderSettings::validate`]: bdpm_settings::RenderSettings::validate
+pub fn load_scene_overridden(
+    path: &Path,
+    options: &LoadOptions,
+    overrides: &bdpm_settings::PartialSettings,
+) -> Result<LoadedScene, LoadError> {
+    let mut loaded = load_scene_with(path, options)?;
+    let overridden = |source| LoadError::Override {
+        path: path.to_path_buf(),
+        source,
+    };
+    overrides.apply(&mut loaded.settings).map_err(overridden)?;
+    loaded.settings.validate().map_err(overridden)?;
+    let (width, height) = (loaded.settings.width, loaded.settings.height);
+    let camera = loaded.scene.camera();
+    if (camera.width(), camera.height()) != (width, height) {
+        loaded
+            .scene
+            .set_resolution(width, height)
+            .map_err(|source| LoadError::Resolution {
+                path: path.to_path_buf(),
+                source,
+            })?;
+    }
+    Ok(loaded)
 }
 
 /// Loads a scene from TOML text. `base_dir` resolves the relative glTF paths; `display_path`

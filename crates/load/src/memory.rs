@@ -4,13 +4,19 @@
 
 use bdpm_core::human_bytes;
 
-/// A limit on the memory of the process, and where it came from, for messages.
+/// A limit on the memory of the process, and the words a refusal says about it. The words are
+/// the caller's: the loader does not know where a limit came from (a command line names its
+/// own option, a library its own parameter).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct MemoryLimit {
     /// The limit, bytes.
     pub bytes: u64,
-    /// Where it came from, as a message names it: `"--max-memory"`, `"available memory"`.
+    /// Where it came from, as a refusal names it: `more than the {source} of 1.0 GiB`
+    /// (`"available memory"`, `"memory limit"`).
     pub source: String,
+    /// What to do when the machine has more memory than the limit, ending a refusal after a
+    /// `; ` (`"raise the limit if the machine has it"`); `None`: nothing.
+    pub remedy: Option<String>,
 }
 
 /// The loader's running account: the bytes it keeps so far (decoded texels and glTF buffers
@@ -39,7 +45,8 @@ impl Budget {
 
     /// `Ok` if `bytes` more, beside what is already held (`held`, which the caller knows
     /// best), stay within the limit; otherwise the end of a message: `needs about 1.0 GiB
-    /// (… ), more than the --max-memory of 200.0 MiB`, with `what` in the parentheses.
+    /// (… ), more than the memory limit of 200.0 MiB`, with `what` in the parentheses and the
+    /// limit's [`MemoryLimit::remedy`] after it.
     pub(crate) fn check(&self, held: u64, bytes: u64, what: &str) -> Result<(), String> {
         let Some(limit) = &self.limit else {
             return Ok(());
@@ -54,8 +61,12 @@ impl Budget {
         } else {
             String::new()
         };
+        let remedy = limit
+            .remedy
+            .as_ref()
+            .map_or_else(String::new, |r| format!("; {r}"));
         Err(format!(
-            "needs about {} ({what}{held_text}), more than the {} of {}; raise --max-memory if the machine has it",
+            "needs about {} ({what}{held_text}), more than the {} of {}{remedy}",
             human_bytes(bytes),
             limit.source,
             human_bytes(limit.bytes)

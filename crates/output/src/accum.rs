@@ -12,22 +12,15 @@
 //! and low 32 bits of each f64 (EXR has no 64-bit float type); text attributes `accum.*`.
 use std::path::{Path, PathBuf};
 
-use exr::prelude::{AnyChannel, FlatSamples};
+use exr::prelude::{AnyChannel, AnyChannels, FlatSamples};
 use glam::DVec3;
 
 use bdpm_integrator::RenderSettings;
+use bdpm_load::{assets_hash, fnv1a};
 
 use crate::cli::Overrides;
 use crate::exr::stage_exr_channels;
 use crate::files::Staged;
-
-/// 64-bit FNV-1a: a stable hash (unlike `DefaultHasher`, whose output may change between Rust
-/// releases), for the identity of a render and for naming cached references.
-pub fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
-        (h ^ *b as u64).wrapping_mul(0x0000_0100_0000_01b3)
-    })
-}
 
 /// The value of `bdpm.accum.format`: bumped when the layout changes.
 pub const FORMAT: &str = "bdpm-accumulation-1";
@@ -95,119 +88,8 @@ pub struct PassRecord {
     pub photons_stored: u64,
 }
 
-/// Decodes `%XX` escapes of a glTF URI (RFC 3986), as the loader does; `None` if malformed.
-fn percent_decode(uri: &str) -> Option<String> {
-    let bytes = uri.as_bytes();
-    let mut out = Vec::with_capacity(bytes.len());
-    let mut i = 0;
-    while i < bytes.len() {
-        if bytes[i] == b'%' {
-            let hex = std::str::from_utf8(bytes.get(i + 1..i + 3)?).ok()?;
-            out.push(u8::from_str_radix(hex, 16).ok()?);
-            i += 3;
-        } else {
-            out.push(bytes[i]);
-            i += 1;
-        }
-    }
-    String::from_utf8(out).ok()
-}
-
-/// Feeds `bytes` into a running FNV-1a hash `h`, length first (so that moving bytes from one
-/// file to the next changes the hash).
-fn fnv1a_more(h: u64, bytes: &[u8]) -> u64 {
-    let h = (bytes.len() as u64).to_le_bytes().iter().fold(h, |h, b| {
-        (h ^ *b as u64).wrapping_mul(0x0000_0100_0000_01b3)
-    });
-    bytes.iter().fold(h, |h, b| {
-        (h ^ *b as u64).wrapping_mul(0x0000_0100_0000_01b3)
-    })
-}
-
-/// FNV-1a over the bytes of the files a scene references: each glTF file (as the loader
-/// opened it, [`bdpm_load::LoadReport::gltf_files`]) and the external buffers and images it
-/// names (resolved against its directory), in order; hex. A file that cannot be read is
-/// hashed as its name and "unreadable", so that it still differs from any content.
-pub fn assets_hash(gltf_files: &[PathBuf]) -> String {
-    let mut h = 0xcbf2_9ce4_8422_2325u64;
-    for file in gltf_files {
-        let Ok(bytes) = std::fs::read(file) else {
-            h = fnv1a_more(h, file.to_string_lossy().as_bytes());
-            h = fnv1a_more(h, b"unreadable");
-            continue;
-        };
-        h = fnv1a_more(h, &bytes);
-        let Ok(doc) = gltf::Gltf::from_slice(&bytes) else {
-            continue;
-        };
-        let dir = file.parent().unwrap_or(Path::new("."));
-        let buffers = doc.buffers().filter_map(|b| match b.source() {
-            gltf::buffer::Source::Uri(uri) => Some(uri.to_string()),
-            gltf::buffer::Source::Bin => None,
-        });
-        // From the JSON: the crate's `Image::source` panics on an image with a bufferView but
-        // no mimeType, or with neither a bufferView nor a uri (the loader accepts the first).
-        let images = doc
-            .as_json()
-            .images
-            .iter()
-            .filter(|i| i.buffer_view.is_none())
-            .filter_map(|i| i.uri.clone());
-        for uri in buffers.chain(images) {
-            if uri.starts_with("data:") {
-                continue;
-            }
-            let path = dir.join(percent_decode(&uri).unwrap_or_else(|| uri.clone()));
-            match std::fs::read(&path) {
-                Ok(b) => h = fnv1a_more(h, &b),
-                Err(_) => {
-                    h = fnv1a_more(h, uri.as_bytes());
-                    h = fnv1a_more(h, b"unreadable");
-                }
-            }
-        }
-    }
-    format!("{h:016x}")
-}
-
-/// The scene identity that every image header carries (`bdpm.scene_hash`): FNV-1a of the
-/// scene file's content and the [`assets_hash`] of the files it references, hex. The content
-/// is the file as TOML without its `[render]` table, comments and layout (the bytes, for a
-/// file that is not TOML): two renders with the same scene hash rendered the same scene,
-/// wherever its files were and whatever their render settings, so that a reference or a
-/// measured render made with other settings (scenes/preprint/) is accepted.
-pub fn scene_hash(scene: &Path, gltf_files: &[PathBuf]) -> Result<String, String> {
-    let bytes =
-        std::fs::read(scene).map_err(|e| format!("{}: cannot read: {e}", scene.display()))?;
-    Ok(combined_hash(
-        &format!("{:016x}", fnv1a(&scene_content(&bytes))),
-        &assets_hash(gltf_files),
-    ))
-}
-
-/// What of a scene file [`scene_hash`] covers (see there).
-fn scene_content(bytes: &[u8]) -> Vec<u8> {
-    let parsed = std::str::from_utf8(bytes)
-        .ok()
-        .and_then(|t| t.parse::<toml::Table>().ok());
-    match parsed {
-        Some(mut table) => {
-            table.remove("render");
-            toml::to_string(&table).map_or_else(|_| bytes.to_vec(), String::into_bytes)
-        }
-        None => bytes.to_vec(),
-    }
-}
-
-fn combined_hash(scene_file: &str, assets: &str) -> String {
-    format!(
-        "{:016x}",
-        fnv1a(format!("{scene_file}+{assets}").as_bytes())
-    )
-}
-
 /// Checks that the image at `path`, whose header attributes are `attributes`, was rendered
-/// from the scene whose [`scene_hash`] is `expected`; `what` names the image's role in the
+/// from the scene whose [`bdpm_load::scene_hash`] is `expected`; `what` names the image's role in the
 /// message ("the measured render", "the reference"). An image without the attribute (made by
 /// an older bdpm or another program) is refused too when `required`.
 pub fn check_scene_hash(
@@ -492,6 +374,53 @@ pub fn read(path: &Path) -> Result<Accumulation, String> {
         })
         .collect();
     let (width, height) = (layer.size.width(), layer.size.height());
+    let header = read_header(&attributes, &bad)?;
+    let mut words = channel_words(layer.channel_data, header.indices.len(), &bad)?;
+    let mut passes = Vec::with_capacity(header.indices.len());
+    for (i, &index) in header.indices.iter().enumerate() {
+        let mut channels = Vec::with_capacity(6);
+        for name in ["R", "G", "B"] {
+            for half in ["hi", "lo"] {
+                let c = format!("p{index:06}.{name}.{half}");
+                channels.push(
+                    words
+                        .remove(&c)
+                        .ok_or_else(|| bad(&format!("pass {index} has no channel {c}")))?,
+                );
+            }
+        }
+        passes.push(PassRecord {
+            index,
+            estimates: pass_estimates(path, index, &channels, (width, height))?,
+            dropped: header.dropped[i],
+            samples: header.samples[i],
+            photons_stored: header.photons[i],
+        });
+    }
+    Ok(Accumulation {
+        path: path.to_path_buf(),
+        size: (width as u32, height as u32),
+        identity: header.identity,
+        passes,
+    })
+}
+
+/// What an accumulation file's attributes say: which render it is part of, and per pass its
+/// index and counts.
+struct Header {
+    identity: Identity,
+    indices: Vec<u32>,
+    dropped: Vec<u64>,
+    samples: Vec<u64>,
+    photons: Vec<u64>,
+}
+
+/// Reads the `accum.*` attributes (`bdpm.` prefix removed); `bad` makes the message of a
+/// file that is not an accumulation file.
+fn read_header(
+    attributes: &[(String, String)],
+    bad: &dyn Fn(&str) -> String,
+) -> Result<Header, String> {
     let attr = |k: &str| {
         attributes
             .iter()
@@ -543,18 +472,32 @@ pub fn read(path: &Path) -> Result<Accumulation, String> {
         seed,
         overrides,
     };
-    // The channels by name, as u32 words; each is moved out once into its pass, so that the
-    // decoded file and the records built from it are not both held whole.
-    let expected = indices.len() * 6;
-    let found = layer.channel_data.list.len();
+    Ok(Header {
+        identity,
+        indices,
+        dropped,
+        samples,
+        photons,
+    })
+}
+
+/// The channels of `passes` passes by name, as u32 words; each is moved out once into its
+/// pass by the caller, so that the decoded file and the records built from it are not both
+/// held whole.
+fn channel_words(
+    channels: AnyChannels<FlatSamples>,
+    passes: usize,
+    bad: &dyn Fn(&str) -> String,
+) -> Result<std::collections::HashMap<String, Vec<u32>>, String> {
+    let expected = passes * 6;
+    let found = channels.list.len();
     if found != expected {
         return Err(bad(&format!(
-            "{found} channels for {} passes, which have {expected}",
-            indices.len()
+            "{found} channels for {passes} passes, which have {expected}"
         )));
     }
     let mut words: std::collections::HashMap<String, Vec<u32>> = Default::default();
-    for c in layer.channel_data.list {
+    for c in channels.list {
         let name = c.name.to_string();
         match c.sample_data {
             FlatSamples::U32(v) => {
@@ -568,54 +511,46 @@ pub fn read(path: &Path) -> Result<Accumulation, String> {
             }
         }
     }
-    let mut passes = Vec::with_capacity(indices.len());
-    for (i, &index) in indices.iter().enumerate() {
-        let mut channels = Vec::with_capacity(6);
-        for name in ["R", "G", "B"] {
-            for half in ["hi", "lo"] {
-                let c = format!("p{index:06}.{name}.{half}");
-                channels.push(
-                    words
-                        .remove(&c)
-                        .ok_or_else(|| bad(&format!("pass {index} has no channel {c}")))?,
-                );
-            }
-        }
-        let word = |c: usize, px: usize| {
-            f64::from_bits(((channels[2 * c][px] as u64) << 32) | channels[2 * c + 1][px] as u64)
-        };
-        let mut estimates = Vec::with_capacity(width * height);
-        for px in 0..width * height {
-            let e = DVec3::new(word(0, px), word(1, px), word(2, px));
-            if !e.is_finite() {
-                return Err(format!(
-                    "{}: pass {index} holds a non-finite estimate ({}, {}, {}) at pixel ({}, {}) \
-                     (x, y from the top left): the file is damaged",
-                    path.display(),
-                    e.x,
-                    e.y,
-                    e.z,
-                    px % width,
-                    px / width
-                ));
-            }
-            estimates.push(e);
-        }
-        drop(channels);
-        passes.push(PassRecord {
-            index,
-            estimates,
-            dropped: dropped[i],
-            samples: samples[i],
-            photons_stored: photons[i],
-        });
+    Ok(words)
+}
+
+/// The estimates of pass `index` from its six channels (the high and low words of R, G and
+/// B, `width`×`height` samples each), every one finite.
+fn pass_estimates(
+    path: &Path,
+    index: u32,
+    channels: &[Vec<u32>],
+    (width, height): (usize, usize),
+) -> Result<Vec<DVec3>, String> {
+    let pixels = width * height;
+    if channels.len() != 6 || channels.iter().any(|c| c.len() != pixels) {
+        return Err(format!(
+            "{}: not a bdpm accumulation file (pass {index}'s channels do not hold one sample \
+             per pixel)",
+            path.display()
+        ));
     }
-    Ok(Accumulation {
-        path: path.to_path_buf(),
-        size: (width as u32, height as u32),
-        identity,
-        passes,
-    })
+    let word = |c: usize, px: usize| {
+        f64::from_bits(((channels[2 * c][px] as u64) << 32) | channels[2 * c + 1][px] as u64)
+    };
+    let mut estimates = Vec::with_capacity(pixels);
+    for px in 0..pixels {
+        let e = DVec3::new(word(0, px), word(1, px), word(2, px));
+        if !e.is_finite() {
+            return Err(format!(
+                "{}: pass {index} holds a non-finite estimate ({}, {}, {}) at pixel ({}, {}) \
+                 (x, y from the top left): the file is damaged",
+                path.display(),
+                e.x,
+                e.y,
+                e.z,
+                px % width,
+                px / width
+            ));
+        }
+        estimates.push(e);
+    }
+    Ok(estimates)
 }
 
 /// Checks that `parts` are parts of one render with disjoint pass sets, and returns them as
@@ -701,22 +636,6 @@ pub fn combine(parts: Vec<Accumulation>) -> Result<(Accumulation, Vec<PathBuf>),
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn the_scene_hash_ignores_render_settings_comments_and_layout() {
-        let a = b"# a box\n[render]\npasses = 3\n\n[[light]]\nposition = [0.0, 1.0, 0.0]\n";
-        let b = b"[render]\npasses = 9\nradius = \"1px\"\n[[light]]\nposition = [0.0,  1.0, 0.0]\n";
-        let c = b"[render]\npasses = 3\n[[light]]\nposition = [0.0, 2.0, 0.0]\n";
-        assert_eq!(scene_content(a), scene_content(b));
-        assert_ne!(scene_content(a), scene_content(c));
-        assert_eq!(scene_content(b"not = [toml"), b"not = [toml".to_vec());
-    }
-
-    #[test]
-    fn fnv_hash_is_stable() {
-        assert_eq!(fnv1a(b""), 0xcbf2_9ce4_8422_2325);
-        assert_eq!(fnv1a(b"a"), 0xaf63_dc4c_8601_ec8c);
-    }
 
     /// The identity hashes the serialised settings: a setting that shapes the image changes
     /// them, the pass count (and for the estimator hash the seed) does not, and the value for

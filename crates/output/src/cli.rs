@@ -1,19 +1,18 @@
 //! What every subcommand shares: the setting overrides (the one place where command-line
-//! flags change the scene file's settings, and where they are written back as arguments for
-//! the accumulation file), loading a scene with them, the flag parsers, the thread pool, the
-//! progress bar and the facts about the machine that reports record.
+//! flags change the scene file's settings, where a setting's error is named by its flag, and
+//! where they are written back as arguments for the accumulation file), loading a scene with
+//! them (through the loader), the flag parsers, the thread pool and the progress bar.
 use std::path::{Path, PathBuf};
 
-use bdpm_integrator::{
-    PartialSettings, RadiusInput, RenderSettings, Setting, SettingsError, Stage, StageProbe,
-};
-use bdpm_load::{LoadOptions, LoadReport, MemoryLimit, load_scene_with};
-use bdpm_scene::Scene;
-use bdpm_settings::{Written, limits};
+use bdpm_integrator::{PartialSettings, RadiusInput, Setting, SettingsError};
+use bdpm_load::{LoadError, LoadOptions, LoadedScene, load_scene_overridden};
+use bdpm_mis::Needs;
+use bdpm_settings::{Mode, Written, limits};
 use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::files::stem_of;
-use indicatif::{ProgressBar, ProgressStyle};
+use crate::memory::MemoryLimit;
 
 /// `println!` that ignores a closed standard output (as in `bdpm render … | head`) instead of
 /// panicking: the render's files are what matter, and they are written before any message.
@@ -48,9 +47,9 @@ pub type CliResult<T> = Result<T, String>;
 /// check and message of a value is the scene file's.
 #[derive(Args, Debug, Clone, Default)]
 pub struct Overrides {
-    /// Integrator and weight mode: path, light, bdd0, bdd1, threshold, algebraic-direct, algebraic,
-    /// optimal, optimal-split, optimal-path, balance, power, camis, corrected-balance.
-    #[arg(long)]
+    /// Integrator and weight mode; the help lists every name of the mode table
+    /// ([`bdpm_settings::Mode::names`]).
+    #[arg(long, help = mode_help())]
     pub mode: Option<String>,
     /// Number of passes.
     #[arg(long, allow_negative_numbers = true, value_parser = count::<u32>(Setting::Passes))]
@@ -77,11 +76,9 @@ pub struct Overrides {
     /// model assumes) instead of jittering them over the pixel.
     #[arg(long)]
     pub no_jitter: bool,
-    /// Noise model of the model-based weights (algebraic-direct, algebraic, optimal,
-    /// optimal-split, optimal-path): footprint
-    /// (N_eff per pixel from the overlap of the samples' merge disks) or pinhole (the preprint's
-    /// N_B; its weights assume every sample of a pixel shares x0).
-    #[arg(long)]
+    /// Noise model of the model-based weights: footprint or pinhole; the help names the modes
+    /// it applies to, those whose heuristic needs N_B (`Needs::effective_samples`).
+    #[arg(long, help = noise_model_help())]
     pub noise_model: Option<String>,
     /// How a pixel's camera samples are placed within a pass: stratified (default; one
     /// jittered sample per stratum of the pixel and of the direction at x0) or independent
@@ -115,6 +112,35 @@ pub struct Overrides {
     /// Worker threads (default: all cores; at most 8 per core, and at least 64 allowed).
     #[arg(long, allow_negative_numbers = true, value_parser = whole::<usize>)]
     pub threads: Option<usize>,
+}
+
+/// The help of `--mode`: every mode name, in the mode table's order.
+fn mode_help() -> String {
+    format!("Integrator and weight mode: {}", Mode::names().join(", "))
+}
+
+/// The names of the weighting modes whose heuristic needs `what` of [`Needs`], in the mode
+/// table's order.
+fn modes_that(what: impl Fn(&Needs) -> bool) -> Vec<&'static str> {
+    Mode::names()
+        .into_iter()
+        .filter(|name| {
+            Mode::parse(name)
+                .and_then(|m| m.kind())
+                .is_some_and(|k| what(&k.heuristic().needs()))
+        })
+        .collect()
+}
+
+/// The help of `--noise-model`, naming the modes whose weights read N_B (the modes it
+/// applies to) from the mode table.
+fn noise_model_help() -> String {
+    format!(
+        "Noise model of the model-based weights ({}): footprint (N_eff per pixel from the \
+         overlap of the samples' merge disks) or pinhole (the preprint's N_B; its weights \
+         assume every sample of a pixel shares x0)",
+        modes_that(|n| n.effective_samples).join(", ")
+    )
 }
 
 /// A whole number for a flag, with a message that says so: the parser's own ("invalid digit
@@ -203,21 +229,12 @@ fn flag_of(setting: Setting) -> &'static str {
     }
 }
 
-/// Applies command-line overrides to the settings loaded from the scene file `scene`
-/// ([`PartialSettings::apply`]; an error names the flag), then checks the final settings
-/// once ([`RenderSettings::validate`]): a combination the file gets wrong may be put right by
-/// a flag (`--light-tracing false` over a file's light tracing without jitter), and one that
-/// is still wrong is named by where each of its settings came from.
-pub fn apply_overrides(
-    settings: &mut RenderSettings,
-    o: &Overrides,
-    scene: &Path,
-) -> CliResult<()> {
-    // The scene file's values were checked by the loader, so an error here is a flag's.
-    o.partial()
-        .apply(settings)
-        .map_err(|e| format!("{}: {e}", flag_of(e.setting())))?;
-    settings.validate().map_err(|e| match e {
+/// The message for an error in the settings the flags `o` put over the scene file `scene`
+/// (or in the final combination of the two): the setting named by its flag, and a
+/// combination by where each of its settings came from (`--light-tracing true and
+/// --no-jitter: …`, or the scene file's keys when no flag set them).
+fn override_message(o: &Overrides, scene: &Path, e: &SettingsError) -> String {
+    match e {
         SettingsError::LightTracingWithoutJitter => {
             let from = |flag: Option<&str>, key: &str| match flag {
                 Some(f) => f.to_string(),
@@ -235,7 +252,7 @@ pub fn apply_overrides(
             }
         }
         other => format!("{}: {other}", flag_of(other.setting())),
-    })
+    }
 }
 
 /// The worker threads of a command: `threads` of them (`--threads`), or one per core.
@@ -265,63 +282,28 @@ pub fn default_output(scene: &Path) -> PathBuf {
     PathBuf::from("out").join(format!("{}.exr", stem_of(scene, "render")))
 }
 
-/// A scene loaded from `path` with `overrides` applied (the camera resized to match).
-pub struct Prepared {
-    /// The scene, camera at the final resolution.
-    pub scene: Scene,
-    /// The final settings.
-    pub settings: RenderSettings,
-    /// The scene file's `output`, if any.
-    pub output: Option<PathBuf>,
-    /// Facts from loading.
-    pub report: LoadReport,
+/// Loads a scene file with the overrides put over its `[render]` table
+/// ([`bdpm_load::load_scene_overridden`]: the scene file's checks, then the final settings
+/// checked together once, the camera at the final resolution), refusing a scene whose
+/// textures, glTF buffers or geometry would not fit in the available memory before
+/// allocating them. An error in an override names its flag.
+pub fn prepare(path: &Path, overrides: &Overrides) -> CliResult<LoadedScene> {
+    prepare_within(path, overrides, MemoryLimit::of(None))
 }
 
-/// Loads a scene file and applies the overrides, refusing a scene whose textures, glTF
-/// buffers or geometry would not fit in the available memory before allocating them.
-pub fn prepare(path: &Path, overrides: &Overrides) -> CliResult<Prepared> {
-    prepare_within(path, overrides, memory_limit(None))
-}
-
-/// The memory limit of a command: `--max-memory` when given, else the available memory
-/// (none where it cannot be read).
-pub fn memory_limit(max_memory: Option<u64>) -> Option<MemoryLimit> {
-    match max_memory {
-        Some(bytes) => Some(MemoryLimit {
-            bytes,
-            source: "--max-memory".into(),
-        }),
-        None => available_memory().map(|bytes| MemoryLimit {
-            bytes,
-            source: "available memory".into(),
-        }),
-    }
-}
-
-/// [`prepare`] with the loader's memory check against `limit` (see
-/// [`bdpm_load::LoadOptions::memory_limit`]).
+/// [`prepare`] with the loader's memory check against `limit`.
 pub fn prepare_within(
     path: &Path,
     overrides: &Overrides,
-    limit: Option<MemoryLimit>,
-) -> CliResult<Prepared> {
+    limit: MemoryLimit,
+) -> CliResult<LoadedScene> {
     let options = LoadOptions {
-        memory_limit: limit,
+        memory_limit: limit.for_loader(),
     };
-    let loaded = load_scene_with(path, &options).map_err(|e| e.to_string())?;
-    let mut scene = loaded.scene;
-    let mut settings = loaded.settings;
-    apply_overrides(&mut settings, overrides, path)?;
-    if (scene.camera().width(), scene.camera().height()) != (settings.width, settings.height) {
-        scene
-            .set_resolution(settings.width, settings.height)
-            .map_err(|e| format!("--resolution: {e}"))?;
-    }
-    Ok(Prepared {
-        scene,
-        settings,
-        output: loaded.output,
-        report: loaded.report,
+    load_scene_overridden(path, &options, &overrides.partial()).map_err(|e| match e {
+        LoadError::Override { path, source } => override_message(overrides, &path, &source),
+        LoadError::Resolution { source, .. } => format!("--resolution: {source}"),
+        other => other.to_string(),
     })
 }
 
@@ -452,115 +434,6 @@ pub fn parse_bytes(s: &str) -> Result<u64, String> {
     Ok(bytes as u64)
 }
 
-/// MemAvailable of /proc/meminfo, bytes (`None` where there is no such file).
-pub fn available_memory() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
-}
-
-/// The process's peak resident memory so far (VmHWM of /proc/self/status), bytes.
-pub fn peak_resident_memory() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = text.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
-}
-
-/// Peak resident memory per stage of a render (Linux): as a stage starts, the kernel's
-/// high-water mark VmHWM is folded into the overall peak and reset to the current resident
-/// size (`/proc/self/clear_refs`, value 5); as it ends, VmHWM is that stage's peak. Where the
-/// reset is not possible, no stage peaks are recorded (they would be cumulative).
-#[derive(Debug, Default)]
-pub struct StagePeaks {
-    state: std::sync::Mutex<PeakState>,
-}
-
-#[derive(Debug, Default)]
-struct PeakState {
-    overall: u64,
-    reset_works: Option<bool>,
-    stages: Vec<(Stage, u64)>,
-}
-
-impl StagePeaks {
-    /// The largest peak of each stage, bytes, in the order the stages first ended.
-    pub fn stages(&self) -> Vec<(Stage, u64)> {
-        self.state
-            .lock()
-            .map(|s| s.stages.clone())
-            .unwrap_or_default()
-    }
-
-    /// The process's peak resident memory over the whole run, bytes (VmHWM now, or any
-    /// earlier peak that a stage reset hid).
-    pub fn overall(&self) -> Option<u64> {
-        let now = peak_resident_memory()?;
-        Some(self.state.lock().map_or(now, |s| s.overall.max(now)))
-    }
-}
-
-impl StageProbe for StagePeaks {
-    fn enter(&self, _stage: Stage) {
-        let Ok(mut s) = self.state.lock() else { return };
-        if let Some(peak) = peak_resident_memory() {
-            s.overall = s.overall.max(peak);
-        }
-        let ok = std::fs::write("/proc/self/clear_refs", "5").is_ok();
-        s.reset_works = Some(s.reset_works.unwrap_or(true) && ok);
-    }
-
-    fn leave(&self, stage: Stage) {
-        let Ok(mut s) = self.state.lock() else { return };
-        let Some(peak) = peak_resident_memory() else {
-            return;
-        };
-        s.overall = s.overall.max(peak);
-        if s.reset_works != Some(true) {
-            return;
-        }
-        match s.stages.iter_mut().find(|(n, _)| *n == stage) {
-            Some((_, p)) => *p = (*p).max(peak),
-            None => s.stages.push((stage, peak)),
-        }
-    }
-}
-
-/// One line of /proc/loadavg (its first three fields), or "unknown".
-pub fn load_average() -> String {
-    std::fs::read_to_string("/proc/loadavg")
-        .ok()
-        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
-        .unwrap_or_else(|| "unknown".into())
-}
-
-/// The CPU model from /proc/cpuinfo, or "unknown".
-pub fn cpu_model() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split_once(':'))
-                .map(|(_, v)| v.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown".into())
-}
-
-/// CPU time of this process so far (user + system, all threads), s; `None` where
-/// /proc/self/stat is not available. Its resolution is the kernel's USER_HZ tick (10 ms).
-pub fn process_cpu_seconds() -> Option<f64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // Fields after the command name, which is in parentheses and may contain spaces:
-    // state is field 3, utime field 14, stime field 15 (proc(5)).
-    let rest = &stat[stat.rfind(')')? + 1..];
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    let utime: f64 = f.get(11)?.parse().ok()?;
-    let stime: f64 = f.get(12)?.parse().ok()?;
-    Some((utime + stime) / 100.0)
-}
-
 /// A progress bar on stderr drawn with `template` (indicatif's syntax), `len` units long
 /// (`None`: a spinner with no end), or a hidden one when `quiet`.
 pub fn progress_bar(quiet: bool, len: Option<u64>, template: &str) -> ProgressBar {
@@ -580,6 +453,20 @@ pub fn progress_bar(quiet: bool, len: Option<u64>, template: &str) -> ProgressBa
 #[cfg(test)]
 mod tests {
     use super::*;
+    use bdpm_integrator::RenderSettings;
+
+    /// The flags put over `settings` as the loader puts them over a scene file's, with the
+    /// command line's messages.
+    fn apply_overrides(
+        settings: &mut RenderSettings,
+        o: &Overrides,
+        scene: &Path,
+    ) -> CliResult<()> {
+        o.partial()
+            .apply(settings)
+            .and_then(|()| settings.validate())
+            .map_err(|e| override_message(o, scene, &e))
+    }
 
     #[test]
     fn overrides_round_trip() {

@@ -3,16 +3,14 @@
 //! map (upscaled when small, so that the legend stays legible) beside a colour bar with
 //! numeric ticks and a title, drawn with plotters in DejaVu Sans. Used by the noise map of
 //! `bdpm render`, the weight map of `bdpm weights` and the ratio maps of `bdpm predict`.
-use std::path::Path;
 use std::sync::LazyLock;
 
 use plotters::prelude::*;
 use plotters::style::colors::colormaps::{DerivedColorMap, ViridisRGB};
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use crate::files::write_atomic;
-use crate::plot::register_font;
-use crate::preview::encode_png_rgb8;
+use crate::font::register_font;
+use crate::raster::Canvas;
 
 /// Panel background and text colours.
 const PANEL: RGBColor = RGBColor(24, 24, 24);
@@ -57,38 +55,6 @@ impl ColourMap {
         let t = if t.is_nan() { nan } else { t.clamp(0.0, 1.0) };
         let RGBColor(r, g, b) = map(t);
         [r, g, b]
-    }
-}
-
-/// An 8-bit RGB image, row-major, row 0 at the top.
-pub struct Canvas {
-    /// Width, pixels.
-    pub width: u32,
-    /// Height, pixels.
-    pub height: u32,
-    /// The pixels, 3 bytes each.
-    pub rgb: Vec<u8>,
-}
-
-impl Canvas {
-    /// Sets one pixel; coordinates outside the canvas are ignored (so callers may draw shapes
-    /// that cross the border).
-    pub fn set(&mut self, x: i64, y: i64, colour: [u8; 3]) {
-        if x < 0 || y < 0 || x >= self.width as i64 || y >= self.height as i64 {
-            return;
-        }
-        let i = (y as usize * self.width as usize + x as usize) * 3;
-        self.rgb[i..i + 3].copy_from_slice(&colour);
-    }
-
-    /// The image as PNG bytes.
-    pub fn encode_png(&self) -> Result<Vec<u8>, String> {
-        encode_png_rgb8(self.width, self.height, &self.rgb)
-    }
-
-    /// Writes the image as a PNG, atomically.
-    pub fn write_png(&self, path: &Path) -> Result<(), String> {
-        write_atomic(path, &self.encode_png()?)
     }
 }
 

@@ -8,7 +8,7 @@
 
 use bdpm_integrator::{MemoryEstimate, MemoryItem, RenderSettings, human_bytes};
 
-use crate::cli::available_memory;
+use crate::system::available_memory;
 
 /// How long an item of a render's estimate lives, which decides how the items of several
 /// renderers of one scene add up.
@@ -148,6 +148,16 @@ impl MemoryLimit {
                 source: "available memory",
             },
         }
+    }
+
+    /// The limit as the loader compares a scene's textures, buffers and geometry with it,
+    /// with the words of this command line; `None` where there is no limit.
+    pub fn for_loader(&self) -> Option<bdpm_load::MemoryLimit> {
+        self.bytes.map(|bytes| bdpm_load::MemoryLimit {
+            bytes,
+            source: self.source.into(),
+            remedy: Some("raise --max-memory if the machine has it".into()),
+        })
     }
 
     /// The limit, when `bytes` exceed it.

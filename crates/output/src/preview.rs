@@ -6,6 +6,7 @@ use glam::DVec3;
 
 use crate::colormap::{ColourMap, Legend, compose, linear_ticks};
 use crate::files::write_atomic;
+use crate::raster::encode_png_rgb8;
 use crate::stats::luminance;
 
 /// Linear → sRGB transfer function, in [0, 1].
@@ -32,29 +33,6 @@ fn auto_exposure(mean: &[DVec3]) -> f64 {
     lum.sort_by(f64::total_cmp);
     let p = lum[((lum.len() - 1) as f64 * 0.99) as usize];
     if p > 0.0 { 1.0 / p } else { 1.0 }
-}
-
-/// Encodes an 8-bit RGB PNG in memory, so that an encoder error cannot leave a half-written
-/// temporary file, and a write error is reported (not lost in a drop).
-pub fn encode_png_rgb8(width: u32, height: u32, rgb: &[u8]) -> Result<Vec<u8>, String> {
-    let mut bytes = Vec::new();
-    {
-        let mut enc = png::Encoder::new(&mut bytes, width, height);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        let mut w = enc
-            .write_header()
-            .map_err(|e| format!("cannot write PNG: {e}"))?;
-        w.write_image_data(rgb)
-            .map_err(|e| format!("cannot write PNG: {e}"))?;
-        w.finish().map_err(|e| format!("cannot write PNG: {e}"))?;
-    }
-    Ok(bytes)
-}
-
-/// Writes an 8-bit RGB image atomically.
-pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), String> {
-    write_atomic(path, &encode_png_rgb8(width, height, rgb)?)
 }
 
 /// The tonemapped preview of the mean as PNG bytes: auto exposure, clamp, sRGB.

@@ -263,6 +263,81 @@ pub struct RunReport {
     memory: MemoryOut,
 }
 
+impl SceneOut {
+    /// The scene file at `path` and what the loader found in it.
+    fn of(path: &Path, load: &LoadReport) -> SceneOut {
+        SceneOut {
+            path: path.display().to_string(),
+            triangles: load.triangles,
+            degenerate_triangles: load.degenerate_triangles,
+            materials: load.materials,
+            lights: load.lights,
+            gltf: GltfOut {
+                files: load.gltf_files.len(),
+                strips_and_fans: load.strips_and_fans,
+                skipped_points_and_lines: load.skipped_primitives,
+                skipped_lights: load.skipped_lights,
+                skipped_cameras: load.skipped_cameras,
+                textured_materials: load.textured_materials,
+                textures: load.textures,
+                other_textures: load.other_textures,
+            },
+        }
+    }
+}
+
+impl Timing {
+    /// The run's times, and the time of each stage of its passes.
+    fn of(f: &RunFacts<'_>) -> Timing {
+        Timing {
+            load_s: f.load_seconds,
+            prepare_s: f.prepare_seconds,
+            render_s: f.render_seconds,
+            samples_per_second: f.rendered_samples as f64 / f.render_seconds.max(1e-9),
+            pass_stages: f
+                .pass_stages
+                .iter()
+                .map(|(n, s)| StageOut {
+                    name: n.name().into(),
+                    seconds: *s,
+                    bytes: 0,
+                    detail: String::new(),
+                })
+                .collect(),
+        }
+    }
+}
+
+impl MemoryOut {
+    /// The estimate, its limit and the measured peaks.
+    fn of(m: &MemoryFacts<'_>) -> MemoryOut {
+        MemoryOut {
+            estimate_bytes: m.estimate.total(),
+            items: m
+                .estimate
+                .items
+                .iter()
+                .map(|i| MemoryItemOut {
+                    name: i.name,
+                    bytes: i.bytes,
+                })
+                .collect(),
+            stored_per_emitted: m.estimate.stored_per_emitted,
+            limit_bytes: m.limit,
+            limit_source: m.limit_source,
+            measured_peak_bytes: m.peak_resident,
+            stage_peaks: m
+                .stage_peaks
+                .iter()
+                .map(|&(stage, peak_bytes)| StagePeakOut {
+                    stage: stage.name(),
+                    peak_bytes,
+                })
+                .collect(),
+        }
+    }
+}
+
 impl RunReport {
     /// The report of a run.
     pub fn new(f: RunFacts<'_>) -> RunReport {
@@ -275,23 +350,7 @@ impl RunReport {
         RunReport {
             version: env!("CARGO_PKG_VERSION"),
             run_id: f.run_id.to_string(),
-            scene: SceneOut {
-                path: f.scene_path.display().to_string(),
-                triangles: f.load.triangles,
-                degenerate_triangles: f.load.degenerate_triangles,
-                materials: f.load.materials,
-                lights: f.load.lights,
-                gltf: GltfOut {
-                    files: f.load.gltf_files.len(),
-                    strips_and_fans: f.load.strips_and_fans,
-                    skipped_points_and_lines: f.load.skipped_primitives,
-                    skipped_lights: f.load.skipped_lights,
-                    skipped_cameras: f.load.skipped_cameras,
-                    textured_materials: f.load.textured_materials,
-                    textures: f.load.textures,
-                    other_textures: f.load.other_textures,
-                },
-            },
+            scene: SceneOut::of(f.scene_path, f.load),
             // The settings as asked for, with the merge radius and the weight clamp in force.
             settings: f.settings.record(
                 f.renderer.radius(),
@@ -314,22 +373,7 @@ impl RunReport {
                     detail: s.detail.clone(),
                 })
                 .collect(),
-            timing: Timing {
-                load_s: f.load_seconds,
-                prepare_s: f.prepare_seconds,
-                render_s: f.render_seconds,
-                samples_per_second: f.rendered_samples as f64 / f.render_seconds.max(1e-9),
-                pass_stages: f
-                    .pass_stages
-                    .iter()
-                    .map(|(n, s)| StageOut {
-                        name: n.name().into(),
-                        seconds: *s,
-                        bytes: 0,
-                        detail: String::new(),
-                    })
-                    .collect(),
-            },
+            timing: Timing::of(&f),
             weights: WeightsOut {
                 evaluations: f.weights.evaluations,
                 outside_unit_interval: f.weights.outside_unit,
@@ -348,32 +392,7 @@ impl RunReport {
             mean_noise_sqrt_v: image_mean(&noise),
             outputs: f.outputs.all().map(|p| p.display().to_string()),
             warnings: f.warnings.to_vec(),
-            memory: MemoryOut {
-                estimate_bytes: f.memory.estimate.total(),
-                items: f
-                    .memory
-                    .estimate
-                    .items
-                    .iter()
-                    .map(|i| MemoryItemOut {
-                        name: i.name,
-                        bytes: i.bytes,
-                    })
-                    .collect(),
-                stored_per_emitted: f.memory.estimate.stored_per_emitted,
-                limit_bytes: f.memory.limit,
-                limit_source: f.memory.limit_source,
-                measured_peak_bytes: f.memory.peak_resident,
-                stage_peaks: f
-                    .memory
-                    .stage_peaks
-                    .iter()
-                    .map(|&(stage, peak_bytes)| StagePeakOut {
-                        stage: stage.name(),
-                        peak_bytes,
-                    })
-                    .collect(),
-            },
+            memory: MemoryOut::of(&f.memory),
         }
     }
 
@@ -384,7 +403,7 @@ impl RunReport {
 }
 
 /// The settings as EXR header attributes (`bdpm.mode`, `bdpm.seed`, …), and the scene's
-/// identity `bdpm.scene_hash` ([`crate::accum::scene_hash`]), which `predict --measured` and
+/// identity `bdpm.scene_hash` ([`bdpm_load::scene_hash`]), which `predict --measured` and
 /// `study --reference` check, and `bdpm.estimator_hash` ([`crate::accum::estimator_hash`]),
 /// which `predict --measured` checks.
 pub fn header_attributes(

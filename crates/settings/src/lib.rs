@@ -1,6 +1,6 @@
 //! The render settings of bdpm: one type ([`RenderSettings`]), one validation
 //! ([`RenderSettings::validate`]), one shape for settings given in part ([`PartialSettings`]:
-//! a scene file's `[render]` table, command-line overrides, a `--modes` entry) applied by one
+//! a scene file's `[render]` table, command-line overrides, a mode-list entry) applied by one
 //! function, and one record of them for reports and image headers ([`SettingsRecord`]),
 //! shared by the scene loader, the integrator and the driver.
 //!

@@ -1,5 +1,5 @@
 //! Settings given in part: the one shape of a scene file's `[render]` table, the command
-//! line's overrides and a `--modes` entry's own settings, and the one function that puts any
+//! line's overrides and a mode-list entry's own settings, and the one function that puts any
 //! of them onto [`RenderSettings`].
 
 use std::path::PathBuf;
@@ -12,7 +12,7 @@ use crate::{
 /// Render settings given in part, as written: every field optional, named as the scene
 /// file's `[render]` keys. Names (mode, noise model, sampler) and radii stay as the user
 /// wrote them, so that [`PartialSettings::apply`] can check them and quote them; each caller
-/// names the field its way (`render.mode` in a scene file, `--mode` on the command line).
+/// names the field its way (`render.mode` in a scene file, its own option on a command line).
 ///
 /// With the `serde` feature it deserialises from a `[render]` table, refusing unknown keys,
 /// each value read as written and set by [`PartialSettings::set`].
@@ -63,8 +63,8 @@ pub struct PartialSettings {
 }
 
 /// A merge radius as written: a number of metres (a scene file's `radius = 0.01`) or text
-/// as [`RadiusSpec::parse`] reads it (`"0.01"`, `"0.01m"`, `"1.2px"`; scene files, flags,
-/// `--modes` entries).
+/// as [`RadiusSpec::parse`] reads it (`"0.01"`, `"0.01m"`, `"1.2px"`; scene files, command
+/// lines, mode-list entries).
 #[derive(Clone, Debug, PartialEq)]
 pub enum RadiusInput {
     /// Metres.
@@ -116,7 +116,7 @@ impl PartialSettings {
     /// partly changed.
     ///
     /// The combinations of settings are not checked here: a later override (a command-line
-    /// flag over a scene file, a `--modes` entry over both) may still put one right, so the
+    /// value over a scene file, a mode-list entry over both) may still put one right, so the
     /// caller checks them once, on the final settings ([`RenderSettings::validate`]).
     pub fn apply(&self, settings: &mut RenderSettings) -> Result<(), SettingsError> {
         let s = settings;

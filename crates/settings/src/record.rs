@@ -24,7 +24,7 @@ pub struct SettingsRecord {
     /// The same radius in pixel footprints (`Scene::pixel_footprint`), when the camera sees
     /// the scene.
     pub radius_px: Option<f32>,
-    /// Whether the radius was given (scene file or `--radius`) or is the default.
+    /// Whether the radius was given (scene file or command line) or is the default.
     pub radius_given: bool,
     /// Master seed.
     pub seed: u64,

@@ -1,8 +1,9 @@
-//! A setting's value as written (a scene file's TOML value, the text of a `--modes` entry or of
-//! a flag) and the one conversion of each `[render]` key's value into [`PartialSettings`]: a
-//! wrong kind of value ("found a boolean") and a count out of its range are told the same way
-//! wherever the value came from, with the bound. The caller names the field its way
-//! (`render.radius` in a scene file, the entry in `--modes`).
+//! A setting's value as written (a scene file's TOML value, the text of a mode-list entry
+//! such as `balance:radius=0.2px` or of a command-line value) and the one conversion of each
+//! `[render]` key's value into [`PartialSettings`]: a wrong kind of value ("found a boolean")
+//! and a count out of its range are told the same way wherever the value came from, with the
+//! bound. The caller names the field its way (`render.radius` in a scene file, the entry in
+//! a mode list).
 
 use std::path::PathBuf;
 
@@ -29,7 +30,7 @@ pub enum Written {
 }
 
 impl Written {
-    /// A value typed as text (a `--modes` entry's or a flag's): `true` and `false`, a whole
+    /// A value typed as text (a mode-list entry's or a command line's): `true` and `false`, a whole
     /// number, another number, or else the text itself.
     pub fn from_text(text: &str) -> Written {
         let t = text.trim();

@@ -163,10 +163,11 @@ fn bit_check_writes_relative_folders_under_the_callers_directory() {
     let tmp = crate::temp_dir("bitcheck");
     let dir = tmp.path();
     let fake = dir.join("fake-bdpm");
-    // Creates the file after -o, as a render would.
+    // Lists two modes, as `bdpm modes` does, and creates the file after -o, as a render would.
     executable(
         &fake,
-        "#!/bin/sh\nwhile [ $# -gt 0 ]; do [ \"$1\" = -o ] && : > \"$2\"; shift; done\n",
+        "#!/bin/sh\n[ \"$1\" = modes ] && { echo path; echo optimal; exit 0; }\n\
+         while [ $# -gt 0 ]; do [ \"$1\" = -o ] && : > \"$2\"; shift; done\n",
     );
     let name = format!("bit-check-rel-{}", std::process::id());
     let run = Command::new(repo().join("scripts/bit-check.sh"))
@@ -183,5 +184,6 @@ fn bit_check_writes_relative_folders_under_the_callers_directory() {
     let written = std::fs::read_dir(dir.join(&name))
         .expect("the folder under the caller's directory")
         .count();
-    assert!(written > 0, "{}", text(&run));
+    // Both scenes in each mode the binary listed.
+    assert_eq!(written, 4, "{}", text(&run));
 }

@@ -129,7 +129,8 @@ fn the_memory_limit_refuses_an_image_before_decoding_it() {
     let options = LoadOptions {
         memory_limit: Some(MemoryLimit {
             bytes: 100 << 10,
-            source: "--max-memory".into(),
+            source: "memory limit".into(),
+            remedy: Some("raise the limit if the machine has it".into()),
         }),
     };
     let e = load_scene_with(&dir.join("scene.toml"), &options)
@@ -140,7 +141,7 @@ fn the_memory_limit_refuses_an_image_before_decoding_it() {
         "image 0",
         "512×512 texels",
         "1.0 MiB",
-        "--max-memory of 100.0 KiB",
+        "more than the memory limit of 100.0 KiB; raise the limit if the machine has it",
     ] {
         assert!(e.contains(needle), "'{needle}' not in: {e}");
     }

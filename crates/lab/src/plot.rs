@@ -1,15 +1,16 @@
 //! Plots for `bdpm study`: error against time (log-log, one line per mode) and a bar chart of
 //! one number per mode. Each plot is written twice from the same drawing code: a PNG through
-//! plotters' bitmap backend, with the DejaVu Sans font embedded in the binary (the `dejavu`
-//! crate), so that no system font is needed; and an SVG, whose text the viewer renders.
+//! plotters' bitmap backend, in the DejaVu Sans font that bdpm-output embeds and registers
+//! (`bdpm_output::font`), so that no system font is needed; and an SVG, whose text the viewer
+//! renders.
 use std::path::Path;
-use std::sync::Once;
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::files::write_atomic;
-use crate::preview::write_png_rgb8;
+use bdpm_output::files::write_atomic;
+use bdpm_output::font::register_font;
+use bdpm_output::raster::write_png_rgb8;
 
 /// Pixel size of every plot.
 const SIZE: (u32, u32) = (960, 640);
@@ -29,13 +30,13 @@ const PALETTE: [RGBColor; 10] = [
 ];
 
 /// The colour of series number `i`.
-pub fn colour(i: usize) -> RGBColor {
+pub(crate) fn colour(i: usize) -> RGBColor {
     PALETTE[i % PALETTE.len()]
 }
 
 /// One line of a plot: a name for the legend and its (x, y) points.
 #[derive(Clone, Debug)]
-pub struct Series {
+pub(crate) struct Series {
     /// The name in the legend.
     pub name: String,
     /// The points, (x, y) in the plot's units; non-positive ones are left out on log axes.
@@ -44,7 +45,7 @@ pub struct Series {
 
 /// A log-log line plot.
 #[derive(Clone, Debug)]
-pub struct LogLogPlot {
+pub(crate) struct LogLogPlot {
     /// The caption above the plot.
     pub title: String,
     /// The x axis's description, unit included.
@@ -59,26 +60,13 @@ pub struct LogLogPlot {
 
 /// A bar chart with one bar per named value.
 #[derive(Clone, Debug)]
-pub struct BarPlot {
+pub(crate) struct BarPlot {
     /// The caption above the chart.
     pub title: String,
     /// The y axis's description, unit included.
     pub y_label: String,
     /// The bars: name under the bar and its height.
     pub bars: Vec<(String, f64)>,
-}
-
-/// Registers DejaVu Sans as plotters' "sans-serif" (once), for text in bitmaps.
-pub(crate) fn register_font() {
-    static ONCE: Once = Once::new();
-    ONCE.call_once(|| {
-        // DejaVu Sans is a valid TrueType font; a failure here would only lose the PNG text.
-        let _ = plotters::style::register_font(
-            "sans-serif",
-            FontStyle::Normal,
-            dejavu::sans::regular(),
-        );
-    });
 }
 
 type Bitmap<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
@@ -112,12 +100,12 @@ fn write_both(
 }
 
 /// Writes `stem.png` and `stem.svg` of a log-log line plot.
-pub fn write_loglog(stem: &Path, plot: &LogLogPlot) -> Result<(), String> {
+pub(crate) fn write_loglog(stem: &Path, plot: &LogLogPlot) -> Result<(), String> {
     write_both(stem, |r| draw_loglog(r, plot), |r| draw_loglog(r, plot))
 }
 
 /// Writes `stem.png` and `stem.svg` of a bar chart.
-pub fn write_bars(stem: &Path, plot: &BarPlot) -> Result<(), String> {
+pub(crate) fn write_bars(stem: &Path, plot: &BarPlot) -> Result<(), String> {
     write_both(stem, |r| draw_bars(r, plot), |r| draw_bars(r, plot))
 }
 

@@ -1,0 +1,96 @@
+//! The scene's materials as the loader assembles them: the scene file's, by name, then those
+//! made from glTF files, with their base-colour textures. Shared by the scene file's build
+//! and the glTF reader.
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use bdpm_bdf::Bdf;
+use bdpm_scene::{Material, Texture};
+use glam::Vec3;
+
+use crate::LoadError;
+
+/// The scene's materials: TOML ones first (sorted by name), then those made from glTF files.
+pub(crate) struct Materials {
+    list: Vec<Material>,
+    by_name: HashMap<String, u32>,
+    gltf_default: Option<u32>,
+    /// Base-colour textures by material index (shorter than `list` where the rest have none).
+    textures: Vec<Option<Arc<Texture>>>,
+}
+
+impl Materials {
+    /// No materials yet, room for `n` from the scene file.
+    pub(crate) fn with_capacity(n: usize) -> Materials {
+        Materials {
+            list: Vec::with_capacity(n),
+            by_name: HashMap::new(),
+            gltf_default: None,
+            textures: Vec::new(),
+        }
+    }
+
+    /// Adds a scene file's material, reachable by its name.
+    pub(crate) fn add_named(&mut self, material: Material) {
+        let _ = self
+            .by_name
+            .insert(material.name.clone(), self.list.len() as u32);
+        self.list.push(material);
+    }
+
+    /// The names of the scene file's materials, sorted.
+    pub(crate) fn names(&self) -> Vec<&str> {
+        let mut known: Vec<&str> = self.by_name.keys().map(String::as_str).collect();
+        known.sort_unstable();
+        known
+    }
+
+    /// How many materials there are.
+    pub(crate) fn len(&self) -> usize {
+        self.list.len()
+    }
+
+    /// The materials in index order and their base-colour textures.
+    pub(crate) fn into_parts(self) -> (Vec<Material>, Vec<Option<Arc<Texture>>>) {
+        (self.list, self.textures)
+    }
+
+    /// Index of the TOML material `name`.
+    pub(crate) fn lookup(&self, name: &str) -> Option<u32> {
+        self.by_name.get(name).copied()
+    }
+
+    /// Adds a Lambert material made from a glTF file (not reachable by name from shapes).
+    pub(crate) fn add_lambert(&mut self, name: String, kd: Vec3) -> Result<u32, String> {
+        let bdf = Bdf::lambert(kd).map_err(|e| e.to_string())?;
+        self.list.push(Material { name, bdf });
+        Ok(self.list.len() as u32 - 1)
+    }
+
+    /// Gives material `m` a base-colour texture.
+    pub(crate) fn set_texture(&mut self, m: u32, texture: Arc<Texture>) {
+        let m = m as usize;
+        if self.textures.len() <= m {
+            self.textures.resize(m + 1, None);
+        }
+        self.textures[m] = Some(texture);
+    }
+
+    /// The material of glTF primitives without one: Lambert, kd = 0.8 in every channel.
+    pub(crate) fn gltf_default(&mut self) -> Result<u32, LoadError> {
+        if let Some(m) = self.gltf_default {
+            return Ok(m);
+        }
+        let m = self
+            .add_lambert("gltf:default".into(), Vec3::splat(crate::GLTF_DEFAULT_KD))
+            .map_err(|e| LoadError::Invalid {
+                path: PathBuf::new(),
+                field: "gltf:default".into(),
+                message: e,
+            })?;
+        self.gltf_default = Some(m);
+        Ok(m)
+    }
+}
