@@ -73,7 +73,5 @@ mod scene;
 mod trace;
 
 pub use map::{Photon, PhotonMap, PhotonQuery};
-pub use scene::PhotonScene;
-pub use trace::{
-    PathVertex, PhotonArrival, Scatter, TraceOptions, trace_photons, trace_photons_until,
-};
+pub use scene::{PhotonScene, Scatter};
+pub use trace::{PathVertex, PhotonArrival, TraceOptions, trace_photons, trace_photons_until};

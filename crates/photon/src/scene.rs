@@ -4,8 +4,6 @@
 use bdpm_core::{PointLight, Shading};
 use glam::Vec3;
 
-use crate::trace::Scatter;
-
 /// The scene queries of the photon random walk (method.md §1). Every method must be a pure
 /// function of its arguments (the walk's determinism rests on it) and callable from many
 /// threads at once.
@@ -15,7 +13,7 @@ use crate::trace::Scatter;
 ///
 /// Use [`Shading`] for a surface point (position, geometric normal and shading frame facing
 /// the arrival side, material and triangle indices): the photon records
-/// ([`PathVertex`](crate::PathVertex)) store those fields for the MIS weights.
+/// (`PathVertex`) store those fields for the MIS weights.
 pub trait PhotonScene: Sync {
     /// Chooses the light that emits a photon, for `u` uniform in [0, 1): its index and the
     /// probability p_l with which it was chosen (bdpm picks in proportion to flux
@@ -42,7 +40,7 @@ pub trait PhotonScene: Sync {
     fn spawn(&self, sh: &Shading, dir: Vec3) -> Vec3;
 
     /// Bit l set iff light l (l < 32) is visible from `sh` on the side of its normal; asked
-    /// only when [`TraceOptions::light_visibility`](crate::TraceOptions::light_visibility) is
+    /// only when the trace options' `light_visibility` is
     /// on (the MIS weights read it at photons' previous vertices).
     fn visible_light_mask(&self, sh: &Shading) -> u32;
 
@@ -54,4 +52,18 @@ pub trait PhotonScene: Sync {
         let _ = light;
         self.visible_light_mask(sh)
     }
+}
+
+/// The BDF sample drawn at an arrival (before the roulette decision).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Scatter {
+    /// Unit world direction leaving the surface, on the side of the vertex's
+    /// geometric normal.
+    pub direction: Vec3,
+    /// BDF value f(ω_in, ω_out), sr⁻¹.
+    pub f: Vec3,
+    /// Solid-angle pdf of `direction`, sr⁻¹ (without the roulette factor).
+    pub pdf: f32,
+    /// f·cos/pdf (dimensionless); the scattered energy is `power · weight`.
+    pub weight: Vec3,
 }

@@ -3,7 +3,7 @@
 use bdpm_core::sampling::uniform_sphere;
 use bdpm_core::{Domain, Rng, Shading, WeightVertex};
 
-use crate::scene::PhotonScene;
+use crate::scene::{PhotonScene, Scatter};
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -107,19 +107,6 @@ pub(crate) fn emit<S: PhotonScene + ?Sized>(
         direction: uniform_sphere(u_dir),
         power: l.flux / (p * photons as f32),
     })
-}
-
-/// The BDF sample drawn at an arrival (before the roulette decision).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Scatter {
-    /// Unit world direction leaving the surface, on the side of the vertex normal ([`PathVertex::at`]`.n`).
-    pub direction: Vec3,
-    /// BDF value f(ω_in, ω_out), sr⁻¹.
-    pub f: Vec3,
-    /// Solid-angle pdf of `direction`, sr⁻¹ (without the roulette factor).
-    pub pdf: f32,
-    /// f·cos/pdf (dimensionless); the scattered energy is `power · weight`.
-    pub weight: Vec3,
 }
 
 /// Everything known at one arrival of a photon at a surface, as passed to the visitors of
