@@ -129,6 +129,8 @@ pub(crate) struct Mix<'a> {
     pub(crate) scene: &'a Scene,
     pub(crate) heuristic: Heuristic,
     pub(crate) needs: Needs,
+    /// w₁ of a mode that does not weigh (`bdd0`: 0, `bdd1`: 1; [`Heuristic::fixed_w1`]).
+    pub(crate) fixed_w1: Option<f64>,
     pub(crate) budget: Budget,
     /// Merge kernel 1/S, m⁻².
     pub(crate) inv_area: f32,
@@ -191,12 +193,11 @@ impl<'a> Mix<'a> {
         }
         let bdf = self.scene.bdf_at(&sh);
         let out = bdf.outgoing(u_local);
-        let (acceptance_area, primary_density) =
-            if self.heuristic == Heuristic::Camis || self.light_tracing {
-                self.primary_terms(&sh, u)
-            } else {
-                (0.0, 0.0)
-            };
+        let (acceptance_area, primary_density) = if self.needs.primary_terms || self.light_tracing {
+            self.primary_terms(&sh, u)
+        } else {
+            (0.0, 0.0)
+        };
         Some(FirstVertex {
             sh,
             u,
@@ -435,11 +436,10 @@ impl<'a> Mix<'a> {
         let mut direct_raw = Vec3::ZERO;
         let mut direct_weighted = Vec3::ZERO;
         let per_light = self.needs.densities;
-        let pure = matches!(self.heuristic, Heuristic::Bdd1);
         let w_const = if per_light {
             0.0
-        } else if pure {
-            1.0
+        } else if let Some(w1) = self.fixed_w1 {
+            w1
         } else {
             self.w1(&pair, weigher, stats)
         };
@@ -552,7 +552,6 @@ impl<'a> Mix<'a> {
         let scene = self.scene;
         let mut raw = Vec3::ZERO;
         let mut weighted = Vec3::ZERO;
-        let pure = matches!(self.heuristic, Heuristic::Bdd0);
         photons.0.finish_query_indexed(query, |i, ph| {
             let wp = ph.incoming;
             let f = scene.eval_with(&x0.bdf, &x0.sh, x0.u, wp);
@@ -561,8 +560,8 @@ impl<'a> Mix<'a> {
             }
             let c = f * ph.power;
             raw += c;
-            let w0 = if pure {
-                1.0
+            let w0 = if let Some(w1) = self.fixed_w1 {
+                1.0 - w1
             } else if self.camera_x1_weighting() {
                 1.0 - camera_w1.unwrap_or(0.0)
             } else {

@@ -2,7 +2,7 @@
 //! splats every arrival of depth ≥ 1 unweighted; the mix with `light_tracing` on samples
 //! BDD=0's paths this way instead of merging photons at x₀, with BDD=0's weight
 //! 1 − w₁(x₀, y_p) (docs/method-notes.md, "Light tracing in place of the merge at x₀").
-use bdpm_mis::{Heuristic, Weigher};
+use bdpm_mis::Weigher;
 use bdpm_photon::{PathVertex, PhotonArrival};
 use bdpm_scene::{Scene, Shading};
 use glam::Vec3;
@@ -115,8 +115,8 @@ impl Mix<'_> {
         if dist2 <= 0.0 {
             return;
         }
-        let w1 = if matches!(self.heuristic, Heuristic::Bdd0) {
-            0.0
+        let w1 = if let Some(w1) = self.fixed_w1 {
+            w1
         } else {
             let v = to_prev / dist2.sqrt();
             let base = self.pair(&x0, &y, v, self.f_at_x0(&x0, v));

@@ -10,7 +10,7 @@
 use bdpm_bdf::{luminance, survival_at};
 use bdpm_cache::{CacheSlot, RadianceCache};
 use bdpm_geometry::Frame;
-use bdpm_mis::{Heuristic, Pair, PathKind, X0Inputs, X1Inputs, acceptance_probability};
+use bdpm_mis::{Pair, PathKind, X0Inputs, X1Inputs, acceptance_probability};
 use bdpm_photon::{PathVertex, Photon, PhotonMap};
 use bdpm_scene::WeightVertex;
 use glam::Vec3;
@@ -121,7 +121,7 @@ impl<'a> Mix<'a> {
             pair.x1.indirect = ld as f64;
             pair.x1.b = b as f64;
         }
-        if let Heuristic::Threshold { .. } = self.heuristic {
+        if self.needs.light_distance {
             pair.x1.light_distance = self
                 .scene
                 .lights()
@@ -169,7 +169,7 @@ impl<'a> Mix<'a> {
                     let (pc, pl) = self.densities(x0, x1, v, dist2, incoming);
                     pair.path.camera_density = pc;
                     pair.path.light_density = pl;
-                    if self.heuristic == Heuristic::Camis {
+                    if self.needs.light_suffix {
                         pair.path.light_suffix = self.light_suffix(vertices, x0, x1, from, pc);
                     }
                 }
@@ -429,9 +429,7 @@ impl<'a> Mix<'a> {
     /// numbers, bit for bit, as [`Self::pair`] would for each visit.
     pub(crate) fn prev_inputs(&self, map: &PhotonMap) -> Vec<[f32; 3]> {
         let reads_inputs = self.needs.direct_at_x1 || self.needs.radiance_cache;
-        let per_visit = matches!(self.heuristic, Heuristic::Bdd0)
-            || self.camera_x1_weighting()
-            || self.per_visit_inputs();
+        let per_visit = !self.needs.weighs || self.camera_x1_weighting() || self.per_visit_inputs();
         let isotropic = self.cache_needed().is_none_or(|c| c.is_isotropic());
         if !(self.merges_at_x0() && reads_inputs && isotropic) || per_visit {
             return Vec::new();

@@ -607,13 +607,15 @@ impl<'a> Renderer<'a> {
             scene: self.scene,
             heuristic,
             needs: heuristic.needs(),
+            fixed_w1: heuristic.fixed_w1(),
             budget: self.budget(),
             inv_area: 1.0 / (std::f32::consts::PI * self.radius * self.radius),
             radius: self.radius,
             radius_map: self.radius_map.as_ref(),
             cache: self.cache.as_ref(),
             pilot: false,
-            light_tracing: self.settings.light_tracing && heuristic != Heuristic::Bdd1,
+            // `bdd1` has no BDD=0 part to sample.
+            light_tracing: self.settings.light_tracing && heuristic.needs().photons_at_x0,
             #[cfg(feature = "test-hooks")]
             camera_x1_weighting: self.camera_x1_weighting,
             #[cfg(feature = "test-hooks")]
