@@ -223,7 +223,7 @@ fn memory_gate(
             human_bytes(estimate.total()),
             memory::parts(&estimate),
             limit.describe(),
-            estimate.scalable_largest().lower
+            memory::lower(estimate.scalable_largest())
         )),
         None => Ok(()),
     }

@@ -7,8 +7,9 @@ use bdpm_photon::{PathVertex, PhotonArrival};
 use bdpm_scene::{Scene, Shading};
 use glam::Vec3;
 
-use crate::bdpm::{FirstVertex, Mix, WeightStats};
+use crate::estimates::WeightStats;
 use crate::inputs::direction_to;
+use crate::mix::{FirstVertex, Mix};
 
 /// A photon arrival connected to the camera: where it lands on the film and what it adds.
 #[derive(Clone, Copy, Debug)]

@@ -20,7 +20,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use std::f32::consts::PI;
 
-use crate::bdpm::{FirstVertex, Mix};
+use crate::mix::{FirstVertex, Mix};
 
 /// How the light subpath of a full path …→x₁→x₀ reaches x₁: what the path's own inputs (its
 /// kind, f₁ at x₁, the densities, `camis`'s β) are read from.
@@ -486,7 +486,7 @@ pub(crate) fn direction_to(x0: &FirstVertex<'_>, y: &WeightVertex) -> Option<(Ve
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     //! The agreement of the ways in: for stored light paths, the inputs the camera side
     //! assembles for the path …→x₂→x₁→x₀ (x₁ its own vertex, the photon stored at x₁ found
     //! around it) are the inputs the photon side assembles when that path's next photon lands
@@ -507,7 +507,7 @@ mod tests {
 
     /// An open box: Lambert floor and left wall, a back wall that is Lambert or glossy, two
     /// point lights.
-    fn open_box(glossy_back: bool) -> Scene {
+    pub(crate) fn open_box(glossy_back: bool) -> Scene {
         let mut mesh = TriangleMesh::default();
         let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
         mesh.push_quad(
@@ -603,7 +603,7 @@ mod tests {
                 domain: Domain::Photon,
                 pass: 0,
                 light_visibility: mix.needs.direct_at_x1,
-                max_depth: 1024,
+                max_depth: bdpm_photon::MAX_DEPTH,
             };
             let map = PhotonMap::trace(scene, &options, 0.05);
             let prev_inputs = mix.prev_inputs(&map);

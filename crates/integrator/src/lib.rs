@@ -9,40 +9,49 @@
 //!
 //! Architecture invariant: no file IO; the driver writes images and reports.
 
-pub mod bdpm;
+mod bdpm;
 mod connect;
 mod correction;
 mod direct;
+mod error;
+mod estimate;
+mod estimates;
 mod film;
 mod inputs;
 mod light;
 mod memory;
+mod mix;
+mod pass;
 pub mod path;
 mod predict;
+mod prepare;
+mod products;
 mod radius;
 mod render;
 mod sampler;
 mod settings;
+mod setup;
 mod stage;
 mod table;
 mod weightmap;
 
-pub use bdpm::{Techniques, WeightStats, scene_default_radius};
 pub use bdpm_mis::NoiseModel;
 pub use correction::{CANDIDATES, Correction, PILOT_PASSES, pilot_seed};
 pub use direct::DirectSamples;
+pub use error::{RenderError, TargetError};
+pub use estimate::{PILOT_PHOTONS, estimate_memory};
+pub use estimates::{PassOutput, Techniques, WeightStats};
 pub use film::{Film, PassSums, PassValue};
 pub use memory::{
-    MemoryEstimate, MemoryItem, PILOT_PHOTONS, estimate_memory, human_bytes, loading_item,
-    model_cache_item, scene_items,
+    Lifetime, Lower, MemoryEstimate, MemoryItem, human_bytes, loading_item, scene_items,
 };
 pub use predict::{JITTER_RAYS, Prediction};
+pub use prepare::{MODEL_CACHE_BINS, MODEL_CACHE_PHOTONS, model_cache_item, model_cache_settings};
 pub use radius::RadiusMap;
 pub use render::{
-    FirstHitLayers, LARGE_RADIUS_FRACTION, MODEL_CACHE_BINS, MODEL_CACHE_PHOTONS, PassOutput,
-    RenderError, Renderer, StageProbe, StageReport, TargetError, first_hit_layers,
-    model_cache_settings, render_path_pass, resolve_radius,
+    FirstHitLayers, LARGE_RADIUS_FRACTION, Renderer, first_hit_layers, render_path_pass,
 };
+pub use setup::{resolve_radius, scene_default_radius};
 // The settings are `bdpm-settings`'; re-exported so that a user of the integrator needs one
 // dependency.
 pub use bdpm_settings::{
@@ -51,6 +60,6 @@ pub use bdpm_settings::{
     SettingsRecord, WeightClamp, Written, check_radius, default_radius,
 };
 pub use sampler::strata;
-pub use stage::Stage;
+pub use stage::{Stage, StageProbe, StageReport};
 pub use table::{PixelTable, PixelWeights};
 pub use weightmap::{WeightMap, WeightTarget, weight_map_heuristic};

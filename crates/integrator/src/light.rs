@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use crate::connect::connect;
 use crate::direct::{DirectSamples, direct_through};
-use crate::render::{PassOutput, accumulate};
+use crate::estimates::{PassOutput, accumulate};
 use crate::sampler::PixelSamples;
 use crate::stage::Stage;
 use bdpm_settings::RenderSettings;
@@ -64,7 +64,7 @@ pub(crate) fn render_light_pass(
         domain: Domain::Photon,
         pass,
         light_visibility: false,
-        max_depth: 1024,
+        max_depth: bdpm_photon::MAX_DEPTH,
     };
     // Splats come back in photon order, so the sums below do not depend on the thread count.
     let splats: Vec<(u32, Vec3)> = trace_photons(scene, &options, |arrival, out| {

@@ -56,8 +56,9 @@ use bdpm_mis::{Heuristic, Weigher, effective_samples};
 use crate::inputs::Arrival;
 use rayon::prelude::*;
 
-use crate::bdpm::{FirstVertex, Mix};
-use crate::render::{RenderError, Renderer};
+use crate::error::RenderError;
+use crate::mix::{FirstVertex, Mix};
+use crate::render::Renderer;
 use crate::sampler::{direction_strata, in_cell, pixel_strata, random_cell};
 use crate::table::footprint_overlap;
 use bdpm_settings::PINHOLE_TABLE_RAYS;
@@ -211,7 +212,8 @@ impl Renderer<'_> {
         // The weights' inputs exactly as the renderer passes them.
         let table = self.pixel_table().map(|t| t.get(x, y));
         let factor = self.correction().map_or(1.0, |c| c.get(x, y));
-        let weigher = mix.weigher(table, factor, scale);
+        let inputs = (table.map(|p| p.camera_samples), table.map(|p| &p.terms));
+        let weigher = mix.weigher(inputs, factor, scale);
 
         // The model's own directions: as many as the preprint's A/B rays unless given, so that
         // a prediction does not get noisier where the table takes fewer.

@@ -16,7 +16,7 @@
 
 use bdpm_bdf::luminance;
 
-use crate::bdpm::Techniques;
+use crate::estimates::Techniques;
 
 /// Side of the square pixel blocks that share a radius, pixels.
 pub(crate) const BLOCK: u32 = 8;

@@ -6,7 +6,8 @@ use rayon::prelude::*;
 use bdpm_mis::Heuristic;
 use bdpm_settings::RenderSettings;
 
-use crate::render::{RenderError, Renderer, TargetError};
+use crate::error::{RenderError, TargetError};
+use crate::render::Renderer;
 use crate::table::{TableSpec, pixel_weights};
 
 /// Where x₀ is.

@@ -210,7 +210,7 @@ fn refuse_above_limit(
                 v.name,
                 human_bytes(e.total()),
                 part.name,
-                part.lower
+                memory::lower(part)
             )
         })
         .unwrap_or_default();

@@ -182,7 +182,7 @@ pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
 }
 
 /// The flag that sets `setting`.
-fn flag_of(setting: Setting) -> &'static str {
+pub(crate) fn flag_of(setting: Setting) -> &'static str {
     match setting {
         Setting::Width | Setting::Height | Setting::Resolution => "--resolution",
         Setting::Passes => "--passes",

@@ -75,5 +75,5 @@ mod trace;
 pub use map::{Photon, PhotonMap, PhotonQuery};
 pub use scene::PhotonScene;
 pub use trace::{
-    PathVertex, PhotonArrival, Scatter, TraceOptions, trace_photons, trace_photons_until,
+    MAX_DEPTH, PathVertex, PhotonArrival, Scatter, TraceOptions, trace_photons, trace_photons_until,
 };
