@@ -9,10 +9,10 @@ use bdpm_scene::{Shading, WeightVertex};
 use glam::Vec3;
 
 use crate::correction::CandidateSums;
-use crate::direct::DirectExtra;
 use crate::estimates::{Techniques, WeightStats};
 use crate::inputs::Arrival;
 use crate::mix::{FirstVertex, Mix};
+use crate::plan::PixelPlan;
 
 /// Camera samples that [`Mix::sample_batch`] takes together: enough for each sample's
 /// photon-map fetches to be hidden behind the others' work, few enough for the batch's state
@@ -24,23 +24,41 @@ pub(crate) const BATCH: usize = 16;
 /// stage of a query, so that every read of a gather has been fetched.
 const QUERY_STAGES: usize = 3;
 
-/// One camera sample to take: its image point (pixels, x right and y down from the top-left
-/// corner), its random stream, and where its value goes.
+/// One camera sample to take: which of its pixel's samples, its image point (pixels, x right
+/// and y down from the top-left corner) and its random stream.
 #[derive(Clone, Debug)]
 pub(crate) struct Job {
-    pub(crate) x: f32,
-    pub(crate) y: f32,
-    pub(crate) rng: Rng,
+    /// Sample k of the pixel (its direct-light points' stream, [`PixelPlan::direct_extra`]).
+    k: u32,
+    x: f32,
+    y: f32,
+    rng: Rng,
     /// The numbers of the BDF sample at x₀ when the sampler fixes them (`None`: from `rng`).
-    pub(crate) bdf: Option<[f32; 3]>,
-    pub(crate) out: Techniques,
-    /// The weighted parts of the value under each candidate factor of `corrected-balance`'s
-    /// pilot (only when [`Mix::pilot`]; direct light at x₀ is not in it).
+    bdf: Option<[f32; 3]>,
+}
+
+impl Job {
+    /// Sample `k` (< N_B) of the pixel of `plan`.
+    #[inline]
+    pub(crate) fn new(plan: &PixelPlan<'_>, k: u32) -> Job {
+        let c = plan.sample(k);
+        Job {
+            k,
+            x: plan.x as f32 + c.offset[0],
+            y: plan.y as f32 + c.offset[1],
+            rng: c.rng,
+            bdf: c.bdf,
+        }
+    }
+}
+
+/// What one camera sample gives: its value split by technique and, in `corrected-balance`'s
+/// pilot ([`Mix::pilot`]), its weighted parts under each candidate factor (direct light at x₀
+/// is not in those).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct SampleOut {
+    pub(crate) techniques: Techniques,
     pub(crate) pilot: CandidateSums,
-    /// Further points where direct light at x₀ is evaluated (`direct_boost`), if any.
-    pub(crate) direct_extra: Option<DirectExtra>,
-    /// The pixel's scale of the merge radius ([`Mix::radius_scale`]).
-    pub(crate) scale: f32,
 }
 
 /// Room for the state of a batch of samples between their rays and their gathers, reused from
@@ -48,9 +66,18 @@ pub(crate) struct Job {
 #[derive(Default)]
 pub(crate) struct Slots<'s>([Slot<'s>; BATCH]);
 
+impl Slots<'_> {
+    /// What the first `n` samples of the last batch gave, in sample order.
+    pub(crate) fn outputs(&self, n: usize) -> impl Iterator<Item = &SampleOut> {
+        self.0[..n].iter().map(|s| &s.out)
+    }
+}
+
 /// A sample between its rays and its gathers.
 #[derive(Default)]
 struct Slot<'s> {
+    /// What the sample gives, filled as it goes.
+    out: SampleOut,
     /// None if the sample ended before any gather.
     x0: Option<FirstVertex<'s>>,
     /// The x₁ part, if the mode has one and x₁ was found.
@@ -78,8 +105,9 @@ struct Second {
 }
 
 impl<'a> Mix<'a> {
-    /// Camera samples through the image points of `jobs`, each with its own random stream:
-    /// every job's `out` receives the value split by technique. At most [`BATCH`] jobs.
+    /// The camera samples `jobs` of the pixel of `plan`, each with its own random stream:
+    /// what each gives goes to its slot ([`Slots::outputs`]). At most [`BATCH`] jobs.
+    /// `photons` are the pass's map and [`Self::prev_inputs`]' table.
     ///
     /// The samples are taken together in stages so that the photon-map reads of one sample
     /// are fetched while the others compute: first every sample's rays, shading and weights
@@ -88,25 +116,28 @@ impl<'a> Mix<'a> {
     /// alone, so the results do not depend on the batch.
     pub(crate) fn sample_batch<'s>(
         &'s self,
-        map: &PhotonMap,
-        prev_inputs: &[[f32; 3]],
+        photons: (&PhotonMap, &[[f32; 3]]),
+        plan: &PixelPlan<'_>,
         jobs: &mut [Job],
         slots: &mut Slots<'s>,
-        weigher: &Weigher,
         stats: &mut WeightStats,
     ) {
         assert!(jobs.len() <= BATCH, "at most {BATCH} samples per batch");
-        let slots = &mut slots.0;
+        let weigher = plan
+            .weigher
+            .as_ref()
+            .expect("a pixel of the mix has a weigher");
+        let map = photons.0;
+        // Only this batch's slots: the others still hold an earlier batch's samples.
+        let slots = &mut slots.0[..jobs.len()];
         for (job, slot) in jobs.iter_mut().zip(slots.iter_mut()) {
-            job.out = Techniques::default();
-            job.pilot = CandidateSums::default();
+            slot.out = SampleOut::default();
             slot.x0 = None;
             slot.second = None;
-            self.start_sample(map, job, weigher, stats, slot);
+            self.start_sample(map, job, plan, (weigher, &mut *stats), slot);
         }
         for _ in 0..QUERY_STAGES {
-            // Only this batch's slots: the others still hold an earlier batch's samples.
-            for slot in slots[..jobs.len()].iter_mut().filter(|s| s.x0.is_some()) {
+            for slot in slots.iter_mut().filter(|s| s.x0.is_some()) {
                 if slot.second.is_some() {
                     map.advance_query(&mut slot.query1);
                 }
@@ -115,39 +146,37 @@ impl<'a> Mix<'a> {
                 }
             }
         }
-        for (job, slot) in jobs.iter_mut().zip(slots.iter()) {
-            let Some(x0) = &slot.x0 else { continue };
-            let camera_w1 = slot.second.as_ref().map(|s| s.w_const);
-            // The kernel 1/S of the sample's pixel, for both of its merges.
-            let k = self.inv_area / (job.scale * job.scale);
-            if let Some(second) = &slot.second {
-                let out = (&mut job.out, &mut job.pilot);
-                self.merge_at_x1(x0, (map, k), second, &slot.query1, weigher, stats, out);
+        // The kernel 1/S of the pixel, for both merges of every sample.
+        let k = self.inv_area / (plan.radius_scale * plan.radius_scale);
+        for slot in slots.iter_mut() {
+            let Slot {
+                out,
+                x0,
+                second,
+                query0,
+                query1,
+            } = slot;
+            let Some(x0) = x0 else { continue };
+            let camera_w1 = second.as_ref().map(|s| s.w_const);
+            if let Some(second) = second {
+                self.merge_at_x1(x0, (map, k), second, query1, (weigher, &mut *stats), out);
             }
             if self.merges_at_x0() {
-                let photons = (map, prev_inputs);
-                self.merge_at_x0(
-                    x0,
-                    (photons, k),
-                    &slot.query0,
-                    weigher,
-                    camera_w1,
-                    stats,
-                    (&mut job.out, &mut job.pilot),
-                );
+                let at_x0 = (&*query0, camera_w1);
+                self.merge_at_x0(x0, (photons, k), at_x0, (weigher, &mut *stats), out);
             }
         }
     }
 
-    /// Everything of one sample up to its gathers: the direct light at x₀ goes into
-    /// `job.out`, the rest into `slot` (whose `x0` stays None if the sample ends before any
+    /// Everything of one sample up to its gathers: the direct light at x₀ goes into its
+    /// output, the rest into `slot` (whose `x0` stays None if the sample ends before any
     /// gather).
     fn start_sample<'s>(
         &'s self,
         map: &PhotonMap,
         job: &mut Job,
-        weigher: &Weigher,
-        stats: &mut WeightStats,
+        plan: &PixelPlan<'_>,
+        weights: (&Weigher, &mut WeightStats),
         slot: &mut Slot<'s>,
     ) {
         let scene = self.scene;
@@ -159,10 +188,10 @@ impl<'a> Mix<'a> {
         let u = -dir;
         let sh0 = hit0.map(|hit| scene.shade(&hit, u));
         let direct = sh0.as_ref().map_or(Vec3::ZERO, |sh| scene.direct(sh, u));
-        job.out.direct = match &mut job.direct_extra {
+        slot.out.techniques.direct = match plan.direct_extra(job.k) {
             // The mean of L₀ over the sample's point and the further ones, whether or not
             // the sample's own ray meets anything.
-            Some(extra) => extra.mean_with(scene, direct),
+            Some(mut extra) => extra.mean_with(scene, direct),
             None => direct.as_dvec3(),
         };
         let Some(sh0) = sh0 else {
@@ -171,7 +200,7 @@ impl<'a> Mix<'a> {
         let Some(x0) = self.first_vertex_shaded(sh0, u) else {
             return;
         };
-        let r = self.radius * job.scale;
+        let r = self.radius * plan.radius_scale;
         if self.merges_at_x0() {
             map.restart_query_within(&mut slot.query0, x0.sh.p, r);
         }
@@ -182,9 +211,9 @@ impl<'a> Mix<'a> {
                 &x0,
                 map,
                 (bdf_u, r),
-                (weigher, stats),
+                weights,
                 &mut slot.query1,
-                &mut job.pilot,
+                &mut slot.out.pilot,
             );
         }
         slot.x0 = Some(x0);
@@ -276,17 +305,15 @@ impl<'a> Mix<'a> {
     }
 
     /// BDD=1's merge paths …→x₂→x₁→x₀: photons around x₁, weighted by w₁; finishes the x₁
-    /// part of the sample.
-    #[allow(clippy::too_many_arguments)]
+    /// part of the sample's output `out`.
     fn merge_at_x1(
         &self,
         x0: &FirstVertex<'_>,
         (map, k): (&PhotonMap, f32),
         second: &Second,
         query: &PhotonQuery,
-        weigher: &Weigher,
-        stats: &mut WeightStats,
-        (t, pilot): (&mut Techniques, &mut CandidateSums),
+        (weigher, stats): (&Weigher, &mut WeightStats),
+        out: &mut SampleOut,
     ) {
         let scene = self.scene;
         let &Second {
@@ -322,24 +349,24 @@ impl<'a> Mix<'a> {
             };
             ph_weighted += c * w as f32;
             if self.pilot {
-                pilot.add(f64::from(luminance(e * c) * k), w, true);
+                out.pilot.add(f64::from(luminance(e * c) * k), w, true);
             }
         });
+        let t = &mut out.techniques;
         t.x1_raw = (e * (direct_raw + ph_raw * k)).as_dvec3();
         t.x1_weighted = (e * (direct_weighted + ph_weighted * k)).as_dvec3();
     }
 
-    /// BDD=0: photons around x₀, each weighted by 1 − w₁(x₀, y_p) (method.md §2).
-    #[allow(clippy::too_many_arguments)]
+    /// BDD=0: photons around x₀ (`query`), each weighted by 1 − w₁(x₀, y_p) (method.md §2),
+    /// into the sample's output `out`; `camera_w1` is the camera's w₁ at its own x₁ (for the
+    /// biased test variant only).
     fn merge_at_x0(
         &self,
         x0: &FirstVertex<'_>,
         (photons, k): ((&PhotonMap, &[[f32; 3]]), f32),
-        query: &PhotonQuery,
-        weigher: &Weigher,
-        camera_w1: Option<f64>,
-        stats: &mut WeightStats,
-        (t, pilot): (&mut Techniques, &mut CandidateSums),
+        (query, camera_w1): (&PhotonQuery, Option<f64>),
+        (weigher, stats): (&Weigher, &mut WeightStats),
+        out: &mut SampleOut,
     ) {
         let scene = self.scene;
         let mut raw = Vec3::ZERO;
@@ -362,13 +389,13 @@ impl<'a> Mix<'a> {
                 };
                 let w1 = self.w1(&pair, weigher, stats);
                 if self.pilot {
-                    pilot.add(f64::from(luminance(c) * k), w1, false);
+                    out.pilot.add(f64::from(luminance(c) * k), w1, false);
                 }
                 1.0 - w1
             };
             weighted += c * w0 as f32;
         });
-        t.x0_raw = (raw * k).as_dvec3();
-        t.x0_weighted = (weighted * k).as_dvec3();
+        out.techniques.x0_raw = (raw * k).as_dvec3();
+        out.techniques.x0_weighted = (weighted * k).as_dvec3();
     }
 }

@@ -10,6 +10,7 @@
 //! Architecture invariant: no file IO; the driver writes images and reports.
 
 mod bdpm;
+mod camera;
 mod connect;
 mod correction;
 mod direct;
@@ -23,19 +24,20 @@ mod memory;
 mod mix;
 mod pass;
 pub mod path;
+mod plan;
 mod predict;
 mod prepare;
 mod products;
 mod radius;
 mod render;
 mod sampler;
-mod settings;
 mod setup;
 mod stage;
 mod table;
 mod weightmap;
 
 pub use bdpm_mis::NoiseModel;
+pub use camera::{FirstHitLayers, first_hit_layers, render_path_pass};
 pub use correction::{CANDIDATES, Correction, PILOT_PASSES, pilot_seed};
 pub use direct::DirectSamples;
 pub use error::{RenderError, TargetError};
@@ -48,9 +50,7 @@ pub use memory::{
 pub use predict::{JITTER_RAYS, Prediction};
 pub use prepare::{MODEL_CACHE_BINS, MODEL_CACHE_PHOTONS, model_cache_item, model_cache_settings};
 pub use radius::RadiusMap;
-pub use render::{
-    FirstHitLayers, LARGE_RADIUS_FRACTION, Renderer, first_hit_layers, render_path_pass,
-};
+pub use render::{LARGE_RADIUS_FRACTION, Renderer};
 pub use setup::{resolve_radius, scene_default_radius};
 // The settings are `bdpm-settings`'; re-exported so that a user of the integrator needs one
 // dependency.

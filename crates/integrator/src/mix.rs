@@ -33,24 +33,23 @@ pub(crate) struct Mix<'a> {
     pub(crate) pilot: bool,
     /// BDD=0's paths are sampled by light tracing (`Mix::splat`) instead of merged at x₀.
     pub(crate) light_tracing: bool,
-    /// The test-only switches (all off without the feature `test-hooks`).
+    /// The test-only switches (only with the feature `test-hooks`).
+    #[cfg(feature = "test-hooks")]
     pub(crate) hooks: Hooks,
 }
 
-/// Switches that only tests turn on (with the feature `test-hooks`; without it the struct is
-/// empty and the mix's branches on them are constant).
+/// Switches that only tests turn on (with the feature `test-hooks`; without it nothing holds
+/// them and the mix's branches on them are constant).
+#[cfg(feature = "test-hooks")]
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Hooks {
     /// Weight the x₀ photon sum with w₁(x₀, x₁ᶜ) of the camera's x₁, as the preprint's eq.
     /// 2–3 read literally. It is biased; a test shows it.
-    #[cfg(feature = "test-hooks")]
     pub(crate) camera_x1_weighting: bool,
     /// Compute a photon's y_p inputs at every visit, not once per photon
     /// (`Mix::prev_inputs`); the image bits must not change.
-    #[cfg(feature = "test-hooks")]
     pub(crate) per_visit_inputs: bool,
     /// The splats ignore light tracing's density ratio (a biased mix).
-    #[cfg(feature = "test-hooks")]
     pub(crate) two_way_splat_weights: bool,
 }
 

@@ -1,27 +1,23 @@
 //! The renderer: a scene and settings made ready to render passes. It checks the settings,
 //! runs the preparations the mode needs (crate::prepare's plan) and renders any pass on demand.
-use std::sync::atomic::{AtomicU64, Ordering};
-
 use bdpm_cache::RadianceCache;
 use bdpm_mis::Heuristic;
 use bdpm_scene::Scene;
-use glam::{DVec3, Vec3};
-use rayon::prelude::*;
 
+use crate::camera::render_path_pass;
 use crate::correction::Correction;
 use crate::direct::DirectSamples;
 use crate::error::RenderError;
-use crate::estimates::{PassOutput, WeightStats, accumulate};
+use crate::estimates::PassOutput;
 use crate::mix::Mix;
-use crate::pass::{PassContext, bdpm_pass};
+use crate::pass::{PassContext, TechniqueSplit, bdpm_pass};
 use crate::prepare::{
     BuildContext, MODEL_CACHE_PHOTONS, ModelCache, PLAN, PixelTablePrep, Planned, unless_stopped,
 };
 use crate::products::Products;
 use crate::radius::RadiusMap;
-use crate::sampler::PixelSamples;
 use crate::setup::Setup;
-use crate::stage::{self, Stage, StageProbe, StageReport};
+use crate::stage::{self, Stage, StageProbe, StageReport, never};
 use crate::table::PixelTable;
 use bdpm_settings::{Mode, RenderSettings};
 
@@ -282,13 +278,30 @@ impl<'a> Renderer<'a> {
                 stage::leave(self.probe, Stage::Pass);
                 out
             }
-            Mode::Bdpm(_) => {
-                let h = self.setup.heuristic.expect("a BDPM mode has a heuristic");
-                let cx = PassContext::new(&self.setup, &self.products, self.techniques, self.probe);
-                bdpm_pass(&cx, &self.mix(h), settings, pass, progress, &never)
-                    .expect("a pass that is never stopped is complete")
-                    .0
-            }
+            Mode::Bdpm(_) => self.render_bdpm_pass(pass, progress),
+        }
+    }
+
+    /// Pass `pass` of the mix, with the technique split when asked for.
+    fn render_bdpm_pass(&self, pass: u32, progress: &(dyn Fn(u64) + Sync)) -> PassOutput {
+        let h = self.setup.heuristic.expect("a BDPM mode has a heuristic");
+        let mix = self.mix(h);
+        let cx = PassContext {
+            setup: &self.setup,
+            products: &self.products,
+            probe: self.probe,
+        };
+        let s = &self.setup.settings;
+        let complete = "a pass that is never stopped is complete";
+        if self.techniques {
+            let (mut out, split) =
+                bdpm_pass::<TechniqueSplit>(&cx, &mix, s, pass, progress, &never).expect(complete);
+            out.techniques = Some(split);
+            out
+        } else {
+            bdpm_pass::<()>(&cx, &mix, s, pass, progress, &never)
+                .expect(complete)
+                .0
         }
     }
 
@@ -322,111 +335,4 @@ impl<'a> Renderer<'a> {
     pub fn work_per_pass(&self) -> u64 {
         self.setup.settings.height as u64
     }
-}
-
-/// A stop that never fires ([`Renderer::new`]).
-pub(crate) fn never() -> bool {
-    false
-}
-
-/// Renders pass `pass` of the `path` reference: N_B jittered samples per pixel, each a pure
-/// function of (seed, pass, pixel, sample). `progress` is called with the number of rows done.
-pub fn render_path_pass(
-    scene: &Scene,
-    settings: &RenderSettings,
-    pass: u32,
-    progress: &(dyn Fn(u64) + Sync),
-) -> PassOutput {
-    debug_assert_eq!(settings.mode, Mode::Path);
-    let (w, h) = (settings.width, settings.height);
-    let cam = &scene.camera();
-    let start = std::time::Instant::now();
-    let dropped = AtomicU64::new(0);
-    let mut estimates = vec![DVec3::ZERO; w as usize * h as usize];
-    estimates
-        .par_chunks_mut(w as usize)
-        .enumerate()
-        .for_each(|(y, row)| {
-            let mut row_dropped = 0;
-            let mut layout = PixelSamples::new(settings);
-            for (x, px) in row.iter_mut().enumerate() {
-                let pixel = (y * w as usize + x) as u64;
-                let mut sum = DVec3::ZERO;
-                layout.start(pass, pixel);
-                for s in 0..settings.spp {
-                    let mut c = layout.sample(s);
-                    let dir = cam.ray_direction(x as f32 + c.offset[0], y as f32 + c.offset[1]);
-                    let l = crate::path::trace_path_with_first(
-                        scene,
-                        (cam.position(), dir),
-                        &mut c.rng,
-                        settings.roulette_depth,
-                        c.bdf,
-                    );
-                    accumulate(&mut sum, l, &mut row_dropped);
-                }
-                *px = sum / settings.spp as f64;
-            }
-            dropped.fetch_add(row_dropped, Ordering::Relaxed);
-            progress(1);
-        });
-    PassOutput {
-        estimates,
-        dropped: dropped.into_inner(),
-        samples: w as u64 * h as u64 * settings.spp as u64,
-        stage_seconds: vec![(Stage::Camera, start.elapsed().as_secs_f64())],
-        techniques: None,
-        photons_stored: 0,
-        photon_map_bytes: 0,
-        weights: WeightStats::default(),
-    }
-}
-
-/// Per-pixel first-hit layers for denoisers (Open Image Denoise and the like), see
-/// [`first_hit_layers`].
-#[derive(Clone, Debug)]
-pub struct FirstHitLayers {
-    /// Directional albedo µ(wo) of the surface first seen, averaged over the pixel's samples,
-    /// each channel in [0, 1]; 0 where nothing is seen. Row-major.
-    pub albedo: Vec<DVec3>,
-    /// World-space unit shading normal at the first hit (facing the camera), averaged over the
-    /// pixel's samples and renormalised; 0 where nothing is seen. Row-major.
-    pub normal: Vec<DVec3>,
-}
-
-/// Traces one primary ray per camera sample of pass 0 (the same jittered positions: the
-/// camera stream of (seed, 0, pixel, sample)) and records the first hit's directional albedo
-/// and shading normal. Costs `spp` ray casts per pixel, independent of the radiance passes,
-/// whose bits it does not touch.
-pub fn first_hit_layers(scene: &Scene, settings: &RenderSettings) -> FirstHitLayers {
-    let (w, h) = (settings.width as usize, settings.height as usize);
-    let cam = &scene.camera();
-    let spp = settings.spp.max(1);
-    let mut pixels = vec![(DVec3::ZERO, DVec3::ZERO); w * h];
-    pixels.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-        let mut layout = PixelSamples::new(settings);
-        for (x, px) in row.iter_mut().enumerate() {
-            let pixel = (y * w + x) as u64;
-            let (mut albedo, mut normal) = (DVec3::ZERO, DVec3::ZERO);
-            layout.start(0, pixel);
-            for s in 0..spp {
-                let [jx, jy] = layout.sample(s).offset;
-                let dir = cam.ray_direction(x as f32 + jx, y as f32 + jy);
-                let Some(hit) = scene
-                    .geometry()
-                    .intersect(cam.position(), dir, f32::INFINITY)
-                else {
-                    continue;
-                };
-                let wo = -dir;
-                let sh = scene.shade(&hit, wo);
-                let a = scene.bdf_at(&sh).albedo(sh.frame.to_local(wo));
-                albedo += a.clamp(Vec3::ZERO, Vec3::ONE).as_dvec3();
-                normal += sh.frame.n.as_dvec3();
-            }
-            *px = (albedo / spp as f64, normal.normalize_or_zero());
-        }
-    });
-    let (albedo, normal) = pixels.into_iter().unzip();
-    FirstHitLayers { albedo, normal }
 }

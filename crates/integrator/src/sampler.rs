@@ -26,7 +26,12 @@ use bdpm_geometry::{Domain, Rng};
 use bdpm_settings::{RenderSettings, Sampler};
 
 use crate::direct::DirectExtra;
-use crate::settings::pixel_offset;
+
+/// Where in the pixel a camera sample goes: the jittered offset, or the centre.
+#[inline]
+fn pixel_offset(u: [f32; 2], jitter: bool) -> [f32; 2] {
+    if jitter { u } else { [0.5, 0.5] }
+}
 
 /// The largest f32 below 1: a jittered coordinate (i + u)/n can round up to 1 in f32.
 const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;

@@ -7,7 +7,9 @@ use bdpm_scene::Scene;
 use bdpm_settings::{RenderSettings, check_radius};
 
 use crate::error::RenderError;
-use crate::mix::{Hooks, Mix};
+#[cfg(feature = "test-hooks")]
+use crate::mix::Hooks;
+use crate::mix::Mix;
 use crate::products::Products;
 use crate::radius::RadiusMap;
 
@@ -26,6 +28,8 @@ pub(crate) struct Setup<'a> {
     /// Photons of the noise model's own radiance cache, once asked for
     /// (`Renderer::with_model_cache`; crate::prepare::model_cache).
     pub(crate) model_cache_photons: Option<u64>,
+    /// The test-only switches of its mixes (only with the feature `test-hooks`).
+    #[cfg(feature = "test-hooks")]
     pub(crate) hooks: Hooks,
 }
 
@@ -74,6 +78,7 @@ impl<'a> Setup<'a> {
             radius,
             footprint,
             model_cache_photons: None,
+            #[cfg(feature = "test-hooks")]
             hooks: Hooks::default(),
         }
     }
@@ -111,6 +116,7 @@ impl<'a> Setup<'a> {
             pilot: false,
             // `bdd1` has no BDD=0 part to sample.
             light_tracing: self.settings.light_tracing && needs.photons_at_x0,
+            #[cfg(feature = "test-hooks")]
             hooks: self.hooks,
         }
     }

@@ -94,3 +94,8 @@ impl fmt::Display for Stage {
         f.write_str(self.name())
     }
 }
+
+/// A stop that never fires (a preparation or pass that runs to its end).
+pub(crate) fn never() -> bool {
+    false
+}

@@ -7,7 +7,7 @@ use crate::correction::{CANDIDATES, CandidateSums, Correction, PILOT_PASSES, pil
 use crate::error::RenderError;
 use crate::memory::{Lifetime, Lower, MemoryItem};
 use crate::mix::Mix;
-use crate::pass::bdpm_pass;
+use crate::pass::{CandidateLayer, bdpm_pass};
 use crate::setup::Setup;
 use crate::stage::Stage;
 use bdpm_settings::Setting;
@@ -47,12 +47,13 @@ impl Preparation for BalanceCorrectionPrep {
             pilot: true,
             ..cx.mix(Heuristic::Balance)
         };
-        let pass_cx = cx.pass_context(false);
+        let pass_cx = cx.pass_context();
         let pixels = s.width as usize * s.height as usize;
         let mut second = vec![CandidateSums::default(); pixels];
         for pass in 0..PILOT_PASSES {
-            let (_, estimates) = bdpm_pass(&pass_cx, &mix, &pilot, pass, &|_| {}, cx.stop)
-                .ok_or(RenderError::Interrupted(Stage::BalanceCorrection))?;
+            let (_, estimates) =
+                bdpm_pass::<CandidateLayer>(&pass_cx, &mix, &pilot, pass, &|_| {}, cx.stop)
+                    .ok_or(RenderError::Interrupted(Stage::BalanceCorrection))?;
             for (m, f) in second.iter_mut().zip(&estimates) {
                 m.add_squares(f, 1.0 / f64::from(PILOT_PASSES));
             }

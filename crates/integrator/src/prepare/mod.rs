@@ -76,10 +76,13 @@ impl BuildContext<'_> {
         self.setup.mix(heuristic, self.products)
     }
 
-    /// A pilot pass's context: the products built so far (a pilot of `balance` passes its own
-    /// table and factors: none), with the technique split when `record`.
-    pub(crate) fn pass_context(&self, record: bool) -> PassContext<'_> {
-        PassContext::new(self.setup, self.products, record, self.probe)
+    /// A pilot pass's context: the products built so far.
+    pub(crate) fn pass_context(&self) -> PassContext<'_> {
+        PassContext {
+            setup: self.setup,
+            products: self.products,
+            probe: self.probe,
+        }
     }
 }
 

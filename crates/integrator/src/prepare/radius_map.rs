@@ -4,7 +4,7 @@ use super::{BuildContext, MemoryScale, Preparation, pilot_settings};
 use crate::error::RenderError;
 use crate::estimates::Techniques;
 use crate::memory::{Lifetime, Lower, MemoryItem};
-use crate::pass::bdpm_pass;
+use crate::pass::{TechniqueSplit, bdpm_pass};
 use crate::radius::{BLOCK, RadiusMap, SCALES, SHARE_BOUNDS, radius_pilot_seed};
 use crate::setup::Setup;
 use crate::stage::Stage;
@@ -47,12 +47,13 @@ impl Preparation for RadiusMapPrep {
         let s = cx.settings();
         let pilot = pilot_settings(s, radius_pilot_seed(s.seed));
         let mix = cx.mix(h);
-        let pass_cx = cx.pass_context(true);
+        let pass_cx = cx.pass_context();
         let mut sums = vec![Techniques::default(); s.width as usize * s.height as usize];
         for pass in 0..ADAPTIVE_RADIUS_PILOT_PASSES {
-            let (out, _) = bdpm_pass(&pass_cx, &mix, &pilot, pass, &|_| {}, cx.stop)
-                .ok_or(RenderError::Interrupted(Stage::RadiusMap))?;
-            for (sum, t) in sums.iter_mut().zip(out.techniques.iter().flatten()) {
+            let (_, techniques) =
+                bdpm_pass::<TechniqueSplit>(&pass_cx, &mix, &pilot, pass, &|_| {}, cx.stop)
+                    .ok_or(RenderError::Interrupted(Stage::RadiusMap))?;
+            for (sum, t) in sums.iter_mut().zip(&techniques) {
                 sum.direct += t.direct;
                 sum.x0_weighted += t.x0_weighted;
                 sum.x1_weighted += t.x1_weighted;
