@@ -12,8 +12,8 @@ use std::path::{Path, PathBuf};
 use std::time::{Instant, SystemTime};
 
 use bdpm_integrator::{
-    Film, Lower, MemoryEstimate, MemoryItem, Mode, RenderError, Renderer, Stage, StageProbe,
-    WeightStats, estimate_memory, first_hit_layers, human_bytes,
+    Film, MemoryEstimate, MemoryItem, Mode, RenderError, Renderer, Stage, StageProbe, WeightStats,
+    camera::first_hit_layers, estimate_memory, human_bytes, memory::Lower,
 };
 use bdpm_output::accum::{self, Identity, PassRecord};
 use bdpm_output::cli::{

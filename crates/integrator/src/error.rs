@@ -33,7 +33,7 @@ pub enum RenderError {
     NoWeights(Mode),
     /// The mode weighs each light path by its incoming direction at x₁, so no map over x₁.
     #[error(
-        "mode '{0}' weighs each light path by its incoming direction at x1, so it has no map over x1 alone; a mode whose weights depend on x1 alone has one (e.g. --mode optimal)"
+        "mode '{0}' weighs each light path by its incoming direction at x1, so it has no map over x1 alone; a mode whose weights depend on x1 alone has one (e.g. optimal)"
     )]
     PerLightPathWeights(&'static str),
     /// The mode (`path`, `light`) has no noise model.
@@ -42,7 +42,7 @@ pub enum RenderError {
     /// The render samples BDD=0 by light tracing (`light_tracing`), which the noise model and
     /// the weight maps (both of the merge at x₀) do not describe.
     #[error(
-        "light_tracing = true: mode '{0}' then samples BDD=0 by light tracing, which the noise model and the weight maps (both of the merge at x0) do not describe; set light_tracing = false (--light-tracing false)"
+        "light_tracing = true: mode '{0}' then samples BDD=0 by light tracing, which the noise model and the weight maps (both of the merge at x0) do not describe; set light_tracing = false"
     )]
     LightTracing(&'static str),
     /// The weights asked for read the pixel table's A and B, which the mode did not build.

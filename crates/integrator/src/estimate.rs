@@ -18,14 +18,12 @@ use bdpm_settings::{Mode, RenderSettings, Setting};
 use crate::connect::Splat;
 use crate::estimates::Techniques;
 use crate::memory::{
-    ARRIVAL_RECORD_BYTES, BASE_NAME, Lifetime, Lower, MemoryEstimate, MemoryItem, loading_item,
-    scene_items,
+    ARRIVAL_RECORD_BYTES, BASE_NAME, Lifetime, Lower, MemoryEstimate, MemoryItem, PILOT_PHOTONS,
+    loading_item, scene_items,
 };
 use crate::prepare::{MemoryScale, PLAN};
 use crate::setup::Setup;
 
-/// Photons traced by the pilot that measures a scene's photons stored per emitted photon.
-pub const PILOT_PHOTONS: u64 = 4096;
 /// Peak bytes per pixel of the film, luminance film, pass estimate and output encoding
 /// (measured: 171 B at 1024² and 2048²), rounded up.
 const BYTES_PER_PIXEL: u64 = 180;

@@ -10,56 +10,44 @@
 //! Architecture invariant: no file IO; the driver writes images and reports.
 
 mod bdpm;
-mod camera;
+pub mod camera;
 mod connect;
-mod correction;
-mod direct;
-mod error;
+pub mod correction;
+pub mod direct;
+pub mod error;
 mod estimate;
-mod estimates;
-mod film;
+pub mod estimates;
+pub mod film;
 mod inputs;
 mod light;
-mod memory;
+pub mod memory;
 mod mix;
 mod pass;
 pub mod path;
 mod plan;
-mod predict;
-mod prepare;
+pub mod predict;
+pub mod prepare;
 mod products;
-mod radius;
-mod render;
+pub mod radius;
+pub mod render;
 mod sampler;
-mod setup;
-mod stage;
-mod table;
-mod weightmap;
+pub mod setup;
+pub mod stage;
+pub mod table;
+pub mod weightmap;
 
-pub use bdpm_mis::NoiseModel;
-pub use camera::{FirstHitLayers, first_hit_layers, render_path_pass};
-pub use correction::{CANDIDATES, Correction, PILOT_PASSES, pilot_seed};
-pub use direct::DirectSamples;
-pub use error::{RenderError, TargetError};
-pub use estimate::{PILOT_PHOTONS, estimate_memory};
+// The crate root names what most users need; the rest is in the modules above (e.g.
+// `memory::Lower`, `radius::RadiusMap`, `prepare::model_cache_settings`).
+pub use error::RenderError;
+pub use estimate::estimate_memory;
 pub use estimates::{PassOutput, Techniques, WeightStats};
-pub use film::{Film, PassSums, PassValue};
-pub use memory::{
-    Lifetime, Lower, MemoryEstimate, MemoryItem, human_bytes, loading_item, scene_items,
-};
-pub use predict::{JITTER_RAYS, Prediction};
-pub use prepare::{MODEL_CACHE_BINS, MODEL_CACHE_PHOTONS, model_cache_item, model_cache_settings};
-pub use radius::RadiusMap;
-pub use render::{LARGE_RADIUS_FRACTION, Renderer};
-pub use setup::{resolve_radius, scene_default_radius};
-// The settings are `bdpm-settings`'; re-exported so that a user of the integrator needs one
-// dependency.
-pub use bdpm_settings::{
-    FOOTPRINT_TABLE_RAYS, HeuristicKind, MIN_RADIUS, Mode, PINHOLE_TABLE_RAYS, PartialSettings,
-    RadiusError, RadiusInput, RadiusSpec, RenderSettings, Sampler, Setting, SettingsError,
-    SettingsRecord, WeightClamp, Written, check_radius, default_radius,
-};
-pub use sampler::strata;
+pub use film::Film;
+pub use memory::{MemoryEstimate, MemoryItem, human_bytes};
+pub use predict::Prediction;
+pub use render::Renderer;
 pub use stage::{Stage, StageProbe, StageReport};
-pub use table::{PixelTable, PixelWeights};
-pub use weightmap::{WeightMap, WeightTarget, weight_map_heuristic};
+pub use weightmap::{WeightMap, WeightTarget};
+// The settings are `bdpm-settings`' (all of them as `settings`); re-exported so that a user
+// of the integrator needs one dependency.
+pub use bdpm_settings as settings;
+pub use bdpm_settings::{Mode, NoiseModel, PartialSettings, RenderSettings, Sampler, Setting};

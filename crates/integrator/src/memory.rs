@@ -7,6 +7,9 @@ pub use bdpm_core::human_bytes;
 use bdpm_scene::Scene;
 use bdpm_settings::Setting;
 
+/// Photons traced by the pilot of [`crate::estimate_memory`] that measures a scene's photons
+/// stored per emitted photon.
+pub const PILOT_PHOTONS: u64 = 4096;
 /// Bytes per record while the radiance cache or a light pass collects arrivals: a 12–16 B
 /// record in thread-local parts and their merged copy.
 pub(crate) const ARRIVAL_RECORD_BYTES: f64 = 32.0;

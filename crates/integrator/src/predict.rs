@@ -24,7 +24,7 @@
 //! T_jitter the spread of the pixel's mean radiance over its footprint, which the functional of
 //! §12 leaves out (it is the same for every mode) but a measured V contains.
 //!
-//! **Stratified samples** (`--sampler stratified`, the default). The N_B samples of a pass take
+//! **Stratified samples** (the `stratified` sampler, the default). The N_B samples of a pass take
 //! one cell each of an n_x × n_y grid (of the pixel, and of the BDF's two direction numbers at
 //! x₀), and the mean of one value per cell has variance (1/N_B)·mean over cells of σ²_cell,
 //! the variance within a cell. So Var_p in T1 and Var_{x₀ in pixel} in T_jitter become that
@@ -133,8 +133,7 @@ impl Renderer<'_> {
     /// [`Self::predict_variance`] for the weights `h` in place of the mode's own, with this
     /// renderer's settings, cache and pixel table: e.g. the unclamped `optimal-split`, the
     /// minimiser of the functional over weights per (x₀, x₁) and path kind, as the floor that no
-    /// such weight can go below (`bdpm predict
-    /// --headroom`). If `h` reads the pixel table's A and B, the renderer's mode must have
+    /// such weight can go below (the headroom of `bdpm predict`). If `h` reads the pixel table's A and B, the renderer's mode must have
     /// built it (an `optimal*` mode); otherwise the error says so.
     pub fn predict_variance_for(&self, h: Heuristic) -> Result<Prediction, RenderError> {
         if self.light_traced() {

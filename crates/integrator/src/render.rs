@@ -137,9 +137,9 @@ impl<'a> Renderer<'a> {
     }
 
     /// [`Self::with_model_inputs`] with a cache of at least `photons` photons (and
-    /// [`crate::MODEL_CACHE_BINS`] bins), or the weights' own cache where that is as fine. The
+    /// [`crate::prepare::MODEL_CACHE_BINS`] bins), or the weights' own cache where that is as fine. The
     /// weights keep reading theirs, so rendering is unchanged and the model weighs exactly as
-    /// the render does; the cache is that of [`crate::model_cache_settings`] with the same
+    /// the render does; the cache is that of [`crate::prepare::model_cache_settings`] with the same
     /// `photons`. Built once: a later call keeps the first cache.
     pub fn with_model_cache(mut self, photons: u64) -> Self {
         self.setup.model_cache_photons.get_or_insert(photons);
@@ -334,5 +334,81 @@ impl<'a> Renderer<'a> {
     /// Units of progress one pass reports.
     pub fn work_per_pass(&self) -> u64 {
         self.setup.settings.height as u64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::atomic::{AtomicU32, Ordering};
+
+    use bdpm_settings::{Mode, RenderSettings};
+
+    use super::Renderer;
+    use crate::error::RenderError;
+    use crate::stage::Stage;
+
+    /// The stages a preparation of `mode` is interrupted in, stopped at each ask of its stop
+    /// flag in turn, until one that is never stopped completes.
+    fn interrupted_stages(mode: &str, adaptive_radius: bool) -> Vec<Stage> {
+        let scene = crate::inputs::tests::open_box(false);
+        let settings = RenderSettings {
+            width: 8,
+            height: 8,
+            photons: 3000,
+            cache_photons: Some(10_000),
+            pixel_table_rays: Some(4),
+            radius: Some(0.05),
+            mode: Mode::parse(mode).expect("a mode"),
+            adaptive_radius,
+            ..RenderSettings::default()
+        };
+        let mut stages = Vec::new();
+        for after in 0.. {
+            let asked = AtomicU32::new(0);
+            let stop = || asked.fetch_add(1, Ordering::SeqCst) >= after;
+            match Renderer::new_until(&scene, &settings, &stop) {
+                Ok(_) => break,
+                Err(RenderError::Interrupted(stage)) if stages.last() != Some(&stage) => {
+                    stages.push(stage)
+                }
+                Err(RenderError::Interrupted(_)) => {}
+                Err(e) => panic!("{mode}: {e}"),
+            }
+            assert!(after < 100_000, "{mode}: still stopped after {after} asks");
+        }
+        stages
+    }
+
+    #[test]
+    fn a_set_stop_flag_interrupts_each_preparation_in_its_stage() {
+        // A flag set from the start stops the first stage before any work.
+        let scene = crate::inputs::tests::open_box(false);
+        let settings = RenderSettings {
+            width: 8,
+            height: 8,
+            mode: Mode::parse("optimal").expect("a mode"),
+            ..RenderSettings::default()
+        };
+        let stopped = Renderer::new_until(&scene, &settings, &|| true).err();
+        assert_eq!(
+            stopped,
+            Some(RenderError::Interrupted(Stage::RadianceCache))
+        );
+        // Stopped later, the plan's stages in order.
+        assert_eq!(
+            interrupted_stages("optimal", true),
+            [
+                Stage::RadianceCache,
+                Stage::PixelTable,
+                Stage::RadiusMap,
+                Stage::PixelTable,
+                Stage::DirectSamples
+            ]
+        );
+        assert_eq!(
+            interrupted_stages("corrected-balance", false),
+            [Stage::BalanceCorrection, Stage::DirectSamples]
+        );
+        assert_eq!(interrupted_stages("path", false), []);
     }
 }

@@ -1,5 +1,6 @@
 //! What every preparation and pass of a renderer reads: the scene, the settings in force, the
-//! heuristic and the merge radius, checked once ([`Setup::new`]).
+//! heuristic and the merge radius, checked once (`Setup::new`); and the merge radius in force
+//! for settings on a scene ([`resolve_radius`]).
 use bdpm_bdf::luminance;
 use bdpm_cache::RadianceCache;
 use bdpm_mis::{Budget, Heuristic, NoiseModel};

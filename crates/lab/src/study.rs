@@ -992,7 +992,7 @@ fn memory_gate(
         name: "reference image",
         bytes: pixels * REFERENCE_BYTES_PER_PIXEL,
         lifetime: memory::Lifetime::Shared,
-        lower: bdpm_integrator::Lower::Setting(bdpm_integrator::Setting::Resolution),
+        lower: bdpm_integrator::memory::Lower::Setting(bdpm_integrator::Setting::Resolution),
     });
     crate::refuse_above_limit(&args.scene, "study", &total, variants, &estimates, limit)?;
     Ok(total)

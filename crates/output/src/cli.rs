@@ -4,9 +4,8 @@
 //! progress bar and the facts about the machine that reports record.
 use std::path::{Path, PathBuf};
 
-use bdpm_integrator::{
-    PartialSettings, RadiusInput, RenderSettings, Setting, SettingsError, Stage, StageProbe,
-};
+use bdpm_integrator::settings::{RadiusInput, SettingsError};
+use bdpm_integrator::{PartialSettings, RenderSettings, Setting, Stage, StageProbe};
 use bdpm_load::{LoadOptions, LoadReport, MemoryLimit, load_scene_with};
 use bdpm_scene::Scene;
 use bdpm_settings::{Written, limits};
@@ -181,8 +180,9 @@ pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
     Ok((side(w, "width")?, side(h, "height")?))
 }
 
-/// The flag that sets `setting`.
-pub(crate) fn flag_of(setting: Setting) -> &'static str {
+/// The flag that sets `setting` (a typed error's or memory item's setting, named as the
+/// command line names it).
+pub fn flag_of(setting: Setting) -> &'static str {
     match setting {
         Setting::Width | Setting::Height | Setting::Resolution => "--resolution",
         Setting::Passes => "--passes",

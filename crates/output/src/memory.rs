@@ -5,10 +5,11 @@
 //!
 //! The estimate of one render is [`bdpm_integrator::estimate_memory`]'s; each of its items
 //! says how long it lives ([`Lifetime`]), which decides how they add up here, and what scales
-//! it ([`bdpm_integrator::Lower`]), which [`lower`] names as the command line does.
+//! it ([`bdpm_integrator::memory::Lower`]), which [`lower`] names as the command line does.
 
-pub use bdpm_integrator::Lifetime;
-use bdpm_integrator::{Lower, MemoryEstimate, MemoryItem, RenderSettings, Setting, human_bytes};
+pub use bdpm_integrator::memory::Lifetime;
+use bdpm_integrator::memory::Lower;
+use bdpm_integrator::{MemoryEstimate, MemoryItem, RenderSettings, Setting, human_bytes};
 
 use crate::cli::available_memory;
 
@@ -249,7 +250,7 @@ mod tests {
         ] {
             assert!(seen.contains(&expected), "{expected:?} not in {seen:?}");
         }
-        let model = bdpm_integrator::model_cache_item(
+        let model = bdpm_integrator::prepare::model_cache_item(
             &estimate_memory(&loaded.scene, &loaded.settings, false),
             1000,
         );

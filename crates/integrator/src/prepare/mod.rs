@@ -1,7 +1,7 @@
 //! The renderer's preparations: everything built once, before the first pass, because the
 //! settings and the scene need it (method.md §7: nothing a mode does not need). Each is one
-//! type in its own file that implements [`Preparation`]: when it is needed, what it costs in
-//! memory, what it builds and how it reports itself. [`PLAN`] lists them in the order they
+//! type in its own file that implements `Preparation`: when it is needed, what it costs in
+//! memory, what it builds and how it reports itself. `PLAN` lists them in the order they
 //! run; the renderer runs the plan (`Renderer::new`), keeps their products by type
 //! (crate::products) and reports one stage each, and the memory estimate
 //! (crate::estimate) sums the items of the plan's needed entries.
@@ -167,81 +167,5 @@ pub(crate) fn pilot_settings(settings: &RenderSettings, seed: u64) -> RenderSett
     RenderSettings {
         seed,
         ..settings.clone()
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use std::sync::atomic::{AtomicU32, Ordering};
-
-    use bdpm_settings::{Mode, RenderSettings};
-
-    use crate::error::RenderError;
-    use crate::render::Renderer;
-    use crate::stage::Stage;
-
-    /// The stages a preparation of `mode` is interrupted in, stopped at each ask of its stop
-    /// flag in turn, until one that is never stopped completes.
-    fn interrupted_stages(mode: &str, adaptive_radius: bool) -> Vec<Stage> {
-        let scene = crate::inputs::tests::open_box(false);
-        let settings = RenderSettings {
-            width: 8,
-            height: 8,
-            photons: 3000,
-            cache_photons: Some(10_000),
-            pixel_table_rays: Some(4),
-            radius: Some(0.05),
-            mode: Mode::parse(mode).expect("a mode"),
-            adaptive_radius,
-            ..RenderSettings::default()
-        };
-        let mut stages = Vec::new();
-        for after in 0.. {
-            let asked = AtomicU32::new(0);
-            let stop = || asked.fetch_add(1, Ordering::SeqCst) >= after;
-            match Renderer::new_until(&scene, &settings, &stop) {
-                Ok(_) => break,
-                Err(RenderError::Interrupted(stage)) if stages.last() != Some(&stage) => {
-                    stages.push(stage)
-                }
-                Err(RenderError::Interrupted(_)) => {}
-                Err(e) => panic!("{mode}: {e}"),
-            }
-            assert!(after < 100_000, "{mode}: still stopped after {after} asks");
-        }
-        stages
-    }
-
-    #[test]
-    fn a_set_stop_flag_interrupts_each_preparation_in_its_stage() {
-        // A flag set from the start stops the first stage before any work.
-        let scene = crate::inputs::tests::open_box(false);
-        let settings = RenderSettings {
-            width: 8,
-            height: 8,
-            mode: Mode::parse("optimal").expect("a mode"),
-            ..RenderSettings::default()
-        };
-        let stopped = Renderer::new_until(&scene, &settings, &|| true).err();
-        assert_eq!(
-            stopped,
-            Some(RenderError::Interrupted(Stage::RadianceCache))
-        );
-        // Stopped later, the plan's stages in order.
-        assert_eq!(
-            interrupted_stages("optimal", true),
-            [
-                Stage::RadianceCache,
-                Stage::PixelTable,
-                Stage::RadiusMap,
-                Stage::PixelTable,
-                Stage::DirectSamples
-            ]
-        );
-        assert_eq!(
-            interrupted_stages("corrected-balance", false),
-            [Stage::BalanceCorrection, Stage::DirectSamples]
-        );
-        assert_eq!(interrupted_stages("path", false), []);
     }
 }
