@@ -19,7 +19,7 @@
 use std::sync::LazyLock;
 
 use bdpm_geometry::{Domain, Rng};
-use bdpm_integrator::scene_default_radius;
+use bdpm_integrator::setup::scene_default_radius;
 use bdpm_load::load_scene;
 use bdpm_photon::{PhotonMap, TraceOptions};
 use bdpm_scene::Scene;

@@ -4,7 +4,7 @@
 //! survival q = k), and a gather's variance is α·(k/π)²·E_ind with α = Φ/(N_F·S), E_ind the
 //! uniform indirect irradiance: T0 has a closed form, and the measured V must agree with it.
 
-use bdpm_integrator::{RenderSettings, Renderer, Stage, model_cache_settings};
+use bdpm_integrator::{RenderSettings, Renderer, Stage, prepare::model_cache_settings};
 use bdpm_suite::{Furnace, block_map, load, with_mode};
 use glam::DVec3;
 

@@ -69,7 +69,7 @@ fn the_balance_correction_learns_factors_in_the_candidates_range() {
     let r = Renderer::new(&scene, &s).unwrap();
     let factors = r.correction().expect("the mode learns factors").factors();
     assert_eq!(factors.len(), 32 * 32);
-    let candidates = bdpm_integrator::CANDIDATES;
+    let candidates = bdpm_integrator::correction::CANDIDATES;
     let (lo, hi) = (candidates[0], candidates[candidates.len() - 1]);
     assert!(
         factors

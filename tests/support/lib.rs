@@ -276,7 +276,7 @@ pub fn with_kernel(geometry: &Geometry, kernel: Kernel) -> Geometry {
 /// The radius map of a `side` × `side` image whose 8 × 8 blocks, in row order, have BDD=1
 /// carrying `shares` of their image (`RadiusMap::from_techniques`' rule picks each block's
 /// scale: under 0.3 → ½ r, up to 0.6 → r, above → 1.4 r).
-pub fn block_map(side: u32, shares: &[f64]) -> bdpm_integrator::RadiusMap {
+pub fn block_map(side: u32, shares: &[f64]) -> bdpm_integrator::radius::RadiusMap {
     let blocks_per_row = side.div_ceil(8);
     let techniques: Vec<bdpm_integrator::Techniques> = (0..side * side)
         .map(|i| {
@@ -289,5 +289,5 @@ pub fn block_map(side: u32, shares: &[f64]) -> bdpm_integrator::RadiusMap {
             }
         })
         .collect();
-    bdpm_integrator::RadiusMap::from_techniques(side, side, &techniques)
+    bdpm_integrator::radius::RadiusMap::from_techniques(side, side, &techniques)
 }

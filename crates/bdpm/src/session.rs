@@ -13,7 +13,7 @@ use std::time::{Instant, SystemTime};
 
 use bdpm_integrator::{
     Film, MemoryEstimate, MemoryItem, Mode, RenderError, Renderer, Stage, StageProbe, WeightStats,
-    estimate_memory, first_hit_layers, human_bytes,
+    camera::first_hit_layers, estimate_memory, human_bytes, memory::Lower,
 };
 use bdpm_load::LoadedScene;
 use bdpm_output::accum::{self, Identity, PassRecord};
@@ -231,11 +231,12 @@ fn memory_gate(
         estimate.items.push(MemoryItem {
             name: "passes kept for the accumulation file",
             bytes: kept * pixels * accum::BYTES_PER_PIXEL_PASS,
-            lower: if job.merge {
+            lifetime: memory::Lifetime::Held,
+            lower: Lower::Other(if job.merge {
                 "the passes merged at once (merge fewer parts, then merge the results)"
             } else {
                 "--passes (or drop --accumulate)"
-            },
+            }),
         });
         estimate.items.sort_by_key(|i| std::cmp::Reverse(i.bytes));
     }
@@ -259,7 +260,7 @@ fn memory_gate(
             parts.join(", "),
             limit_source,
             human_bytes(limit),
-            estimate.scalable_largest().lower
+            memory::lower(estimate.scalable_largest())
         ));
     }
     Ok((estimate, (limit, limit_source)))

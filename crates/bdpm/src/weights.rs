@@ -4,13 +4,13 @@
 use std::path::{Path, PathBuf};
 
 use bdpm_integrator::{
-    Mode, RenderError, RenderSettings, Renderer, WeightMap, WeightTarget, estimate_memory,
-    human_bytes, weight_map_heuristic,
+    Mode, RenderError, RenderSettings, Renderer, Setting, WeightMap, WeightTarget, estimate_memory,
+    human_bytes, weightmap::weight_map_heuristic,
 };
 use clap::{ArgGroup, Args};
 use glam::Vec3;
 
-use bdpm_output::cli::{CliResult, Overrides, parse_bytes, prepare, thread_pool};
+use bdpm_output::cli::{CliResult, Overrides, flag_of, parse_bytes, prepare, thread_pool};
 use bdpm_output::colormap::{ColourMap, Legend, compose};
 use bdpm_output::files::stem_of;
 use bdpm_output::memory::{self, MemoryLimit};
@@ -141,7 +141,8 @@ pub(crate) fn run(args: WeightsArgs) -> CliResult<()> {
     // message says where the mode, or light tracing, came from.
     let refused = |e: RenderError| match e {
         RenderError::LightTracing(_) => {
-            format!("{}: {e}", args.scene.display())
+            let flag = flag_of(Setting::LightTracing);
+            format!("{}: {e} ({flag} false)", args.scene.display())
         }
         _ => format!("{mode_source}: {e}"),
     };
@@ -246,7 +247,7 @@ fn memory_gate(
             human_bytes(estimate.total()),
             memory::parts(&estimate),
             limit.describe(),
-            estimate.scalable_largest().lower
+            memory::lower(estimate.scalable_largest())
         )),
         None => Ok(()),
     }

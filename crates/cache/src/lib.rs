@@ -302,7 +302,7 @@ impl RadianceCache {
             domain: Domain::CachePhoton,
             pass: 0,
             light_visibility: false,
-            max_depth: 1024,
+            max_depth: bdpm_photon::MAX_DEPTH,
         };
         // Records are made in parallel and come back in photon order, so the sequential
         // accumulation in `fill` is bit-identical whatever the thread count.

@@ -2,7 +2,8 @@
 //! and checked against what a closed form says: a floor lit by one point light, seen from
 //! above, whose pixels under the light carry the direct radiance k_d/π·I·cos/d².
 //!
-//! `cargo run --release -p bdpm-integrator --example render_in_code`
+//! Run it as the example `render_in_code` of the package `bdpm-integrator` (`cargo run` in
+//! release mode); the test command runs it too.
 
 use bdpm_bdf::Bdf;
 use bdpm_geometry::{Geometry, TriangleMesh};

@@ -1,65 +1,18 @@
 //! The BDPM mix of method.md §2: direct light at x₀, photons merged at x₀ weighted per photon
-//! by 1 − w₁(x₀, y_p), and the camera's second vertex x₁ weighted by w₁(x₀, x₁).
-use std::borrow::Cow;
-
-use bdpm_bdf::{Bdf, Outgoing, luminance};
-use bdpm_cache::RadianceCache;
-use bdpm_geometry::Hit;
+//! by 1 − w₁(x₀, y_p), and the camera's second vertex x₁ weighted by w₁(x₀, x₁), taken in
+//! batches of camera samples ([`Mix::sample_batch`]).
+use bdpm_bdf::luminance;
 use bdpm_geometry::Rng;
-use bdpm_mis::{Budget, Heuristic, Needs, Pair, Weigher, acceptance_area};
+use bdpm_mis::{Pair, Weigher};
 use bdpm_photon::{PhotonMap, PhotonQuery};
-use bdpm_scene::{Scene, Shading};
+use bdpm_scene::{Shading, WeightVertex};
+use glam::Vec3;
 
 use crate::correction::CandidateSums;
-use crate::direct::DirectExtra;
+use crate::estimates::{Techniques, WeightStats};
 use crate::inputs::Arrival;
-use crate::radius::RadiusMap;
-use crate::table::PixelWeights;
-use bdpm_scene::WeightVertex;
-use glam::{DVec3, Vec3};
-
-/// The contributions of one camera sample, split by technique (for the debug layers).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Techniques {
-    /// L₀(x₀): direct light at the first vertex (never weighted).
-    pub direct: DVec3,
-    /// Photons merged at x₀, unweighted (the pure BDD=0 estimate of indirect light).
-    pub x0_raw: DVec3,
-    /// Photons merged at x₀, each weighted by 1 − w₁(x₀, y_p).
-    pub x0_weighted: DVec3,
-    /// E·(L₀(x₁→x₀) + Ph(x₁)), unweighted (the pure BDD=1 estimate of indirect light).
-    pub x1_raw: DVec3,
-    /// The same with weights w₁.
-    pub x1_weighted: DVec3,
-}
-
-impl Techniques {
-    /// The sample value: direct + weighted x₀ merge + weighted x₁ part.
-    pub fn total(&self) -> DVec3 {
-        self.direct + self.x0_weighted + self.x1_weighted
-    }
-}
-
-/// Counts of weight evaluations, for the run report (method.md §4 asks that clamped c·B and
-/// weights outside [0, 1] be reported).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct WeightStats {
-    /// Weights evaluated.
-    pub evaluations: u64,
-    /// Weights whose w₁ fell outside [0, 1] (before any optional clamp).
-    pub outside_unit: u64,
-    /// Optimal weights whose c·B was clamped to 1 − ε.
-    pub clamped_cb: u64,
-}
-
-impl WeightStats {
-    /// Adds another set of counts.
-    pub fn add(&mut self, o: &WeightStats) {
-        self.evaluations += o.evaluations;
-        self.outside_unit += o.outside_unit;
-        self.clamped_cb += o.clamped_cb;
-    }
-}
+use crate::mix::{FirstVertex, Mix};
+use crate::plan::PixelPlan;
 
 /// Camera samples that [`Mix::sample_batch`] takes together: enough for each sample's
 /// photon-map fetches to be hidden behind the others' work, few enough for the batch's state
@@ -71,23 +24,41 @@ pub(crate) const BATCH: usize = 16;
 /// stage of a query, so that every read of a gather has been fetched.
 const QUERY_STAGES: usize = 3;
 
-/// One camera sample to take: its image point (pixels, x right and y down from the top-left
-/// corner), its random stream, and where its value goes.
+/// One camera sample to take: which of its pixel's samples, its image point (pixels, x right
+/// and y down from the top-left corner) and its random stream.
 #[derive(Clone, Debug)]
 pub(crate) struct Job {
-    pub(crate) x: f32,
-    pub(crate) y: f32,
-    pub(crate) rng: Rng,
+    /// Sample k of the pixel (its direct-light points' stream, [`PixelPlan::direct_extra`]).
+    k: u32,
+    x: f32,
+    y: f32,
+    rng: Rng,
     /// The numbers of the BDF sample at x₀ when the sampler fixes them (`None`: from `rng`).
-    pub(crate) bdf: Option<[f32; 3]>,
-    pub(crate) out: Techniques,
-    /// The weighted parts of the value under each candidate factor of `corrected-balance`'s
-    /// pilot (only when [`Mix::pilot`]; direct light at x₀ is not in it).
+    bdf: Option<[f32; 3]>,
+}
+
+impl Job {
+    /// Sample `k` (< N_B) of the pixel of `plan`.
+    #[inline]
+    pub(crate) fn new(plan: &PixelPlan<'_>, k: u32) -> Job {
+        let c = plan.sample(k);
+        Job {
+            k,
+            x: plan.x as f32 + c.offset[0],
+            y: plan.y as f32 + c.offset[1],
+            rng: c.rng,
+            bdf: c.bdf,
+        }
+    }
+}
+
+/// What one camera sample gives: its value split by technique and, in `corrected-balance`'s
+/// pilot ([`Mix::pilot`]), its weighted parts under each candidate factor (direct light at x₀
+/// is not in those).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct SampleOut {
+    pub(crate) techniques: Techniques,
     pub(crate) pilot: CandidateSums,
-    /// Further points where direct light at x₀ is evaluated (`direct_boost`), if any.
-    pub(crate) direct_extra: Option<DirectExtra>,
-    /// The pixel's scale of the merge radius ([`Mix::radius_scale`]).
-    pub(crate) scale: f32,
 }
 
 /// Room for the state of a batch of samples between their rays and their gathers, reused from
@@ -95,9 +66,18 @@ pub(crate) struct Job {
 #[derive(Default)]
 pub(crate) struct Slots<'s>([Slot<'s>; BATCH]);
 
+impl Slots<'_> {
+    /// What the first `n` samples of the last batch gave, in sample order.
+    pub(crate) fn outputs(&self, n: usize) -> impl Iterator<Item = &SampleOut> {
+        self.0[..n].iter().map(|s| &s.out)
+    }
+}
+
 /// A sample between its rays and its gathers.
 #[derive(Default)]
 struct Slot<'s> {
+    /// What the sample gives, filled as it goes.
+    out: SampleOut,
     /// None if the sample ended before any gather.
     x0: Option<FirstVertex<'s>>,
     /// The x₁ part, if the mode has one and x₁ was found.
@@ -124,169 +104,10 @@ struct Second {
     direct_weighted: Vec3,
 }
 
-/// Per-render constants of the mix.
-pub(crate) struct Mix<'a> {
-    pub(crate) scene: &'a Scene,
-    pub(crate) heuristic: Heuristic,
-    pub(crate) needs: Needs,
-    pub(crate) budget: Budget,
-    /// Merge kernel 1/S, m⁻².
-    pub(crate) inv_area: f32,
-    /// Merge radius r, m (a pixel's is r times its [`Self::radius_scale`]).
-    pub(crate) radius: f32,
-    /// Each pixel's scale of r (`adaptive_radius`); `None`: r everywhere.
-    pub(crate) radius_map: Option<&'a RadiusMap>,
-    /// The frozen radiance cache, when the mode needs L_d (and b).
-    pub(crate) cache: Option<&'a RadianceCache>,
-    /// `corrected-balance`'s pilot: every weighted contribution also goes into the sample's
-    /// [`Job::pilot`] under each candidate factor (crate::correction).
-    pub(crate) pilot: bool,
-    /// BDD=0's paths are sampled by light tracing ([`Mix::splat`]) instead of merged at x₀.
-    pub(crate) light_tracing: bool,
-    /// Test-only variant: weight the x₀ photon sum with w₁(x₀, x₁ᶜ) of the camera's x₁, as
-    /// the preprint's eq. 2–3 read literally. It is biased; a test shows it.
-    #[cfg(feature = "test-hooks")]
-    pub(crate) camera_x1_weighting: bool,
-    /// Test-only: compute a photon's y_p inputs at every visit, not once per photon
-    /// ([`Mix::prev_inputs`]); the image bits must not change.
-    #[cfg(feature = "test-hooks")]
-    pub(crate) per_visit_inputs: bool,
-    /// Test-only: the splats ignore light tracing's density ratio (a biased mix).
-    #[cfg(feature = "test-hooks")]
-    pub(crate) two_way_splat_weights: bool,
-}
-
-/// The camera side of x₀: the shading point, its outgoing direction and its BDF data.
-pub(crate) struct FirstVertex<'s> {
-    pub(crate) sh: Shading,
-    pub(crate) u: Vec3,
-    /// The BDF's data for outgoing direction u, shared by every sample and pdf at x₀.
-    pub(crate) out: Outgoing,
-    /// The BDF at x₀ (kd from its texture where the material has one).
-    pub(crate) bdf: Cow<'s, Bdf>,
-    /// Luminance of the directional albedo µ(u; x₀).
-    pub(crate) albedo: f32,
-    /// `camis` only (else 0): its acceptance area A at x₀'s distance from the camera, m².
-    pub(crate) acceptance_area: f64,
-    /// `camis` only (else 0): p_C(x₀), the camera's density of x₀ within its pixel, m⁻².
-    pub(crate) primary_density: f64,
-}
-
 impl<'a> Mix<'a> {
-    /// Prepares x₀ for a camera ray that hit `hit` (u = towards the camera), or None if the
-    /// shading normal faces away from the camera.
-    pub(crate) fn first_vertex<'s>(&'s self, hit: &Hit, u: Vec3) -> Option<FirstVertex<'s>> {
-        self.first_vertex_shaded(self.scene.shade(hit, u), u)
-    }
-
-    /// [`Self::first_vertex`] for a hit already shaded for `u`.
-    pub(crate) fn first_vertex_shaded<'s>(
-        &'s self,
-        sh: Shading,
-        u: Vec3,
-    ) -> Option<FirstVertex<'s>> {
-        let u_local = sh.frame.to_local(u);
-        if u_local.z <= 0.0 {
-            return None;
-        }
-        let bdf = self.scene.bdf_at(&sh);
-        let out = bdf.outgoing(u_local);
-        let (acceptance_area, primary_density) =
-            if self.heuristic == Heuristic::Camis || self.light_tracing {
-                self.primary_terms(&sh, u)
-            } else {
-                (0.0, 0.0)
-            };
-        Some(FirstVertex {
-            sh,
-            u,
-            out,
-            albedo: luminance(bdf.albedo_at(&out)),
-            bdf,
-            acceptance_area,
-            primary_density,
-        })
-    }
-
-    /// `camis`'s acceptance area A (m²) and p_C(x₀) (m⁻²) for x₀ at `sh` seen along −u.
-    ///
-    /// Both are functions of x₀ alone. A pixel is sampled uniformly over its area a_pix on
-    /// the image plane at unit distance; dω = cos³θ_c·dA_image and dA(x₀) = d₀²·dω/cos θ₀,
-    /// hence p_C(x₀) = cos θ₀/(d₀²·a_pix·cos³θ_c).
-    fn primary_terms(&self, sh: &Shading, u: Vec3) -> (f64, f64) {
-        let cam = &self.scene.camera();
-        let d2 = (sh.p - cam.position()).length_squared() as f64;
-        let cos0 = sh.ng.dot(u).abs() as f64;
-        let cos_c = cam.forward().dot(-u).max(0.0) as f64;
-        let image = d2 * cam.pixel_area() as f64 * cos_c * cos_c * cos_c;
-        let density = if image > 0.0 { cos0 / image } else { 0.0 };
-        (acceptance_area(d2.sqrt()), density)
-    }
-
-    /// The mix's budget for one pixel: its N_B (N_eff where given, else the mix's) and its
-    /// merge area, scale²·S for a radius of `scale` × r (exactly S at a scale of 1).
-    pub(crate) fn pixel_budget(&self, camera_samples: Option<f64>, scale: f32) -> Budget {
-        let mut budget = Budget {
-            camera_samples: camera_samples.unwrap_or(self.budget.camera_samples),
-            ..self.budget
-        };
-        if scale != 1.0 {
-            budget.merge_area *= f64::from(scale) * f64::from(scale);
-        }
-        budget
-    }
-
-    /// Pixel (x, y)'s scale of the merge radius: 1 without a map. Exactly 1 keeps every
-    /// kernel, gather and weight input bit for bit what it is without one.
-    #[inline]
-    pub(crate) fn radius_scale(&self, x: u32, y: u32) -> f32 {
-        self.radius_map.map_or(1.0, |m| m.scale(x, y))
-    }
-
-    /// The largest pixel radius over r: the photon grid is built for r times it.
-    pub(crate) fn largest_radius_scale(&self) -> f32 {
-        self.radius_map.map_or(1.0, |m| m.largest().max(1.0))
-    }
-
-    /// The weigher of one pixel: the mode with the pixel's A, B and, where the table gives
-    /// one, its N_eff in place of N_B (method.md §12; N_B itself under the pinhole model and
-    /// without jitter, so those weights keep their bits), `corrected-balance`'s factor
-    /// `correction` for the pixel (1 for `balance`'s weights; the other modes ignore it), and
-    /// the pixel's merge area scale²·S for its radius of `scale` × r ([`Self::radius_scale`]).
-    pub(crate) fn weigher(
-        &self,
-        pixel: Option<&PixelWeights>,
-        correction: f64,
-        scale: f32,
-    ) -> Weigher {
-        let budget = self.pixel_budget(pixel.map(|p| p.camera_samples), scale);
-        Weigher::new(self.heuristic, &budget, pixel.map(|p| &p.terms)).with_correction(correction)
-    }
-
-    /// Whether the camera side merges photons at x₀ (BDD=0 by merging, not light tracing).
-    pub(crate) fn merges_at_x0(&self) -> bool {
-        self.needs.photons_at_x0 && !self.light_tracing
-    }
-
-    /// w₁ for `pair` under `weigher`, counted in `stats`; with light tracing in BDD=0's place,
-    /// [`Weigher::weight_light_traced`] with N_B·S·p_C(x₀), S the weigher's (its pixel's, with
-    /// `adaptive_radius`): both sides of a path compute it from x₀ and its pixel alone.
-    pub(crate) fn w1(&self, pair: &Pair, weigher: &Weigher, stats: &mut WeightStats) -> f64 {
-        let w = if self.light_tracing {
-            let b = &self.budget;
-            let ratio = b.camera_samples * weigher.merge_area() * pair.x0.primary_density;
-            weigher.weight_light_traced(pair, ratio)
-        } else {
-            weigher.weight(pair)
-        };
-        stats.evaluations += 1;
-        stats.outside_unit += w.outside_unit as u64;
-        stats.clamped_cb += w.clamped_cb as u64;
-        w.w1
-    }
-
-    /// Camera samples through the image points of `jobs`, each with its own random stream:
-    /// every job's `out` receives the value split by technique. At most [`BATCH`] jobs.
+    /// The camera samples `jobs` of the pixel of `plan`, each with its own random stream:
+    /// what each gives goes to its slot ([`Slots::outputs`]). At most [`BATCH`] jobs.
+    /// `photons` are the pass's map and [`Self::prev_inputs`]' table.
     ///
     /// The samples are taken together in stages so that the photon-map reads of one sample
     /// are fetched while the others compute: first every sample's rays, shading and weights
@@ -295,25 +116,28 @@ impl<'a> Mix<'a> {
     /// alone, so the results do not depend on the batch.
     pub(crate) fn sample_batch<'s>(
         &'s self,
-        map: &PhotonMap,
-        prev_inputs: &[[f32; 3]],
+        photons: (&PhotonMap, &[[f32; 3]]),
+        plan: &PixelPlan<'_>,
         jobs: &mut [Job],
         slots: &mut Slots<'s>,
-        weigher: &Weigher,
         stats: &mut WeightStats,
     ) {
         assert!(jobs.len() <= BATCH, "at most {BATCH} samples per batch");
-        let slots = &mut slots.0;
+        let weigher = plan
+            .weigher
+            .as_ref()
+            .expect("a pixel of the mix has a weigher");
+        let map = photons.0;
+        // Only this batch's slots: the others still hold an earlier batch's samples.
+        let slots = &mut slots.0[..jobs.len()];
         for (job, slot) in jobs.iter_mut().zip(slots.iter_mut()) {
-            job.out = Techniques::default();
-            job.pilot = CandidateSums::default();
+            slot.out = SampleOut::default();
             slot.x0 = None;
             slot.second = None;
-            self.start_sample(map, job, weigher, stats, slot);
+            self.start_sample(map, job, plan, (weigher, &mut *stats), slot);
         }
         for _ in 0..QUERY_STAGES {
-            // Only this batch's slots: the others still hold an earlier batch's samples.
-            for slot in slots[..jobs.len()].iter_mut().filter(|s| s.x0.is_some()) {
+            for slot in slots.iter_mut().filter(|s| s.x0.is_some()) {
                 if slot.second.is_some() {
                     map.advance_query(&mut slot.query1);
                 }
@@ -322,39 +146,37 @@ impl<'a> Mix<'a> {
                 }
             }
         }
-        for (job, slot) in jobs.iter_mut().zip(slots.iter()) {
-            let Some(x0) = &slot.x0 else { continue };
-            let camera_w1 = slot.second.as_ref().map(|s| s.w_const);
-            // The kernel 1/S of the sample's pixel, for both of its merges.
-            let k = self.inv_area / (job.scale * job.scale);
-            if let Some(second) = &slot.second {
-                let out = (&mut job.out, &mut job.pilot);
-                self.merge_at_x1(x0, (map, k), second, &slot.query1, weigher, stats, out);
+        // The kernel 1/S of the pixel, for both merges of every sample.
+        let k = self.inv_area / (plan.radius_scale * plan.radius_scale);
+        for slot in slots.iter_mut() {
+            let Slot {
+                out,
+                x0,
+                second,
+                query0,
+                query1,
+            } = slot;
+            let Some(x0) = x0 else { continue };
+            let camera_w1 = second.as_ref().map(|s| s.w_const);
+            if let Some(second) = second {
+                self.merge_at_x1(x0, (map, k), second, query1, (weigher, &mut *stats), out);
             }
             if self.merges_at_x0() {
-                let photons = (map, prev_inputs);
-                self.merge_at_x0(
-                    x0,
-                    (photons, k),
-                    &slot.query0,
-                    weigher,
-                    camera_w1,
-                    stats,
-                    (&mut job.out, &mut job.pilot),
-                );
+                let at_x0 = (&*query0, camera_w1);
+                self.merge_at_x0(x0, (photons, k), at_x0, (weigher, &mut *stats), out);
             }
         }
     }
 
-    /// Everything of one sample up to its gathers: the direct light at x₀ goes into
-    /// `job.out`, the rest into `slot` (whose `x0` stays None if the sample ends before any
+    /// Everything of one sample up to its gathers: the direct light at x₀ goes into its
+    /// output, the rest into `slot` (whose `x0` stays None if the sample ends before any
     /// gather).
     fn start_sample<'s>(
         &'s self,
         map: &PhotonMap,
         job: &mut Job,
-        weigher: &Weigher,
-        stats: &mut WeightStats,
+        plan: &PixelPlan<'_>,
+        weights: (&Weigher, &mut WeightStats),
         slot: &mut Slot<'s>,
     ) {
         let scene = self.scene;
@@ -366,10 +188,10 @@ impl<'a> Mix<'a> {
         let u = -dir;
         let sh0 = hit0.map(|hit| scene.shade(&hit, u));
         let direct = sh0.as_ref().map_or(Vec3::ZERO, |sh| scene.direct(sh, u));
-        job.out.direct = match &mut job.direct_extra {
+        slot.out.techniques.direct = match plan.direct_extra(job.k) {
             // The mean of L₀ over the sample's point and the further ones, whether or not
             // the sample's own ray meets anything.
-            Some(extra) => extra.mean_with(scene, direct),
+            Some(mut extra) => extra.mean_with(scene, direct),
             None => direct.as_dvec3(),
         };
         let Some(sh0) = sh0 else {
@@ -378,7 +200,7 @@ impl<'a> Mix<'a> {
         let Some(x0) = self.first_vertex_shaded(sh0, u) else {
             return;
         };
-        let r = self.radius * job.scale;
+        let r = self.radius * plan.radius_scale;
         if self.merges_at_x0() {
             map.restart_query_within(&mut slot.query0, x0.sh.p, r);
         }
@@ -389,9 +211,9 @@ impl<'a> Mix<'a> {
                 &x0,
                 map,
                 (bdf_u, r),
-                (weigher, stats),
+                weights,
                 &mut slot.query1,
-                &mut job.pilot,
+                &mut slot.out.pilot,
             );
         }
         slot.x0 = Some(x0);
@@ -435,11 +257,10 @@ impl<'a> Mix<'a> {
         let mut direct_raw = Vec3::ZERO;
         let mut direct_weighted = Vec3::ZERO;
         let per_light = self.needs.densities;
-        let pure = matches!(self.heuristic, Heuristic::Bdd1);
         let w_const = if per_light {
             0.0
-        } else if pure {
-            1.0
+        } else if let Some(w1) = self.fixed_w1 {
+            w1
         } else {
             self.w1(&pair, weigher, stats)
         };
@@ -484,17 +305,15 @@ impl<'a> Mix<'a> {
     }
 
     /// BDD=1's merge paths …→x₂→x₁→x₀: photons around x₁, weighted by w₁; finishes the x₁
-    /// part of the sample.
-    #[allow(clippy::too_many_arguments)]
+    /// part of the sample's output `out`.
     fn merge_at_x1(
         &self,
         x0: &FirstVertex<'_>,
         (map, k): (&PhotonMap, f32),
         second: &Second,
         query: &PhotonQuery,
-        weigher: &Weigher,
-        stats: &mut WeightStats,
-        (t, pilot): (&mut Techniques, &mut CandidateSums),
+        (weigher, stats): (&Weigher, &mut WeightStats),
+        out: &mut SampleOut,
     ) {
         let scene = self.scene;
         let &Second {
@@ -530,29 +349,28 @@ impl<'a> Mix<'a> {
             };
             ph_weighted += c * w as f32;
             if self.pilot {
-                pilot.add(f64::from(luminance(e * c) * k), w, true);
+                out.pilot.add(f64::from(luminance(e * c) * k), w, true);
             }
         });
+        let t = &mut out.techniques;
         t.x1_raw = (e * (direct_raw + ph_raw * k)).as_dvec3();
         t.x1_weighted = (e * (direct_weighted + ph_weighted * k)).as_dvec3();
     }
 
-    /// BDD=0: photons around x₀, each weighted by 1 − w₁(x₀, y_p) (method.md §2).
-    #[allow(clippy::too_many_arguments)]
+    /// BDD=0: photons around x₀ (`query`), each weighted by 1 − w₁(x₀, y_p) (method.md §2),
+    /// into the sample's output `out`; `camera_w1` is the camera's w₁ at its own x₁ (for the
+    /// biased test variant only).
     fn merge_at_x0(
         &self,
         x0: &FirstVertex<'_>,
         (photons, k): ((&PhotonMap, &[[f32; 3]]), f32),
-        query: &PhotonQuery,
-        weigher: &Weigher,
-        camera_w1: Option<f64>,
-        stats: &mut WeightStats,
-        (t, pilot): (&mut Techniques, &mut CandidateSums),
+        (query, camera_w1): (&PhotonQuery, Option<f64>),
+        (weigher, stats): (&Weigher, &mut WeightStats),
+        out: &mut SampleOut,
     ) {
         let scene = self.scene;
         let mut raw = Vec3::ZERO;
         let mut weighted = Vec3::ZERO;
-        let pure = matches!(self.heuristic, Heuristic::Bdd0);
         photons.0.finish_query_indexed(query, |i, ph| {
             let wp = ph.incoming;
             let f = scene.eval_with(&x0.bdf, &x0.sh, x0.u, wp);
@@ -561,8 +379,8 @@ impl<'a> Mix<'a> {
             }
             let c = f * ph.power;
             raw += c;
-            let w0 = if pure {
-                1.0
+            let w0 = if let Some(w1) = self.fixed_w1 {
+                1.0 - w1
             } else if self.camera_x1_weighting() {
                 1.0 - camera_w1.unwrap_or(0.0)
             } else {
@@ -571,19 +389,13 @@ impl<'a> Mix<'a> {
                 };
                 let w1 = self.w1(&pair, weigher, stats);
                 if self.pilot {
-                    pilot.add(f64::from(luminance(c) * k), w1, false);
+                    out.pilot.add(f64::from(luminance(c) * k), w1, false);
                 }
                 1.0 - w1
             };
             weighted += c * w0 as f32;
         });
-        t.x0_raw = (raw * k).as_dvec3();
-        t.x0_weighted = (weighted * k).as_dvec3();
+        out.techniques.x0_raw = (raw * k).as_dvec3();
+        out.techniques.x0_weighted = (weighted * k).as_dvec3();
     }
-}
-
-/// The default merge radius for `scene`: its largest bounding-box extent / 1600, metres.
-pub fn scene_default_radius(scene: &Scene) -> f32 {
-    let (lo, hi) = scene.geometry().bounds();
-    bdpm_settings::default_radius((hi - lo).max_element())
 }

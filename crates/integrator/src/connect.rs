@@ -2,13 +2,14 @@
 //! splats every arrival of depth ≥ 1 unweighted; the mix with `light_tracing` on samples
 //! BDD=0's paths this way instead of merging photons at x₀, with BDD=0's weight
 //! 1 − w₁(x₀, y_p) (docs/method-notes.md, "Light tracing in place of the merge at x₀").
-use bdpm_mis::{Heuristic, Weigher};
+use bdpm_mis::{Pair, Weigher};
 use bdpm_photon::{PathVertex, PhotonArrival};
 use bdpm_scene::{Scene, Shading};
 use glam::Vec3;
 
-use crate::bdpm::{Mix, WeightStats};
-use crate::inputs::Arrival;
+use crate::estimates::WeightStats;
+use crate::inputs::direction_to;
+use crate::mix::{FirstVertex, Mix};
 
 /// A photon arrival connected to the camera: where it lands on the film and what it adds.
 #[derive(Clone, Copy, Debug)]
@@ -107,29 +108,16 @@ impl Mix<'_> {
         let Some(x0) = self.first_vertex_shaded(a.shading, c.to_camera) else {
             return;
         };
-        let from = vertices.len() - 1;
-        let prev = &vertices[from];
-        let y = prev.at;
-        let to_prev = y.p - x0.sh.p;
-        let dist2 = to_prev.length_squared();
-        if dist2 <= 0.0 {
-            return;
-        }
-        let w1 = if matches!(self.heuristic, Heuristic::Bdd0) {
-            0.0
+        let w1 = if let Some(w1) = self.fixed_w1 {
+            // As a merge at x₀ would, no path where y_p is x₀ itself.
+            if direction_to(&x0, &vertices[vertices.len() - 1].at).is_none() {
+                return;
+            }
+            w1
         } else {
-            let v = to_prev / dist2.sqrt();
-            let base = self.pair(&x0, &y, v, self.f_at_x0(&x0, v));
-            let arrival = if prev.depth == 0 {
-                Arrival::Light(prev.light as usize)
-            } else {
-                Arrival::Vertex {
-                    vertices,
-                    from: from as u32 - 1,
-                    incoming: prev.incoming,
-                }
+            let Some(pair) = self.splat_pair(&x0, vertices) else {
+                return;
             };
-            let pair = self.path_pair(&x0, &y, (v, dist2), arrival, base);
             let weigher = weigher(c.x, c.y);
             if self.two_way_splat_weights() {
                 weigher.weight(&pair).w1
@@ -143,5 +131,12 @@ impl Mix<'_> {
             raw: c.value,
             w1,
         });
+    }
+
+    /// The inputs of a splat's path …→y_p→x₀ at x₀ = the arrival (`x0`, seen from the
+    /// camera), `vertices` its chunk's light-path vertices with y_p last: the photon side's
+    /// function ([`Mix::light_vertex_pair`]), so the agreement test in inputs.rs covers it.
+    pub(crate) fn splat_pair(&self, x0: &FirstVertex<'_>, vertices: &[PathVertex]) -> Option<Pair> {
+        self.light_vertex_pair(x0, vertices, (vertices.len() - 1) as u32, None)
     }
 }

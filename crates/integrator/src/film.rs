@@ -1,3 +1,5 @@
+//! The film: per-pixel sums of the passes' estimates and of their squares (f64), from which the
+//! mean and the per-pass variance of every pixel come ([`Film`], [`PassSums`] of any value).
 use std::ops::{Add, Div, Mul, Sub};
 
 use glam::DVec3;

@@ -1,23 +1,26 @@
 //! One assembly of a weight's inputs (the [`Pair`] of method.md §2 and §8) for every caller:
 //! the camera side of the mix (BDD=1 at x₁), the photon side (BDD=0, a photon's previous
-//! vertex as x₁), `predict`'s model, the pixel table and the weight map.
+//! vertex as x₁, merged at x₀ or light-traced to the camera), `predict`'s model, the pixel
+//! table and the weight map.
 //!
 //! The mix is unbiased only if both techniques of a full path …→x₁→x₀ see the same inputs
 //! (w₀ + w₁ = 1 per path). Each input is therefore computed by one function here from data
 //! both sides hold alike: x₀, the vertex x₁, the direction x₀→x₁ and how the light reached
-//! x₁ ([`Arrival`]). [`Mix::camera_side_pair`] and [`Mix::photon_side_pair`] are the two
-//! ways in; a test checks, for stored light paths, that they agree bit for bit.
+//! x₁ ([`Arrival`]). [`Mix::camera_side_pair`] and [`Mix::light_vertex_pair`] are the two
+//! ways in (the photon side's merge, [`Mix::photon_side_pair`], and light tracing's splat,
+//! `Mix::splat_pair`, both take the second); a test checks, for stored light paths, that the
+//! camera side, the merge and the splat agree bit for bit.
 use bdpm_bdf::{luminance, survival_at};
 use bdpm_cache::{CacheSlot, RadianceCache};
 use bdpm_geometry::Frame;
-use bdpm_mis::{Heuristic, Pair, PathKind, X0Inputs, X1Inputs, acceptance_probability};
+use bdpm_mis::{Pair, PathKind, X0Inputs, X1Inputs, acceptance_probability};
 use bdpm_photon::{PathVertex, Photon, PhotonMap};
 use bdpm_scene::WeightVertex;
 use glam::Vec3;
 use rayon::prelude::*;
 use std::f32::consts::PI;
 
-use crate::bdpm::{FirstVertex, Mix};
+use crate::mix::{FirstVertex, Mix};
 
 /// How the light subpath of a full path …→x₁→x₀ reaches x₁: what the path's own inputs (its
 /// kind, f₁ at x₁, the densities, `camis`'s β) are read from.
@@ -121,7 +124,7 @@ impl<'a> Mix<'a> {
             pair.x1.indirect = ld as f64;
             pair.x1.b = b as f64;
         }
-        if let Heuristic::Threshold { .. } = self.heuristic {
+        if self.needs.light_distance {
             pair.x1.light_distance = self
                 .scene
                 .lights()
@@ -169,7 +172,7 @@ impl<'a> Mix<'a> {
                     let (pc, pl) = self.densities(x0, x1, v, dist2, incoming);
                     pair.path.camera_density = pc;
                     pair.path.light_density = pl;
-                    if self.heuristic == Heuristic::Camis {
+                    if self.needs.light_suffix {
                         pair.path.light_suffix = self.light_suffix(vertices, x0, x1, from, pc);
                     }
                 }
@@ -223,10 +226,9 @@ impl<'a> Mix<'a> {
     }
 
     /// The photon side's inputs for the path that ends with the photon `ph` (index `i` of
-    /// `map`'s photons) landing at x₀: x₁ is the photon's previous vertex y_p, and the light
-    /// arrived there from the light (a one-bounce path) or from the vertex stored before it.
-    /// `prev_inputs` is [`Self::prev_inputs`]'s table (or empty). Returns the unit direction
-    /// x₀→y_p and the pair, or None where y_p is x₀ itself.
+    /// `map`'s photons) landing at x₀: [`Self::light_vertex_pair`] of its previous vertex y_p
+    /// in the map's stored paths, with y_p's precomputed inputs from `prev_inputs`
+    /// ([`Self::prev_inputs`]'s table, or empty). None where y_p is x₀ itself.
     pub(crate) fn photon_side_pair(
         &self,
         (map, prev_inputs): (&PhotonMap, &[[f32; 3]]),
@@ -234,16 +236,30 @@ impl<'a> Mix<'a> {
         i: usize,
         ph: &Photon,
     ) -> Option<Pair> {
-        let prev = map.vertex(ph.prev);
+        self.light_vertex_pair(x0, map.vertices(), ph.prev, prev_inputs.get(i))
+    }
+
+    /// The inputs of the path whose light subpath ends at the stored vertex
+    /// `vertices[at]` = y_p and goes on to x₀ (a photon landing there, or light tracing's
+    /// connection of an arrival at x₀ to the camera): x₁ is y_p, and the light arrived there
+    /// from the light (a one-bounce path) or from the vertex stored before it (`vertices`
+    /// are stored path by path). `precomputed` are y_p's [L₀, L_d, b] from
+    /// [`Self::prev_inputs`], if any. None where y_p is x₀ itself.
+    // Inlined into the merge at x₀'s per-photon closure, as it was before the splat shared
+    // it: a call per photon visit cost 0.3 % of a glossy pass.
+    #[inline(always)]
+    pub(crate) fn light_vertex_pair(
+        &self,
+        x0: &FirstVertex<'_>,
+        vertices: &[PathVertex],
+        at: u32,
+        precomputed: Option<&[f32; 3]>,
+    ) -> Option<Pair> {
+        let prev = &vertices[at as usize];
         let y = prev.at;
-        let to_prev = y.p - x0.sh.p;
-        let dist2 = to_prev.length_squared();
-        if dist2 <= 0.0 {
-            return None;
-        }
-        let v = to_prev / dist2.sqrt();
+        let (v, dist2) = direction_to(x0, &y)?;
         let f0 = self.f_at_x0(x0, v);
-        let base = match prev_inputs.get(i) {
+        let base = match precomputed {
             Some(&[l0, ld, b]) if !l0.is_nan() && self.same_cache_side(&y, -v) => {
                 // direct_masked's own test of the side; the rest of L₀ is the same number for
                 // any direction on it (method-notes.md, "Precomputed inputs").
@@ -258,8 +274,8 @@ impl<'a> Mix<'a> {
         } else {
             // Light paths are stored vertex after vertex: x₂ is the vertex before y_p.
             Arrival::Vertex {
-                vertices: map.vertices(),
-                from: ph.prev - 1,
+                vertices,
+                from: at - 1,
                 incoming: prev.incoming,
             }
         };
@@ -429,9 +445,7 @@ impl<'a> Mix<'a> {
     /// numbers, bit for bit, as [`Self::pair`] would for each visit.
     pub(crate) fn prev_inputs(&self, map: &PhotonMap) -> Vec<[f32; 3]> {
         let reads_inputs = self.needs.direct_at_x1 || self.needs.radiance_cache;
-        let per_visit = matches!(self.heuristic, Heuristic::Bdd0)
-            || self.camera_x1_weighting()
-            || self.per_visit_inputs();
+        let per_visit = !self.needs.weighs || self.camera_x1_weighting() || self.per_visit_inputs();
         let isotropic = self.cache_needed().is_none_or(|c| c.is_isotropic());
         if !(self.merges_at_x0() && reads_inputs && isotropic) || per_visit {
             return Vec::new();
@@ -466,12 +480,21 @@ impl<'a> Mix<'a> {
     }
 }
 
+/// The unit direction x₀ → `y` and the squared distance (m²), or None where `y` is x₀ itself.
+#[inline]
+pub(crate) fn direction_to(x0: &FirstVertex<'_>, y: &WeightVertex) -> Option<(Vec3, f32)> {
+    let to = y.p - x0.sh.p;
+    let dist2 = to.length_squared();
+    (dist2 > 0.0).then(|| (to / dist2.sqrt(), dist2))
+}
+
 #[cfg(test)]
-mod tests {
-    //! The agreement of the two ways in: for stored light paths, the inputs the camera side
+pub(crate) mod tests {
+    //! The agreement of the ways in: for stored light paths, the inputs the camera side
     //! assembles for the path …→x₂→x₁→x₀ (x₁ its own vertex, the photon stored at x₁ found
     //! around it) are the inputs the photon side assembles when that path's next photon lands
-    //! at x₀ (x₁ its previous vertex), bit for bit, for every mixing mode.
+    //! at x₀ (x₁ its previous vertex), and those light tracing's splat assembles when it
+    //! connects that arrival at x₀ to the camera, bit for bit, for every mixing mode.
     use std::collections::HashMap;
 
     use bdpm_bdf::Bdf;
@@ -487,7 +510,7 @@ mod tests {
 
     /// An open box: Lambert floor and left wall, a back wall that is Lambert or glossy, two
     /// point lights.
-    fn open_box(glossy_back: bool) -> Scene {
+    pub(crate) fn open_box(glossy_back: bool) -> Scene {
         let mut mesh = TriangleMesh::default();
         let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
         mesh.push_quad(
@@ -583,7 +606,7 @@ mod tests {
                 domain: Domain::Photon,
                 pass: 0,
                 light_visibility: mix.needs.direct_at_x1,
-                max_depth: 1024,
+                max_depth: bdpm_photon::MAX_DEPTH,
             };
             let map = PhotonMap::trace(scene, &options, 0.05);
             let prev_inputs = mix.prev_inputs(&map);
@@ -626,15 +649,21 @@ mod tests {
                         let at_x1 = &map.photons()[at_x1];
                         mix.camera_side_pair(&map, &x0, &x1, (v, dist2), at_x1, base)
                     };
+                    // Light tracing's splat of the same arrival at x₀: its chunk's vertices
+                    // end with y_p (here the map's, up to y_p).
+                    let vertices = &map.vertices()[..=ph.prev as usize];
+                    let splat_side = mix.splat_pair(&x0, vertices).expect("as the photon side");
                     // Debug prints the shortest text that reads back to the same f64: equal
                     // text is equal bits, NaN included.
-                    assert_eq!(
-                        format!("{camera_side:?}"),
-                        format!("{photon_side:?}"),
-                        "{name}: photon {i} (depth {}) at x0 {:?}",
-                        prev.depth + 1,
-                        x0.sh.p
-                    );
+                    for (side, inputs) in [("photon", photon_side), ("splat", splat_side)] {
+                        assert_eq!(
+                            format!("{camera_side:?}"),
+                            format!("{inputs:?}"),
+                            "{name}, {side} side: photon {i} (depth {}) at x0 {:?}",
+                            prev.depth + 1,
+                            x0.sh.p
+                        );
+                    }
                 }
             }
         }

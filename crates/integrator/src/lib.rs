@@ -9,48 +9,45 @@
 //!
 //! Architecture invariant: no file IO; the driver writes images and reports.
 
-pub mod bdpm;
+mod bdpm;
+pub mod camera;
 mod connect;
-mod correction;
-mod direct;
-mod film;
+pub mod correction;
+pub mod direct;
+pub mod error;
+mod estimate;
+pub mod estimates;
+pub mod film;
 mod inputs;
 mod light;
-mod memory;
+pub mod memory;
+mod mix;
+mod pass;
 pub mod path;
-mod predict;
-mod radius;
-mod render;
+mod plan;
+pub mod predict;
+pub mod prepare;
+mod products;
+pub mod radius;
+pub mod render;
 mod sampler;
-mod settings;
-mod stage;
-mod table;
-mod weightmap;
+pub mod setup;
+pub mod stage;
+pub mod table;
+pub mod weightmap;
 
-pub use bdpm::{Techniques, WeightStats, scene_default_radius};
-pub use bdpm_mis::NoiseModel;
-pub use correction::{CANDIDATES, Correction, PILOT_PASSES, pilot_seed};
-pub use direct::DirectSamples;
-pub use film::{Film, PassSums, PassValue};
-pub use memory::{
-    MemoryEstimate, MemoryItem, PILOT_PHOTONS, estimate_memory, human_bytes, loading_item,
-    model_cache_item, scene_items,
-};
-pub use predict::{JITTER_RAYS, Prediction};
-pub use radius::RadiusMap;
-pub use render::{
-    FirstHitLayers, LARGE_RADIUS_FRACTION, MODEL_CACHE_BINS, MODEL_CACHE_PHOTONS, PassOutput,
-    RenderError, Renderer, StageProbe, StageReport, TargetError, first_hit_layers,
-    model_cache_settings, render_path_pass, resolve_radius,
-};
-// The settings are `bdpm-settings`'; re-exported so that a user of the integrator needs one
-// dependency.
-pub use bdpm_settings::{
-    FOOTPRINT_TABLE_RAYS, HeuristicKind, MIN_RADIUS, Mode, PINHOLE_TABLE_RAYS, PartialSettings,
-    RadiusError, RadiusInput, RadiusSpec, RenderSettings, Sampler, Setting, SettingsError,
-    SettingsRecord, WeightClamp, Written, check_radius, default_radius,
-};
-pub use sampler::strata;
-pub use stage::Stage;
-pub use table::{PixelTable, PixelWeights};
-pub use weightmap::{WeightMap, WeightTarget, weight_map_heuristic};
+// The crate root names what most users need; the rest is in the modules above (e.g.
+// `memory::Lower`, `radius::RadiusMap`, `prepare::model_cache_settings`).
+pub use error::RenderError;
+pub use estimate::estimate_memory;
+pub use estimates::{PassOutput, Techniques, WeightStats};
+pub use film::Film;
+pub use memory::{MemoryEstimate, MemoryItem, human_bytes};
+pub use predict::Prediction;
+pub use render::Renderer;
+pub use stage::{Stage, StageProbe, StageReport};
+pub use weightmap::{WeightMap, WeightTarget};
+// The settings are `bdpm-settings`' (all of them as `settings`); re-exported so that a user
+// of the integrator needs one dependency.
+pub use bdpm_settings as settings;
+pub use bdpm_settings::{Mode, NoiseModel, PartialSettings, RenderSettings, Sampler, Setting};

@@ -2,20 +2,45 @@
 //! for everything else (every photon arrival after ≥ 1 scattering is connected to the camera).
 //! It is unbiased and independent of the BDPM code paths, and it converges fast where a small
 //! bright secondary source (the Cornell ceiling spot) makes `path` slow (method.md §10).
-use std::sync::atomic::{AtomicU64, Ordering};
-
 use bdpm_geometry::Domain;
 use bdpm_photon::{TraceOptions, trace_photons};
 use bdpm_scene::Scene;
 use glam::{DVec3, Vec3};
-use rayon::prelude::*;
 
+use crate::camera::{EstimateRow, PixelEstimator, camera_pass};
 use crate::connect::connect;
 use crate::direct::{DirectSamples, direct_through};
-use crate::render::{PassOutput, accumulate};
-use crate::sampler::PixelSamples;
-use crate::stage::Stage;
+use crate::estimates::{PassOutput, accumulate};
+use crate::plan::{PixelPlan, PixelPlanner};
+use crate::stage::{Stage, never};
 use bdpm_settings::RenderSettings;
+
+/// The `light` reference's camera samples: exact direct light at x₀, over the pixel's
+/// direct-light samples (crate::direct).
+struct DirectPixels<'s> {
+    scene: &'s Scene,
+    spp: u32,
+}
+
+impl PixelEstimator for DirectPixels<'_> {
+    type Scratch = ();
+    type Row = EstimateRow;
+
+    fn scratch(&self) {}
+
+    fn pixel(&self, plan: &PixelPlan<'_>, _: &mut (), row: &mut EstimateRow) {
+        let mut sum = DVec3::ZERO;
+        for k in 0..self.spp {
+            let [jx, jy] = plan.sample(k).offset;
+            let mut l = direct_through(self.scene, plan.x as f32 + jx, plan.y as f32 + jy);
+            if let Some(mut extra) = plan.direct_extra(k) {
+                l = extra.mean_with(self.scene, l).as_vec3();
+            }
+            accumulate(&mut sum, l, &mut row.dropped);
+        }
+        row.push_mean(sum, self.spp);
+    }
+}
 
 /// Renders one pass of the `light` reference; `direct` gives the pixels whose direct term
 /// takes more than one point per camera sample (`direct_boost`, crate::direct).
@@ -28,33 +53,14 @@ pub(crate) fn render_light_pass(
 ) -> PassOutput {
     let (w, h) = (settings.width as usize, settings.height as usize);
     let t_camera = std::time::Instant::now();
-    let dropped = AtomicU64::new(0);
-    let mut estimates = vec![DVec3::ZERO; w * h];
-    estimates
-        .par_chunks_mut(w)
-        .enumerate()
-        .for_each(|(y, row)| {
-            let mut row_dropped = 0;
-            let mut layout = PixelSamples::new(settings);
-            for (x, px) in row.iter_mut().enumerate() {
-                let pixel = (y * w + x) as u64;
-                let mut sum = DVec3::ZERO;
-                let xy = (x as u32, y as u32);
-                let m = direct.map_or(1, |d| d.at(xy.0, xy.1));
-                layout.start(pass, pixel);
-                for k in 0..settings.spp {
-                    let [jx, jy] = layout.sample(k).offset;
-                    let mut l = direct_through(scene, x as f32 + jx, y as f32 + jy);
-                    if let Some(mut extra) = layout.direct_extra(k, xy, m) {
-                        l = extra.mean_with(scene, l).as_vec3();
-                    }
-                    accumulate(&mut sum, l, &mut row_dropped);
-                }
-                *px = sum / settings.spp as f64;
-            }
-            dropped.fetch_add(row_dropped, Ordering::Relaxed);
-            progress(1);
-        });
+    let pixels = DirectPixels {
+        scene,
+        spp: settings.spp,
+    };
+    let planner = PixelPlanner::unweighted(direct);
+    let rows = camera_pass(settings, pass, &planner, &pixels, progress, &never)
+        .expect("a pass that is never stopped is complete");
+    let (mut estimates, camera_dropped) = EstimateRow::concat(rows, w * h);
     let camera_seconds = t_camera.elapsed().as_secs_f64();
 
     let t_light = std::time::Instant::now();
@@ -64,7 +70,7 @@ pub(crate) fn render_light_pass(
         domain: Domain::Photon,
         pass,
         light_visibility: false,
-        max_depth: 1024,
+        max_depth: bdpm_photon::MAX_DEPTH,
     };
     // Splats come back in photon order, so the sums below do not depend on the thread count.
     let splats: Vec<(u32, Vec3)> = trace_photons(scene, &options, |arrival, out| {
@@ -86,7 +92,7 @@ pub(crate) fn render_light_pass(
     }
     PassOutput {
         estimates,
-        dropped: dropped.into_inner() + light_dropped,
+        dropped: camera_dropped + light_dropped,
         samples: (w * h) as u64 * settings.spp as u64,
         stage_seconds: vec![
             (Stage::Camera, camera_seconds),

@@ -1,48 +1,67 @@
-//! The memory a render will need, estimated before anything large is allocated, so that the
-//! driver can refuse a render that would run out of memory after minutes of work.
-//!
-//! Per-pixel and per-photon costs were measured as peak resident memory of `bdpm render` on
-//! the Cornell box (docs/robustness.md, "Memory"): 171 B per pixel for the film, the pass
-//! estimate and the output files being encoded (1024² and 2048², path mode), and 1.6–1.9 times
-//! the finished photon map's bytes at the peak of its build (thread-local parts and the merged
-//! copy, then the grid's sort arrays; `--stage-memory`, 1 and 4 million photons, docs/performance.md). The photons stored per emitted
-//! photon and the bytes per stored photon depend on the scene, so a pilot of
-//! [`PILOT_PHOTONS`] photons is traced to measure them.
+//! The parts of a memory estimate ([`MemoryItem`]: what it is, its bytes, how long it lives,
+//! what scales it), and the scene's own; `crate::estimate` sums a render's
+//! ([`crate::estimate_memory`]), so that the driver can refuse a render that would run out of
+//! memory after minutes of work.
 
 pub use bdpm_core::human_bytes;
-use bdpm_geometry::Domain;
-use bdpm_mis::NoiseModel;
-use bdpm_photon::{PhotonMap, TraceOptions};
 use bdpm_scene::Scene;
+use bdpm_settings::Setting;
 
-use crate::bdpm::{Techniques, scene_default_radius};
-use crate::connect::Splat;
-use crate::correction::CANDIDATES;
-use crate::table::PixelWeights;
-use bdpm_settings::{Mode, RenderSettings};
-
-/// Photons traced by the pilot that measures a scene's photons stored per emitted photon.
+/// Photons traced by the pilot of [`crate::estimate_memory`] that measures a scene's photons
+/// stored per emitted photon.
 pub const PILOT_PHOTONS: u64 = 4096;
-/// Peak bytes per pixel of the film, luminance film, pass estimate and output encoding
-/// (measured: 171 B at 1024² and 2048²), rounded up.
-const BYTES_PER_PIXEL: u64 = 180;
-/// Extra peak bytes per pixel with technique layers: five RGB f64 layers per pass and their
-/// sums (240 B), and their f32 EXR channels and means (180 B).
-const TECHNIQUE_BYTES_PER_PIXEL: u64 = 2 * size_of::<Techniques>() as u64 + 180;
-/// Peak of a photon map's build over its finished size (measured 1.61 at 10⁶ and 1.88 at
-/// 4·10⁶ photons on the Lambert Cornell box), rounded up.
-const PHOTON_MAP_PEAK_FACTOR: f64 = 2.0;
 /// Bytes per record while the radiance cache or a light pass collects arrivals: a 12–16 B
 /// record in thread-local parts and their merged copy.
-const ARRIVAL_RECORD_BYTES: f64 = 32.0;
+pub(crate) const ARRIVAL_RECORD_BYTES: f64 = 32.0;
 /// Name of the fixed part of the estimate.
-const BASE_NAME: &str = "program";
-/// Program, scene-independent buffers and thread stacks (measured ~9 MB at 8×8 pixels).
-const BASE_BYTES: u64 = 16 << 20;
+pub(crate) const BASE_NAME: &str = "program";
 /// Names of the scene's items, which the scene holds already when the estimate is made.
 const SCENE_ITEMS: [&str; 3] = ["geometry", "BVH", "textures"];
 /// Name of the item for the scene's load, which peaks before the render's own allocations.
 const LOADING_NAME: &str = "BVH build while loading, beyond the render's own";
+
+/// How long an item of a render's estimate lives, which decides how the items of several
+/// renderers of one scene add up (a caller that holds several renderers sums them by it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Lifetime {
+    /// The program and the scene: one copy however many renderers there are.
+    Shared,
+    /// Held by a renderer, or by the film and statistics of its image, for as long as it
+    /// lives: one copy per renderer held.
+    Held,
+    /// Allocated while a renderer is prepared and freed before its first pass (a cache
+    /// build's arrivals, a pilot's images).
+    Preparation,
+    /// Allocated while a pass renders and freed after it (the photon map).
+    Pass,
+}
+
+/// What scales an item, i.e. what to lower (or leave out) to shrink it. Typed, so that each
+/// caller names it in its own words (a command-line flag, a scene file's key).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Lower {
+    /// A render setting, e.g. [`Setting::Photons`] or [`Setting::Resolution`].
+    Setting(Setting),
+    /// The first setting, or else leave out the second, an on/off setting that adds the item
+    /// (the resolution, or `adaptive_radius`).
+    SettingOrOff(Setting, Setting),
+    /// The radiance cache's photons: [`Setting::CachePhotons`], or [`Setting::Photons`],
+    /// which it follows when not given.
+    CachePhotons,
+    /// The resolution, or leave out the technique layers
+    /// ([`crate::Renderer::with_technique_layers`]).
+    ResolutionOrTechniques,
+    /// The photons of the noise model's own radiance cache
+    /// ([`crate::Renderer::with_model_cache`]).
+    ModelCachePhotons,
+    /// The scene's triangle count.
+    SceneTriangles,
+    /// The scene's texture sizes (texels).
+    SceneTextures,
+    /// In the words of the caller that adds the item (for what it holds itself).
+    Other(&'static str),
+}
 
 /// One part of the estimate.
 #[derive(Clone, Debug, PartialEq)]
@@ -51,9 +70,10 @@ pub struct MemoryItem {
     pub name: &'static str,
     /// Estimated peak bytes.
     pub bytes: u64,
-    /// The setting that scales it, for a message that says what to lower, e.g.
-    /// `"--photons"`.
-    pub lower: &'static str,
+    /// How long it lives.
+    pub lifetime: Lifetime,
+    /// What scales it, for a message that says what to lower.
+    pub lower: Lower,
 }
 
 /// The estimated peak memory of a render: the sum of its items (each at its own peak, which
@@ -84,26 +104,20 @@ impl MemoryEstimate {
 
 /// The items of `scene` itself: its per-triangle data, its BVH and its decoded textures
 /// ([`Scene::memory`]), bytes held. A caller that sizes work on a loaded scene other than a
-/// render (`bdpm study`, `bench`, `predict`) adds these to its own items; [`estimate_memory`]
-/// does, with [`loading_item`] for the load's peak.
+/// render (`bdpm study`, `bench`, `predict`) adds these to its own items;
+/// [`crate::estimate_memory`] does, with [`loading_item`] for the load's peak.
 pub fn scene_items(scene: &Scene) -> Vec<MemoryItem> {
     let m = scene.memory();
+    let item = |name, bytes, lower| MemoryItem {
+        name,
+        bytes,
+        lifetime: Lifetime::Shared,
+        lower,
+    };
     vec![
-        MemoryItem {
-            name: SCENE_ITEMS[0],
-            bytes: m.triangles,
-            lower: "the scene's triangle count",
-        },
-        MemoryItem {
-            name: SCENE_ITEMS[1],
-            bytes: m.bvh,
-            lower: "the scene's triangle count",
-        },
-        MemoryItem {
-            name: SCENE_ITEMS[2],
-            bytes: m.textures,
-            lower: "the scene's texture sizes (texels)",
-        },
+        item(SCENE_ITEMS[0], m.triangles, Lower::SceneTriangles),
+        item(SCENE_ITEMS[1], m.bvh, Lower::SceneTriangles),
+        item(SCENE_ITEMS[2], m.textures, Lower::SceneTextures),
     ]
 }
 
@@ -116,168 +130,7 @@ pub fn loading_item(scene: &Scene, render: u64) -> MemoryItem {
     MemoryItem {
         name: LOADING_NAME,
         bytes: scene.memory().bvh_build.saturating_sub(render),
-        lower: "the scene's triangle count",
-    }
-}
-
-/// Estimates the peak memory of rendering `scene` with `settings` (with technique layers
-/// when `techniques`): the program, the scene's own items ([`scene_items`], [`loading_item`])
-/// and the render's. Traces a pilot of [`PILOT_PHOTONS`] photons for BDPM and light modes;
-/// allocates nothing in proportion to the resolution or N_F.
-pub fn estimate_memory(
-    scene: &Scene,
-    settings: &RenderSettings,
-    techniques: bool,
-) -> MemoryEstimate {
-    let s = settings;
-    let pixels = s.width as u64 * s.height as u64;
-    // An unusable radius fails in `Renderer::new`; the estimate goes on with the default.
-    let radius = crate::render::resolve_radius(scene, s, scene.pixel_footprint())
-        .unwrap_or_else(|_| scene_default_radius(scene));
-    let mut items = vec![
-        MemoryItem {
-            name: BASE_NAME,
-            bytes: BASE_BYTES,
-            lower: "the scene's triangle count",
-        },
-        MemoryItem {
-            name: "film and output images",
-            bytes: pixels * BYTES_PER_PIXEL,
-            lower: "--resolution",
-        },
-    ];
-    if techniques {
-        items.push(MemoryItem {
-            name: "technique layers",
-            bytes: pixels * TECHNIQUE_BYTES_PER_PIXEL,
-            lower: "--resolution (or leave out --techniques)",
-        });
-    }
-    let mut stored_per_emitted = 0.0;
-    let heuristic = match s.mode {
-        Mode::Path => None,
-        Mode::Light | Mode::Bdpm(_) => {
-            let pilot = PhotonMap::trace(
-                scene,
-                &TraceOptions {
-                    photons: PILOT_PHOTONS,
-                    seed: s.seed,
-                    domain: Domain::Photon,
-                    pass: 0,
-                    light_visibility: false,
-                    max_depth: 1024,
-                },
-                radius,
-            );
-            let stored = pilot.photons().len() as f64;
-            stored_per_emitted = stored / PILOT_PHOTONS as f64;
-            // Arrivals include the first hit from the light, which is not stored.
-            let arrivals_per_emitted = stored_per_emitted + 1.0;
-            let bytes_per_stored = pilot.memory_bytes() as f64 / stored.max(1.0);
-            match s.mode {
-                Mode::Light => items.push(MemoryItem {
-                    name: "light-path splats per pass",
-                    bytes: (s.photons as f64 * arrivals_per_emitted * ARRIVAL_RECORD_BYTES) as u64,
-                    lower: "--photons",
-                }),
-                _ => items.push(MemoryItem {
-                    name: "photon map per pass",
-                    bytes: (s.photons as f64
-                        * stored_per_emitted
-                        * bytes_per_stored
-                        * PHOTON_MAP_PEAK_FACTOR) as u64,
-                    lower: "--photons",
-                }),
-            }
-            if s.light_traced() {
-                // Every arrival of depth ≥ 1 that the camera sees is a splat, held until the
-                // pass adds them in photon order; a growing list can hold twice its length.
-                items.push(MemoryItem {
-                    name: "light-tracing splats per pass",
-                    bytes: (s.photons as f64 * stored_per_emitted * (2 * size_of::<Splat>()) as f64)
-                        as u64,
-                    lower: "--photons",
-                });
-            }
-            if let Some(h) = s.heuristic()
-                && h.needs().radiance_cache
-            {
-                let photons = s.cache_photons.unwrap_or(s.photons) as f64;
-                items.push(MemoryItem {
-                    name: "radiance cache build",
-                    bytes: (photons * arrivals_per_emitted * ARRIVAL_RECORD_BYTES) as u64,
-                    lower: "render.cache_photons (or --photons)",
-                });
-            }
-            s.heuristic()
-        }
-    };
-    if let Some(h) = heuristic {
-        items.extend(pixel_items(s, h, pixels));
-    }
-    add_scene_items(scene, &mut items);
-    MemoryEstimate {
-        items,
-        stored_per_emitted,
-    }
-}
-
-/// Adds the scene's items and its load's to the program's and the render's `items` (the
-/// program first), drops empty ones and sorts them, largest first.
-fn add_scene_items(scene: &Scene, items: &mut Vec<MemoryItem>) {
-    let render: u64 = items.iter().skip(1).map(|i| i.bytes).sum();
-    items.push(loading_item(scene, render));
-    items.extend(scene_items(scene));
-    items.retain(|i| i.bytes > 0 || i.name == BASE_NAME);
-    items.sort_by_key(|i| std::cmp::Reverse(i.bytes));
-}
-
-/// The per-pixel items of a mode with weights `h`: its weight table, adaptive-radius pilot
-/// and balance-correction pilot, as it needs them.
-fn pixel_items(s: &RenderSettings, h: bdpm_mis::Heuristic, pixels: u64) -> Vec<MemoryItem> {
-    let mut items = Vec::new();
-    let footprint = s.noise_model == NoiseModel::Footprint && s.pixel_jitter;
-    let needs = h.needs();
-    if needs.pixel_table || (footprint && needs.effective_samples) {
-        items.push(MemoryItem {
-            name: "per-pixel weight table",
-            bytes: pixels * size_of::<PixelWeights>() as u64,
-            lower: "--resolution",
-        });
-    }
-    if s.adaptive_radius {
-        // At the pilot's peak: its technique sums and one pass's layers and estimates;
-        // then the table at each pixel's radius is built beside the one at r.
-        items.push(MemoryItem {
-            name: "adaptive-radius pilot",
-            bytes: pixels
-                * (2 * size_of::<Techniques>() + size_of::<[f64; 3]>() + size_of::<PixelWeights>())
-                    as u64,
-            lower: "--resolution (or leave out --adaptive-radius)",
-        });
-    }
-    if needs.balance_correction {
-        // Per pixel and candidate, at the pilot's peak: the pass's per-row sums, their
-        // concatenation, and the second moments.
-        items.push(MemoryItem {
-            name: "balance-correction pilot",
-            bytes: pixels * (3 * CANDIDATES.len() * size_of::<f64>()) as u64,
-            lower: "--resolution",
-        });
-    }
-    items
-}
-
-/// The build of the noise model's radiance cache of `photons` photons
-/// ([`crate::Renderer::with_model_cache`]), which holds its arrivals until it sums them: an item
-/// for `estimate` (of the same scene and settings, whose pilot measured the photons stored per
-/// emitted photon) of `bdpm predict`.
-pub fn model_cache_item(estimate: &MemoryEstimate, photons: u64) -> MemoryItem {
-    // Arrivals include the first hit from the light, which is not stored.
-    let arrivals_per_emitted = estimate.stored_per_emitted + 1.0;
-    MemoryItem {
-        name: "noise model's radiance cache build",
-        bytes: (photons as f64 * arrivals_per_emitted * ARRIVAL_RECORD_BYTES) as u64,
-        lower: "--model-cache-photons",
+        lifetime: Lifetime::Shared,
+        lower: Lower::SceneTriangles,
     }
 }

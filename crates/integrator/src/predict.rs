@@ -24,7 +24,7 @@
 //! T_jitter the spread of the pixel's mean radiance over its footprint, which the functional of
 //! §12 leaves out (it is the same for every mode) but a measured V contains.
 //!
-//! **Stratified samples** (`--sampler stratified`, the default). The N_B samples of a pass take
+//! **Stratified samples** (the `stratified` sampler, the default). The N_B samples of a pass take
 //! one cell each of an n_x × n_y grid (of the pixel, and of the BDF's two direction numbers at
 //! x₀), and the mean of one value per cell has variance (1/N_B)·mean over cells of σ²_cell,
 //! the variance within a cell. So Var_p in T1 and Var_{x₀ in pixel} in T_jitter become that
@@ -56,8 +56,9 @@ use bdpm_mis::{Heuristic, Weigher, effective_samples};
 use crate::inputs::Arrival;
 use rayon::prelude::*;
 
-use crate::bdpm::{FirstVertex, Mix};
-use crate::render::{RenderError, Renderer};
+use crate::error::RenderError;
+use crate::mix::{FirstVertex, Mix};
+use crate::render::Renderer;
 use crate::sampler::{direction_strata, in_cell, pixel_strata, random_cell};
 use crate::table::footprint_overlap;
 use bdpm_settings::PINHOLE_TABLE_RAYS;
@@ -132,8 +133,7 @@ impl Renderer<'_> {
     /// [`Self::predict_variance`] for the weights `h` in place of the mode's own, with this
     /// renderer's settings, cache and pixel table: e.g. the unclamped `optimal-split`, the
     /// minimiser of the functional over weights per (x₀, x₁) and path kind, as the floor that no
-    /// such weight can go below (`bdpm predict
-    /// --headroom`). If `h` reads the pixel table's A and B, the renderer's mode must have
+    /// such weight can go below (the headroom of `bdpm predict`). If `h` reads the pixel table's A and B, the renderer's mode must have
     /// built it (an `optimal*` mode); otherwise the error says so.
     pub fn predict_variance_for(&self, h: Heuristic) -> Result<Prediction, RenderError> {
         if self.light_traced() {
@@ -211,7 +211,8 @@ impl Renderer<'_> {
         // The weights' inputs exactly as the renderer passes them.
         let table = self.pixel_table().map(|t| t.get(x, y));
         let factor = self.correction().map_or(1.0, |c| c.get(x, y));
-        let weigher = mix.weigher(table, factor, scale);
+        let inputs = (table.map(|p| p.camera_samples), table.map(|p| &p.terms));
+        let weigher = mix.weigher(inputs, factor, scale);
 
         // The model's own directions: as many as the preprint's A/B rays unless given, so that
         // a prediction does not get noisier where the table takes fewer.

@@ -1,5 +1,5 @@
 //! A merge radius per block of pixels (`adaptive_radius`, docs/results.md, "A sharper glossy
-//! reference"): a pilot's image split by technique puts each [`BLOCK`] × [`BLOCK`] block in
+//! reference"): a pilot's image split by technique puts each `BLOCK` × `BLOCK` (8 × 8) block in
 //! one of three classes by BDD=1's share of the block's luminance, and the class fixes the
 //! block's scale of the render's radius r.
 //!
@@ -16,7 +16,7 @@
 
 use bdpm_bdf::luminance;
 
-use crate::bdpm::Techniques;
+use crate::estimates::Techniques;
 
 /// Side of the square pixel blocks that share a radius, pixels.
 pub(crate) const BLOCK: u32 = 8;

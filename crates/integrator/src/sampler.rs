@@ -1,6 +1,6 @@
 //! Where the camera samples of one pixel go within one pass: the one owner of the pixel
 //! positions and of the BDF numbers at x₀ that every camera-side estimator reads (the BDPM mix,
-//! `path`, `light`'s direct term, the `--aov` primary rays; the noise model's ρ and T_jitter
+//! `path`, `light`'s direct term, the first-hit layers' primary rays; the noise model's ρ and T_jitter
 //! read the layout's strata from here too).
 //!
 //! [`Sampler::Independent`] gives every sample its own uniform numbers from the camera stream
@@ -26,14 +26,19 @@ use bdpm_geometry::{Domain, Rng};
 use bdpm_settings::{RenderSettings, Sampler};
 
 use crate::direct::DirectExtra;
-use crate::settings::pixel_offset;
+
+/// Where in the pixel a camera sample goes: the jittered offset, or the centre.
+#[inline]
+fn pixel_offset(u: [f32; 2], jitter: bool) -> [f32; 2] {
+    if jitter { u } else { [0.5, 0.5] }
+}
 
 /// The largest f32 below 1: a jittered coordinate (i + u)/n can round up to 1 in f32.
 const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// The grid of strata (n_x, n_y) for `n` samples: n_x·n_y = n with n_x the largest divisor of
 /// n that is at most √n (30 → 5 × 6, 16 → 4 × 4, a prime p → 1 × p). `n` = 0 is taken as 1.
-pub fn strata(n: u32) -> (u32, u32) {
+pub(crate) fn strata(n: u32) -> (u32, u32) {
     let n = n.max(1);
     let mut nx = (n as f64).sqrt() as u32;
     while nx > 1 && !n.is_multiple_of(nx) {

@@ -2,6 +2,43 @@
 
 use std::fmt;
 
+/// Told by [`crate::Renderer::render_pass`] when each stage of a pass starts and ends, e.g. to
+/// sample the process's memory per stage. A probe sees stages only and cannot change the
+/// render.
+pub trait StageProbe: Sync {
+    /// `stage` of a pass (one of [`crate::PassOutput::stage_seconds`]) is about to start.
+    fn enter(&self, stage: Stage);
+    /// `stage` has ended.
+    fn leave(&self, stage: Stage);
+}
+
+/// Time and memory of one preparatory stage (photon map, radiance cache, A/B table, …).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StageReport {
+    /// The stage, e.g. [`Stage::RadianceCache`].
+    pub stage: Stage,
+    /// Wall time, seconds.
+    pub seconds: f64,
+    /// Memory held by the stage's result, bytes.
+    pub bytes: u64,
+    /// One line of facts (cell counts, bins, …).
+    pub detail: String,
+}
+
+/// `probe`'s [`StageProbe::enter`], if there is one.
+pub(crate) fn enter(probe: Option<&dyn StageProbe>, stage: Stage) {
+    if let Some(p) = probe {
+        p.enter(stage);
+    }
+}
+
+/// `probe`'s [`StageProbe::leave`], if there is one.
+pub(crate) fn leave(probe: Option<&dyn StageProbe>, stage: Stage) {
+    if let Some(p) = probe {
+        p.leave(stage);
+    }
+}
+
 /// A stage of a render: one of the preparatory stages ([`crate::Renderer::stages`]), a stage
 /// of a pass ([`crate::PassOutput::stage_seconds`], [`crate::StageProbe`]), or the driver's
 /// whole preparation. Code matches on the variant; [`Stage::name`] is the text that reports,
@@ -56,4 +93,9 @@ impl fmt::Display for Stage {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())
     }
+}
+
+/// A stop that never fires (a preparation or pass that runs to its end).
+pub(crate) fn never() -> bool {
+    false
 }

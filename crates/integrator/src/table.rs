@@ -10,7 +10,7 @@ use bdpm_mis::{
 use bdpm_scene::{Scene, Shading};
 use rayon::prelude::*;
 
-use crate::bdpm::{FirstVertex, Mix};
+use crate::mix::{FirstVertex, Mix};
 
 /// What the weights of one pixel's camera samples need beyond the pair (x₀, x₁).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

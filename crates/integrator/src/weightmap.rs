@@ -1,12 +1,15 @@
 //! The weight map of the preprint's Fig. 5: for a fixed first vertex x₀ (seen by the camera),
 //! w₀ = 1 − w₁(x₀, x₁) of a mode as a function of x₁ over every surface point the camera sees.
+use bdpm_geometry::Hit;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use bdpm_mis::Heuristic;
+use bdpm_mis::{Heuristic, Pair};
 use bdpm_settings::RenderSettings;
 
-use crate::render::{RenderError, Renderer, TargetError};
+use crate::error::{RenderError, TargetError};
+use crate::mix::{FirstVertex, Mix};
+use crate::render::Renderer;
 use crate::table::{TableSpec, pixel_weights};
 
 /// Where x₀ is.
@@ -60,6 +63,63 @@ impl Renderer<'_> {
         let h = weight_map_heuristic(self.settings())?;
         let scene = self.scene();
         let cam = &scene.camera();
+        let (hit, dir) = self.target_hit(target)?;
+        let mix = self.mix(h);
+        let x0 = mix
+            .first_vertex(&hit, -dir)
+            .ok_or(RenderError::Target(TargetError::FacesAway))?;
+        let s = self.settings();
+        let needs = h.needs();
+        let footprint = self.footprint_model() && needs.effective_samples;
+        // The image point that sees x₀: its footprint, and its radius with `adaptive_radius`.
+        let projected = cam.project(x0.sh.p);
+        let image_point =
+            projected.unwrap_or((cam.width() as f32 * 0.5, cam.height() as f32 * 0.5));
+        let x0_pixel = projected.map_or((0, 0), |(x, y)| {
+            (
+                (x as u32).min(cam.width() - 1),
+                (y as u32).min(cam.height() - 1),
+            )
+        });
+        let scale = mix.radius_scale(x0_pixel.0, x0_pixel.1);
+        let pixel = (needs.pixel_table || footprint).then(|| {
+            let spec = TableSpec {
+                rays: needs.pixel_table.then_some(s.table_rays()),
+                footprint,
+                strata: crate::sampler::pixel_strata(s),
+                radius: self.radius(),
+                seed: s.seed,
+            };
+            pixel_weights(&mix, &x0, image_point, &spec, u64::MAX)
+        });
+        let budget = mix.pixel_budget(pixel.map(|p| p.camera_samples), scale);
+        let (w, hgt) = (cam.width() as usize, cam.height() as usize);
+        let mut w0 = vec![f64::NAN; w * hgt];
+        w0.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+            for (x, out) in row.iter_mut().enumerate() {
+                let d = cam.ray_direction(x as f32 + 0.5, y as f32 + 0.5);
+                let Some(pair) = pair_towards(&mix, &x0, d) else {
+                    continue;
+                };
+                *out = h
+                    .weight(&budget, &pair, pixel.as_ref().map(|p| &p.terms))
+                    .w0();
+            }
+        });
+        Ok(WeightMap {
+            width: cam.width(),
+            height: cam.height(),
+            w0,
+            x0: x0.sh.p,
+            x0_pixel,
+        })
+    }
+
+    /// The camera's first hit towards `target` and the ray's unit direction, or why `target`
+    /// cannot be x₀ (outside the image, nothing seen, hidden behind another surface).
+    fn target_hit(&self, target: WeightTarget) -> Result<(Hit, Vec3), RenderError> {
+        let scene = self.scene();
+        let cam = &scene.camera();
         let dir = match target {
             WeightTarget::Point(p) => (p - cam.position()).normalize_or_zero(),
             WeightTarget::Pixel(x, y) => {
@@ -87,76 +147,35 @@ impl Renderer<'_> {
                 }));
             }
         }
-        let mix = self.mix(h);
-        let x0 = mix
-            .first_vertex(&hit, -dir)
-            .ok_or(RenderError::Target(TargetError::FacesAway))?;
-        let s = self.settings();
-        let needs = h.needs();
-        let footprint = self.footprint_model() && needs.effective_samples;
-        // The image point that sees x₀: its footprint, and its radius with `adaptive_radius`.
-        let projected = cam.project(x0.sh.p);
-        let image_point =
-            projected.unwrap_or((cam.width() as f32 * 0.5, cam.height() as f32 * 0.5));
-        let x0_pixel = projected.map_or((0, 0), |(x, y)| {
-            (
-                (x as u32).min(cam.width() - 1),
-                (y as u32).min(cam.height() - 1),
-            )
-        });
-        let scale = mix.radius_scale(x0_pixel.0, x0_pixel.1);
-        let pixel = if needs.pixel_table || footprint {
-            let spec = TableSpec {
-                rays: needs.pixel_table.then_some(s.table_rays()),
-                footprint,
-                strata: crate::sampler::pixel_strata(s),
-                radius: self.radius(),
-                seed: s.seed,
-            };
-            Some(pixel_weights(&mix, &x0, image_point, &spec, u64::MAX))
-        } else {
-            None
-        };
-        let budget = mix.pixel_budget(pixel.map(|p| p.camera_samples), scale);
-        let (w, hgt) = (cam.width() as usize, cam.height() as usize);
-        let mut w0 = vec![f64::NAN; w * hgt];
-        w0.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-            for (x, out) in row.iter_mut().enumerate() {
-                let d = cam.ray_direction(x as f32 + 0.5, y as f32 + 0.5);
-                let Some(hit1) = scene.geometry().intersect(cam.position(), d, f32::INFINITY)
-                else {
-                    continue;
-                };
-                let to = hit1.p - x0.sh.p;
-                let dist = to.length();
-                if dist <= 0.0 {
-                    continue;
-                }
-                let v = to / dist;
-                let sh1 = scene.shade(&hit1, -v);
-                let x1 = scene.weight_vertex(&sh1);
-                // Behind x₀'s tangent plane no path x₁→x₀ exists; the map shows the weight the
-                // formula gives with v mirrored into x₀'s hemisphere (for Lambert f̃ = 1/π for every
-                // x₁, as in the preprint's Fig. 5) rather than a meaningless w₀ = 1.
-                let n0 = x0.sh.ng;
-                let v_eval = if n0.dot(v) < 0.0 {
-                    v - 2.0 * n0.dot(v) * n0
-                } else {
-                    v
-                };
-                let f0 = scene.eval(&x0.sh, x0.u, v_eval);
-                let pair = mix.pair(&x0, &x1, v, f0);
-                *out = h
-                    .weight(&budget, &pair, pixel.as_ref().map(|p| &p.terms))
-                    .w0();
-            }
-        });
-        Ok(WeightMap {
-            width: cam.width(),
-            height: cam.height(),
-            w0,
-            x0: x0.sh.p,
-            x0_pixel,
-        })
+        Ok((hit, dir))
     }
+}
+
+/// The inputs of the pair (x₀, x₁) for x₁ the surface point the camera sees along `d`, or
+/// None where it sees nothing or x₁ is x₀.
+fn pair_towards(mix: &Mix<'_>, x0: &FirstVertex<'_>, d: Vec3) -> Option<Pair> {
+    let scene = mix.scene;
+    let cam = scene.camera();
+    let hit1 = scene
+        .geometry()
+        .intersect(cam.position(), d, f32::INFINITY)?;
+    let to = hit1.p - x0.sh.p;
+    let dist = to.length();
+    if dist <= 0.0 {
+        return None;
+    }
+    let v = to / dist;
+    let sh1 = scene.shade(&hit1, -v);
+    let x1 = scene.weight_vertex(&sh1);
+    // Behind x₀'s tangent plane no path x₁→x₀ exists; the map shows the weight the formula
+    // gives with v mirrored into x₀'s hemisphere (for Lambert f̃ = 1/π for every x₁, as in the
+    // preprint's Fig. 5) rather than a meaningless w₀ = 1.
+    let n0 = x0.sh.ng;
+    let v_eval = if n0.dot(v) < 0.0 {
+        v - 2.0 * n0.dot(v) * n0
+    } else {
+        v
+    };
+    let f0 = scene.eval(&x0.sh, x0.u, v_eval);
+    Some(mix.pair(x0, &x1, v, f0))
 }

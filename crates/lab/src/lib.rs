@@ -11,7 +11,8 @@ use std::path::Path;
 use std::process::ExitCode;
 
 use bdpm_integrator::{
-    MemoryEstimate, Mode, PartialSettings, RenderSettings, Written, estimate_memory, human_bytes,
+    MemoryEstimate, Mode, PartialSettings, RenderSettings, estimate_memory, human_bytes,
+    settings::Written,
 };
 use bdpm_output::cli::CliResult;
 use bdpm_output::files::write_atomic;
@@ -211,7 +212,7 @@ fn refuse_above_limit(
                 v.name,
                 human_bytes(e.total()),
                 part.name,
-                part.lower
+                memory::lower(part)
             )
         })
         .unwrap_or_default();

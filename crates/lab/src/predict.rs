@@ -22,9 +22,9 @@
 //! estimated to need exceeds what is available.
 use std::path::{Path, PathBuf};
 
+use bdpm_integrator::prepare::{MODEL_CACHE_PHOTONS, model_cache_item, model_cache_settings};
 use bdpm_integrator::{
-    MODEL_CACHE_PHOTONS, Mode, Prediction, RenderError, RenderSettings, Renderer, estimate_memory,
-    human_bytes, model_cache_item, model_cache_settings,
+    Mode, Prediction, RenderError, RenderSettings, Renderer, Setting, estimate_memory, human_bytes,
 };
 use bdpm_mis::Heuristic;
 use clap::Args;
@@ -32,7 +32,9 @@ use serde::Serialize;
 
 use bdpm_load::{LoadedScene, scene_hash};
 use bdpm_output::accum::{check_scene_hash, estimator_hash};
-use bdpm_output::cli::{CliResult, Overrides, parse_bytes, prepare as cli_prepare, thread_pool};
+use bdpm_output::cli::{
+    CliResult, Overrides, flag_of, parse_bytes, prepare as cli_prepare, thread_pool,
+};
 use bdpm_output::colormap::{ColourMap, Legend, compose, format_value};
 use bdpm_output::files::stem_of;
 use bdpm_output::memory::{self, MemoryLimit};
@@ -527,9 +529,10 @@ impl Setup<'_> {
         // Refused before the model's inputs are built: the model is of the merge at x₀.
         if let Some(h) = renderer.heuristic().filter(|_| renderer.light_traced()) {
             return Err(format!(
-                "{}: {}",
+                "{}: {} ({} false)",
                 args.scene.display(),
-                RenderError::LightTracing(h.name())
+                RenderError::LightTracing(h.name()),
+                flag_of(Setting::LightTracing)
             ));
         }
         let photons = args.model_cache_photons;
@@ -658,7 +661,7 @@ impl Setup<'_> {
             radius_m: predicted.radius,
             pixel_table_rays: settings
                 .pixel_table_rays
-                .unwrap_or(bdpm_integrator::PINHOLE_TABLE_RAYS),
+                .unwrap_or(bdpm_integrator::settings::PINHOLE_TABLE_RAYS),
             passes: self.passes,
             measured_relative_se_per_pixel: (2.0 / (self.passes as f64 - 1.0)).sqrt(),
             pixels_without_surface: mv.len() - surface.len(),
@@ -819,7 +822,7 @@ fn memory_gate(
             human_bytes(estimate.total()),
             memory::parts(&estimate),
             limit.describe(),
-            estimate.scalable_largest().lower
+            memory::lower(estimate.scalable_largest())
         )),
         None => Ok(()),
     }

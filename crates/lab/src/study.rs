@@ -994,7 +994,8 @@ fn memory_gate(
     total.items.push(MemoryItem {
         name: "reference image",
         bytes: pixels * REFERENCE_BYTES_PER_PIXEL,
-        lower: "--resolution",
+        lifetime: memory::Lifetime::Shared,
+        lower: bdpm_integrator::memory::Lower::Setting(bdpm_integrator::Setting::Resolution),
     });
     crate::refuse_above_limit(&args.scene, "study", &total, variants, &estimates, limit)?;
     Ok(total)

@@ -127,6 +127,16 @@ pub struct Needs {
     pub photons_at_x0: bool,
     /// Trace the camera path's second vertex x₁ (false only for `bdd0`).
     pub second_vertex: bool,
+    /// w₁ differs from path to path, so the weight is evaluated; false for the pure
+    /// strategies, whose w₁ is the constant [`Heuristic::fixed_w1`] (`bdd0`, `bdd1`).
+    pub weighs: bool,
+    /// The smallest distance from x₁ to a light ([`X1Inputs::light_distance`]; `threshold`).
+    pub light_distance: bool,
+    /// x₀'s acceptance area and the camera's density of x₀ within its pixel
+    /// ([`X0Inputs::acceptance_area`], [`X0Inputs::primary_density`]; `camis`).
+    pub primary_terms: bool,
+    /// The light subpath's surrogate probability β ([`PathInputs::light_suffix`]; `camis`).
+    pub light_suffix: bool,
     /// L₀(x₁→x₀) is needed by the weight itself (shadow rays from x₁).
     pub direct_at_x1: bool,
     /// L_d(x₁→x₀) from the directional radiance cache is needed (method.md §5).
@@ -364,6 +374,7 @@ impl Heuristic {
         let mix = Needs {
             photons_at_x0: true,
             second_vertex: true,
+            weighs: true,
             ..Needs::default()
         };
         match self {
@@ -375,8 +386,11 @@ impl Heuristic {
                 second_vertex: true,
                 ..Needs::default()
             },
-            // Eq. 11 needs only positions, which the integrator always has.
-            Heuristic::Threshold { .. } => mix,
+            // Eq. 11 needs only x₁'s distance to the lights.
+            Heuristic::Threshold { .. } => Needs {
+                light_distance: true,
+                ..mix
+            },
             Heuristic::AlgebraicDirect => Needs {
                 direct_at_x1: true,
                 effective_samples: true,
@@ -415,10 +429,15 @@ impl Heuristic {
                 path_kinds: true,
                 ..mix
             },
-            // camis's extra inputs (acceptance area, p_C(x₀), β) come from the same geometry
-            // and light-path vertices as the densities, so it needs nothing more.
-            Heuristic::Balance | Heuristic::Power | Heuristic::Camis => Needs {
+            Heuristic::Balance | Heuristic::Power => Needs {
                 densities: true,
+                ..mix
+            },
+            // The correlation factor's acceptance area, p_C(x₀) and β (method-notes.md, "camis").
+            Heuristic::Camis => Needs {
+                densities: true,
+                primary_terms: true,
+                light_suffix: true,
                 ..mix
             },
             Heuristic::CorrectedBalance => Needs {
@@ -426,6 +445,16 @@ impl Heuristic {
                 balance_correction: true,
                 ..mix
             },
+        }
+    }
+
+    /// w₁ of a mode that does not weigh ([`Needs::weighs`] false): 0 for `bdd0` (merge at x₀
+    /// only), 1 for `bdd1`; `None` for every mode whose w₁ depends on the path.
+    pub fn fixed_w1(&self) -> Option<f64> {
+        match self {
+            Heuristic::Bdd0 => Some(0.0),
+            Heuristic::Bdd1 => Some(1.0),
+            _ => None,
         }
     }
 

@@ -585,6 +585,7 @@ fn needs_follow_method_table() {
     let mix = Needs {
         photons_at_x0: true,
         second_vertex: true,
+        weighs: true,
         ..Needs::default()
     };
     assert_eq!(
@@ -601,7 +602,13 @@ fn needs_follow_method_table() {
             ..Needs::default()
         }
     );
-    assert_eq!(needs("threshold"), mix);
+    assert_eq!(
+        needs("threshold"),
+        Needs {
+            light_distance: true,
+            ..mix
+        }
+    );
     let direct = Needs {
         direct_at_x1: true,
         effective_samples: true,
@@ -627,7 +634,21 @@ fn needs_follow_method_table() {
     };
     assert_eq!(needs("balance"), density);
     assert_eq!(needs("power"), density);
-    assert_eq!(needs("camis"), density);
+    assert_eq!(
+        needs("camis"),
+        Needs {
+            primary_terms: true,
+            light_suffix: true,
+            ..density
+        }
+    );
+    // Only the pure strategies do not weigh, and their w₁ is fixed.
+    for name in Heuristic::ALL_NAMES {
+        let h = Heuristic::parse(name).unwrap();
+        assert_eq!(h.needs().weighs, h.fixed_w1().is_none(), "{name}");
+    }
+    assert_eq!(Heuristic::Bdd0.fixed_w1(), Some(0.0));
+    assert_eq!(Heuristic::Bdd1.fixed_w1(), Some(1.0));
     assert_eq!(
         needs("corrected-balance"),
         Needs {

@@ -4,7 +4,8 @@
 //! them (through the loader), the flag parsers, the thread pool and the progress bar.
 use std::path::{Path, PathBuf};
 
-use bdpm_integrator::{PartialSettings, RadiusInput, Setting, SettingsError};
+use bdpm_integrator::settings::{RadiusInput, SettingsError};
+use bdpm_integrator::{PartialSettings, Setting};
 use bdpm_load::{LoadError, LoadOptions, LoadedScene, load_scene_overridden};
 use bdpm_mis::Needs;
 use bdpm_settings::{Mode, Written, limits};
@@ -12,6 +13,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::files::stem_of;
+pub use crate::flags::flag_of;
 use crate::memory::MemoryLimit;
 
 /// `println!` that ignores a closed standard output (as in `bdpm render … | head`) instead of
@@ -205,28 +207,6 @@ pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
             .ok_or_else(|| format!("the {which} in '{s}' is not a whole number in [1, {max}]"))
     };
     Ok((side(w, "width")?, side(h, "height")?))
-}
-
-/// The flag that sets `setting`.
-fn flag_of(setting: Setting) -> &'static str {
-    match setting {
-        Setting::Width | Setting::Height | Setting::Resolution => "--resolution",
-        Setting::Passes => "--passes",
-        Setting::Photons => "--photons",
-        Setting::Spp => "--spp",
-        Setting::Radius => "--radius",
-        Setting::Mode => "--mode",
-        Setting::NoiseModel => "--noise-model",
-        Setting::Sampler => "--sampler",
-        Setting::CachePhotons => "--cache-photons",
-        Setting::CacheBins => "--cache-bins",
-        Setting::PixelTableRays => "--pixel-table-rays",
-        Setting::DirectBoost => "--direct-boost",
-        Setting::AdaptiveRadius => "--adaptive-radius",
-        Setting::LightTracing => "--light-tracing",
-        // No flag sets it; only a scene file's value reaches here.
-        Setting::ThresholdRadius => "render.threshold_radius",
-    }
 }
 
 /// The message for an error in the settings the flags `o` put over the scene file `scene`

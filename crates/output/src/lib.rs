@@ -16,6 +16,7 @@ pub mod cli;
 pub mod colormap;
 pub mod exr;
 pub mod files;
+mod flags;
 pub mod font;
 pub mod memory;
 pub mod preview;

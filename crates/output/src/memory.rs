@@ -3,64 +3,36 @@
 //! command prepares several and holds them together (`study`, `predict --headroom`) or
 //! prepares one and renders no pass (`merge`, `weights`), and the parts a refusal names.
 //!
-//! The estimate of one render is [`bdpm_integrator::estimate_memory`]'s; this module only
-//! says how long each of its items lives ([`Lifetime`]), which decides how they add up.
+//! The estimate of one render is [`bdpm_integrator::estimate_memory`]'s; each of its items
+//! says how long it lives ([`Lifetime`]), which decides how they add up here, and what scales
+//! it ([`bdpm_integrator::memory::Lower`]), which [`lower`] names as the command line does.
 
-use bdpm_integrator::{MemoryEstimate, MemoryItem, RenderSettings, human_bytes};
+pub use bdpm_integrator::memory::Lifetime;
+use bdpm_integrator::memory::Lower;
+use bdpm_integrator::{MemoryEstimate, MemoryItem, RenderSettings, Setting, human_bytes};
 
 use crate::system::available_memory;
 
-/// How long an item of a render's estimate lives, which decides how the items of several
-/// renderers of one scene add up.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Lifetime {
-    /// The program and the scene: one copy however many renderers there are.
-    Shared,
-    /// Held by a renderer, or by the film and statistics of its image, for as long as it
-    /// lives: one copy per renderer held.
-    Held,
-    /// Allocated while a renderer is prepared and freed before its first pass (a cache
-    /// build's arrivals, a pilot's images).
-    Preparation,
-    /// Allocated while a pass renders and freed after it (the photon map).
-    Pass,
-}
-
-/// Items held for a renderer's life, by their names in [`bdpm_integrator::estimate_memory`]
-/// and in the render session's accumulation item.
-const HELD: [&str; 4] = [
-    "film and output images",
-    "technique layers",
-    "per-pixel weight table",
-    "passes kept for the accumulation file",
-];
-/// Items of a renderer's preparation.
-const PREPARATION: [&str; 4] = [
-    "radiance cache build",
-    "adaptive-radius pilot",
-    "balance-correction pilot",
-    "noise model's radiance cache build",
-];
-/// Items of a rendered pass.
-const PASS: [&str; 3] = [
-    "photon map per pass",
-    "light-path splats per pass",
-    "light-tracing splats per pass",
-];
-
-/// How long `item` lives. An item this module does not know is [`Lifetime::Shared`]: the
-/// program and what the scene itself holds (geometry, textures) are the same for every
-/// renderer of the scene.
-pub fn lifetime(item: &MemoryItem) -> Lifetime {
-    let name = item.name;
-    if HELD.contains(&name) {
-        Lifetime::Held
-    } else if PREPARATION.contains(&name) {
-        Lifetime::Preparation
-    } else if PASS.contains(&name) {
-        Lifetime::Pass
-    } else {
-        Lifetime::Shared
+/// What to lower to shrink `item`, as the command line names it: a render setting by its
+/// flag (`--photons`), an on/off one as a flag to leave out, the scene's parts in words.
+pub fn lower(item: &MemoryItem) -> String {
+    let flag = crate::flags::flag_of;
+    match item.lower {
+        Lower::Setting(s) => flag(s).to_string(),
+        Lower::SettingOrOff(s, off) => format!("{} (or leave out {})", flag(s), flag(off)),
+        Lower::CachePhotons => format!(
+            "{} (or {})",
+            flag(Setting::CachePhotons),
+            flag(Setting::Photons)
+        ),
+        Lower::ResolutionOrTechniques => {
+            format!("{} (or leave out --techniques)", flag(Setting::Resolution))
+        }
+        Lower::ModelCachePhotons => "--model-cache-photons".to_string(),
+        Lower::SceneTriangles => "the scene's triangle count".to_string(),
+        Lower::SceneTextures => "the scene's texture sizes (texels)".to_string(),
+        Lower::Other(text) => text.to_string(),
+        _ => "the render's settings".to_string(),
     }
 }
 
@@ -68,7 +40,7 @@ pub fn lifetime(item: &MemoryItem) -> Lifetime {
 fn transient_bytes(e: &MemoryEstimate) -> u64 {
     e.items
         .iter()
-        .filter(|i| matches!(lifetime(i), Lifetime::Preparation | Lifetime::Pass))
+        .filter(|i| matches!(i.lifetime, Lifetime::Preparation | Lifetime::Pass))
         .map(|i| i.bytes)
         .sum()
 }
@@ -82,7 +54,7 @@ pub fn held_together(entries: &[MemoryEstimate]) -> MemoryEstimate {
     let mut items: Vec<MemoryItem> = Vec::new();
     for e in entries {
         for item in &e.items {
-            let kind = lifetime(item);
+            let kind = item.lifetime;
             if !matches!(kind, Lifetime::Shared | Lifetime::Held) {
                 continue;
             }
@@ -97,7 +69,7 @@ pub fn held_together(entries: &[MemoryEstimate]) -> MemoryEstimate {
         items.extend(
             e.items
                 .iter()
-                .filter(|i| matches!(lifetime(i), Lifetime::Preparation | Lifetime::Pass))
+                .filter(|i| matches!(i.lifetime, Lifetime::Preparation | Lifetime::Pass))
                 .cloned(),
         );
     }
@@ -120,7 +92,7 @@ pub fn without_passes(mut estimate: MemoryEstimate, settings: &RenderSettings) -
             .heuristic()
             .is_some_and(|h| h.needs().balance_correction);
     if !pilot_pass {
-        estimate.items.retain(|i| lifetime(i) != Lifetime::Pass);
+        estimate.items.retain(|i| i.lifetime != Lifetime::Pass);
     }
     estimate
 }
@@ -192,10 +164,17 @@ mod tests {
     use std::path::Path;
 
     fn item(name: &'static str, bytes: u64) -> MemoryItem {
+        let lifetime = match name {
+            "film and output images" | "per-pixel weight table" => Lifetime::Held,
+            "photon map per pass" => Lifetime::Pass,
+            "radiance cache build" => Lifetime::Preparation,
+            _ => Lifetime::Shared,
+        };
         MemoryItem {
             name,
             bytes,
-            lower: "--photons",
+            lifetime,
+            lower: Lower::Setting(Setting::Photons),
         }
     }
 
@@ -244,13 +223,14 @@ mod tests {
         assert_eq!(without_passes(e, &s).total(), 1516);
     }
 
-    /// Every name this module sorts is one that the estimate of some render has (a renamed
-    /// item would otherwise count as shared, once, and hide in a study of many entries).
+    /// The items of the estimates of renders live as this module adds them up: what a
+    /// renderer holds once per renderer, what its preparation or a pass allocates once at a
+    /// time, the rest once.
     #[test]
-    fn the_sorted_names_are_the_estimates_own() {
+    fn the_estimates_items_say_how_long_they_live() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-lambert.toml");
         let loaded = bdpm_load::load_scene(&path).unwrap();
-        let mut seen: Vec<&str> = Vec::new();
+        let mut seen: Vec<(&str, Lifetime)> = Vec::new();
         for (mode, light_tracing, adaptive) in [
             ("optimal", false, true),
             ("corrected-balance", true, false),
@@ -263,23 +243,28 @@ mod tests {
             s.photons = 1000;
             for techniques in [false, true] {
                 let e = estimate_memory(&loaded.scene, &s, techniques);
-                seen.extend(e.items.iter().map(|i| i.name));
+                seen.extend(e.items.iter().map(|i| (i.name, i.lifetime)));
             }
         }
-        let produced_elsewhere = [
-            "passes kept for the accumulation file",
-            "noise model's radiance cache build",
-        ];
-        for name in HELD.iter().chain(&PREPARATION).chain(&PASS) {
-            assert!(
-                seen.contains(name) || produced_elsewhere.contains(name),
-                "'{name}' is in no estimate: {seen:?}"
-            );
+        for expected in [
+            ("film and output images", Lifetime::Held),
+            ("technique layers", Lifetime::Held),
+            ("per-pixel weight table", Lifetime::Held),
+            ("radiance cache build", Lifetime::Preparation),
+            ("adaptive-radius pilot", Lifetime::Preparation),
+            ("balance-correction pilot", Lifetime::Preparation),
+            ("photon map per pass", Lifetime::Pass),
+            ("light-path splats per pass", Lifetime::Pass),
+            ("light-tracing splats per pass", Lifetime::Pass),
+            ("program", Lifetime::Shared),
+        ] {
+            assert!(seen.contains(&expected), "{expected:?} not in {seen:?}");
         }
-        let model = bdpm_integrator::model_cache_item(
+        let model = bdpm_integrator::prepare::model_cache_item(
             &estimate_memory(&loaded.scene, &loaded.settings, false),
             1000,
         );
-        assert_eq!(lifetime(&model), Lifetime::Preparation);
+        assert_eq!(model.lifetime, Lifetime::Preparation);
+        assert_eq!(lower(&model), "--model-cache-photons");
     }
 }

@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use bdpm_integrator::{
-    Film, MemoryEstimate, RenderSettings, Renderer, SettingsRecord, Stage, WeightStats,
+    Film, MemoryEstimate, RenderSettings, Renderer, Stage, WeightStats, settings::SettingsRecord,
 };
 use bdpm_load::LoadReport;
 use serde::Serialize;

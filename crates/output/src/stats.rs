@@ -3,7 +3,7 @@
 //! study`). The film of the integrator keeps per-channel statistics; these are of the
 //! luminance, which the per-channel ones cannot give (they lack the covariances between
 //! channels).
-use bdpm_integrator::PassSums;
+use bdpm_integrator::film::PassSums;
 use glam::DVec3;
 
 /// Rec. 709 luminance of a linear RGB value (same unit as the value, e.g. W·m⁻²·sr⁻¹).

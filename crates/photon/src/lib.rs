@@ -74,4 +74,6 @@ mod trace;
 
 pub use map::{Photon, PhotonMap, PhotonQuery};
 pub use scene::{PhotonScene, Scatter};
-pub use trace::{PathVertex, PhotonArrival, TraceOptions, trace_photons, trace_photons_until};
+pub use trace::{
+    MAX_DEPTH, PathVertex, PhotonArrival, TraceOptions, trace_photons, trace_photons_until,
+};

@@ -51,13 +51,18 @@ pub struct TraceOptions {
     /// path continues from).
     pub light_visibility: bool,
     /// Hard cap on scatterings per path (arrivals have depth ≤ `max_depth`), a guard for
-    /// scenes that barely absorb; e.g. 1024.
+    /// scenes that barely absorb; e.g. [`MAX_DEPTH`].
     pub max_depth: u32,
 }
 
+/// The cap on scatterings per light path that every tracer of bdpm uses (render passes, the
+/// radiance cache, the memory estimate's pilot): Russian roulette ends paths long before it;
+/// it guards against a scene that barely absorbs.
+pub const MAX_DEPTH: u32 = 1024;
+
 impl TraceOptions {
     /// Options for `photons` photons of render pass `pass` with the defaults: photon domain,
-    /// no light visibility, `max_depth` 1024.
+    /// no light visibility, `max_depth` [`MAX_DEPTH`].
     pub fn new(photons: u64, seed: u64, pass: u32) -> TraceOptions {
         TraceOptions {
             photons,
@@ -65,7 +70,7 @@ impl TraceOptions {
             domain: Domain::Photon,
             pass,
             light_visibility: false,
-            max_depth: 1024,
+            max_depth: MAX_DEPTH,
         }
     }
 }
