@@ -235,7 +235,6 @@ fn read_obj<R: std::io::Read>(
         triangulate: false,
         ignore_points: true,
         ignore_lines: true,
-        ..tobj::LoadOptions::default()
     };
     let mut counted = LineCounter {
         inner: reader,

@@ -251,7 +251,6 @@ fn a_ply_header_over_the_memory_limit_is_refused_before_the_data() {
             source: "memory limit".into(),
             remedy: None,
         }),
-        ..LoadOptions::default()
     };
     error_with(
         "m.ply",
