@@ -10,6 +10,7 @@ mod determinism;
 mod doc_claims;
 mod furnace;
 mod light_leak;
+mod mesh_files;
 mod new_scenes;
 mod noise_model;
 mod precision;

@@ -17,7 +17,8 @@ use glam::{Mat4, Vec2, Vec3};
 use crate::gltf_mesh::{Assets, Origin, load_gltf};
 use crate::materials::Materials;
 use crate::memory::{Budget, MemoryLimit};
-use crate::schema::{CameraDef, MaterialDef, Point, SceneFile, ShapeDef, Triple};
+use crate::mesh_file::{Held, MeshFormat, MeshOrigin, load_mesh_file};
+use crate::schema::{CameraDef, MaterialDef, MeshFileDef, Point, SceneFile, ShapeDef, Triple};
 use crate::{LoadError, LoadReport, LoadedScene, limits};
 
 /// The file being loaded: the source of every message's prefix.
@@ -194,6 +195,17 @@ pub(crate) fn build(
                 lights.extend(part.lights);
                 part.mesh
             }
+            ShapeDef::Obj(m) | ShapeDef::Ply(m) => {
+                let held = Held {
+                    budget: &assets.budget,
+                    bytes: assets.budget.textures() + shapes.bytes(),
+                };
+                let (mesh, path) =
+                    mesh_file_shape(&ctx, &prefix, shape, m, base_dir, &materials, &held)?;
+                // Listed with the glTF files: the scene's identity hashes their bytes.
+                report.gltf_files.push(path);
+                mesh
+            }
             _ => builtin_shape(
                 &ctx,
                 &prefix,
@@ -338,6 +350,47 @@ fn gltf_shape(
     load_gltf(&origin, post, override_material, materials, assets)
 }
 
+/// A `[[shape]]` of type `obj` or `ply`: its file's triangles, placed, with its material;
+/// and the file as opened.
+fn mesh_file_shape(
+    ctx: &Ctx<'_>,
+    prefix: &str,
+    shape: &ShapeDef,
+    m: &MeshFileDef,
+    base_dir: &Path,
+    materials: &Materials,
+    held: &Held<'_>,
+) -> Result<(TriangleMesh, PathBuf), LoadError> {
+    let (format, what) = match shape {
+        ShapeDef::Ply(_) => (
+            MeshFormat::Ply,
+            "path of a .ply file, relative to the scene file",
+        ),
+        _ => (
+            MeshFormat::Obj,
+            "path of a .obj file, relative to the scene file",
+        ),
+    };
+    let material = shape_material(
+        ctx,
+        prefix,
+        m.material.as_deref(),
+        materials,
+        shape.type_name(),
+    )?;
+    let field = format!("{prefix}.file");
+    let written = ctx.required(&field, m.file.as_ref(), what)?;
+    let path = base_dir.join(written);
+    let post = ctx.placement(prefix, m.scale, m.translate)?;
+    let origin = MeshOrigin {
+        scene: ctx.file,
+        field: &field,
+        path: &path,
+    };
+    let mesh = load_mesh_file(&origin, format, post, material, held)?;
+    Ok((mesh, path))
+}
+
 /// A built-in `quad`, `box` or `sphere` shape as a mesh.
 fn builtin_shape(
     ctx: &Ctx<'_>,
@@ -360,7 +413,9 @@ fn builtin_shape(
             builtin_triangles,
             &mut mesh,
         )?,
-        ShapeDef::Mesh(_) => unreachable!("glTF shapes are loaded by gltf_shape"),
+        ShapeDef::Mesh(_) | ShapeDef::Obj(_) | ShapeDef::Ply(_) => {
+            unreachable!("file shapes are loaded by gltf_shape and mesh_file_shape")
+        }
     }
     Ok(mesh)
 }

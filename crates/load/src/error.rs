@@ -71,4 +71,16 @@ pub enum LoadError {
         /// What is wrong.
         message: String,
     },
+    /// An OBJ or PLY file named by a shape could not be read or is not acceptable.
+    #[error("{scene}: {field}: {path}: {message}")]
+    MeshFile {
+        /// The scene file.
+        scene: PathBuf,
+        /// The scene-file field that named it, such as `shape[2].file`.
+        field: String,
+        /// The mesh file, as opened (joined to the scene file's directory).
+        path: PathBuf,
+        /// What is wrong, with the line or element where the file tells it.
+        message: String,
+    },
 }

@@ -37,6 +37,24 @@ pub(crate) fn read_regular(
     limit: u64,
     what: &'static str,
 ) -> Result<Vec<u8>, ReadError> {
+    let file = open_regular(path, limit, what)?;
+    let mut bytes = Vec::with_capacity(file.metadata()?.len() as usize);
+    // One byte past the limit shows a file that grew after the check.
+    let _ = file.take(limit + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > limit {
+        return Err(too_large(bytes.len() as u64, limit, what));
+    }
+    Ok(bytes)
+}
+
+/// Opens the regular file at `path` for reading, without blocking, refusing a directory, a
+/// FIFO, a socket, a device or a file of more than `limit` bytes. A caller that streams it
+/// reads at most `limit + 1` bytes (`take`), so that a file grown since is seen.
+pub(crate) fn open_regular(
+    path: &Path,
+    limit: u64,
+    what: &'static str,
+) -> Result<fs::File, ReadError> {
     // Checked before opening: opening a FIFO for reading blocks until a writer appears.
     let meta = fs::metadata(path)?;
     check_kind(&meta, what)?;
@@ -54,13 +72,7 @@ pub(crate) fn read_regular(
     if meta.len() > limit {
         return Err(too_large(meta.len(), limit, what));
     }
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
-    // One byte past the limit shows a file that grew after the check.
-    let _ = file.take(limit + 1).read_to_end(&mut bytes)?;
-    if bytes.len() as u64 > limit {
-        return Err(too_large(bytes.len() as u64, limit, what));
-    }
-    Ok(bytes)
+    Ok(file)
 }
 
 fn check_kind(meta: &fs::Metadata, what: &'static str) -> Result<(), ReadError> {

@@ -1,10 +1,10 @@
-//! Scene loading for bdpm: a TOML scene file (plus any glTF 2.0 meshes it names) becomes a
-//! [`bdpm_scene::Scene`] and the [`bdpm_settings::RenderSettings`] to render it with.
+//! Scene loading for bdpm: a TOML scene file (plus any glTF 2.0, OBJ and PLY meshes it names)
+//! becomes a [`bdpm_scene::Scene`] and the [`bdpm_settings::RenderSettings`] to render it with.
 //!
 //! The file format is documented field by field in `docs/scene-format.md`. In short:
 //! `[render]` (all optional), `[camera]` (required), `[[light]]` point lights,
 //! `[material.NAME]` Lambert + Gaussian-lobe materials, and `[[shape]]` quads, boxes,
-//! geodesic spheres and glTF meshes. Units are metres, watts and degrees.
+//! geodesic spheres, glTF meshes and OBJ or PLY meshes. Units are metres, watts and degrees.
 //!
 //! Every error is a [`LoadError`] whose one-line message names the file, the dotted field
 //! (`material.red.kd`, `shape[3].radius`, `render.passes`) and what is wrong. No input,
@@ -53,6 +53,7 @@ mod identity;
 mod image;
 mod materials;
 mod memory;
+mod mesh_file;
 mod schema;
 
 use std::path::{Path, PathBuf};
@@ -86,6 +87,8 @@ pub mod limits {
     pub const MAX_SCENE_FILE_BYTES: u64 = 256 << 20;
     /// Largest glTF or GLB file, and largest external glTF buffer, bytes (2 GiB).
     pub const MAX_GLTF_BYTES: u64 = 2 << 30;
+    /// Largest OBJ or PLY mesh file, bytes (2 GiB).
+    pub const MAX_MESH_FILE_BYTES: u64 = 2 << 30;
     /// Most texels of one decoded texture image (16384 × 16384; 3 GiB as linear RGB f32).
     pub const MAX_TEXTURE_TEXELS: u64 = 1 << 28;
 }
@@ -120,7 +123,8 @@ pub struct LoadReport {
     pub materials: usize,
     /// Point lights: the TOML ones, then glTF KHR_lights_punctual point lights.
     pub lights: usize,
-    /// glTF files loaded, as opened (joined to the scene file's directory).
+    /// glTF, OBJ and PLY files loaded, as opened (joined to the scene file's directory), in
+    /// the order of the shapes: the files whose bytes [`assets_hash`] hashes.
     pub gltf_files: Vec<PathBuf>,
     /// glTF primitives whose normals were computed by the loader. Always 0 in this version:
     /// glTF 2.0 requires flat shading for primitives without normals, which is what the

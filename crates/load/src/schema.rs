@@ -65,6 +65,8 @@ pub(crate) enum ShapeDef {
     Sphere(SphereDef),
     #[serde(alias = "gltf")]
     Mesh(MeshDef),
+    Obj(MeshFileDef),
+    Ply(MeshFileDef),
 }
 
 impl ShapeDef {
@@ -74,6 +76,8 @@ impl ShapeDef {
             ShapeDef::Box(_) => "box",
             ShapeDef::Sphere(_) => "sphere",
             ShapeDef::Mesh(_) => "mesh",
+            ShapeDef::Obj(_) => "obj",
+            ShapeDef::Ply(_) => "ply",
         }
     }
 }
@@ -117,6 +121,17 @@ pub(crate) struct SphereDef {
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct MeshDef {
+    pub(crate) file: Option<PathBuf>,
+    pub(crate) material: Option<String>,
+    pub(crate) scale: Option<Triple>,
+    pub(crate) translate: Option<Point>,
+}
+
+/// `type = "obj"` and `type = "ply"`: a mesh file with one material (required: the file's
+/// own materials are not read).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct MeshFileDef {
     pub(crate) file: Option<PathBuf>,
     pub(crate) material: Option<String>,
     pub(crate) scale: Option<Triple>,

@@ -6,6 +6,7 @@
 mod errors;
 mod fuzz;
 mod gltf;
+mod mesh_files;
 mod round4;
 mod scenes;
 mod shapes;
