@@ -16,6 +16,7 @@ mod noise_model;
 mod precision;
 mod predict;
 mod seams;
+mod specular;
 mod stages;
 mod stiff;
 mod textures;

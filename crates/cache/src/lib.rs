@@ -312,7 +312,8 @@ impl RadianceCache {
             &options,
             |arrival, out| {
                 // Only light that has scattered at least once is secondary (L_d, method.md §5).
-                if arrival.vertex.depth == 0 {
+                // A delta vertex (mirror, glass) has no radiance of its own to cache.
+                if arrival.vertex.depth == 0 || arrival.delta {
                     return;
                 }
                 let Some(sc) = arrival.scatter else { return };

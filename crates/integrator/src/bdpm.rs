@@ -1,7 +1,7 @@
 //! The BDPM mix of method.md §2: direct light at x₀, photons merged at x₀ weighted per photon
 //! by 1 − w₁(x₀, y_p), and the camera's second vertex x₁ weighted by w₁(x₀, x₁), taken in
 //! batches of camera samples ([`Mix::sample_batch`]).
-use bdpm_bdf::luminance;
+use bdpm_bdf::{Transport, luminance};
 use bdpm_geometry::Rng;
 use bdpm_mis::{Pair, Weigher};
 use bdpm_photon::{PhotonMap, PhotonQuery};
@@ -165,6 +165,9 @@ impl<'a> Mix<'a> {
                 let at_x0 = (&*query0, camera_w1);
                 self.merge_at_x0(x0, (photons, k), at_x0, (weigher, &mut *stats), out);
             }
+            if let Some(beta) = x0.beta {
+                out.techniques.scale_merges(beta.as_dvec3());
+            }
         }
     }
 
@@ -182,24 +185,27 @@ impl<'a> Mix<'a> {
         let scene = self.scene;
         let cam = &scene.camera();
         let dir = cam.ray_direction(job.x, job.y);
-        let hit0 = scene
-            .geometry()
-            .intersect(cam.position(), dir, f32::INFINITY);
-        let u = -dir;
-        let sh0 = hit0.map(|hit| scene.shade(&hit, u));
-        let direct = sh0.as_ref().map_or(Vec3::ZERO, |sh| scene.direct(sh, u));
+        // Through mirrors and glass to x₀ (a scene without them: the primary hit, beta = 1).
+        let rng = &mut job.rng;
+        let walk =
+            scene.walk_to_non_delta(cam.position(), dir, Transport::Radiance, || rng.uniform());
+        let direct = walk.as_ref().map_or(Vec3::ZERO, |w| {
+            let l0 = scene.direct(&w.sh, w.wo);
+            if w.vertices == 0 { l0 } else { w.beta * l0 }
+        });
         slot.out.techniques.direct = match plan.direct_extra(job.k) {
             // The mean of L₀ over the sample's point and the further ones, whether or not
             // the sample's own ray meets anything.
             Some(mut extra) => extra.mean_with(scene, direct),
             None => direct.as_dvec3(),
         };
-        let Some(sh0) = sh0 else {
+        let Some(walk) = walk else {
             return;
         };
-        let Some(x0) = self.first_vertex_shaded(sh0, u) else {
+        let Some(mut x0) = self.first_vertex_shaded(walk.sh, walk.wo) else {
             return;
         };
+        x0.beta = (walk.vertices > 0).then_some(walk.beta);
         let r = self.radius * plan.radius_scale;
         if self.merges_at_x0() {
             map.restart_query_within(&mut slot.query0, x0.sh.p, r);
@@ -239,6 +245,11 @@ impl<'a> Mix<'a> {
         let hit1 = scene
             .geometry()
             .intersect(scene.spawn(&x0.sh, v), v, f32::INFINITY)?;
+        // A mirror or glass between x₀ and x₁: BDD=1 does not sample such paths (w₁ = 0), the
+        // merge at x₀ takes them whole (`Mix::after_delta`).
+        if scene.is_delta(hit1.material) {
+            return None;
+        }
         // Started before the shadow ray and the weight's inputs, which hide its first fetch.
         map.restart_query_within(query, hit1.p, r);
         let wo1 = -v;
@@ -369,6 +380,8 @@ impl<'a> Mix<'a> {
         out: &mut SampleOut,
     ) {
         let scene = self.scene;
+        // Read once, not per photon: a scene without mirrors or glass pays nothing for them.
+        let has_delta = scene.has_delta();
         let mut raw = Vec3::ZERO;
         let mut weighted = Vec3::ZERO;
         photons.0.finish_query_indexed(query, |i, ph| {
@@ -379,7 +392,13 @@ impl<'a> Mix<'a> {
             }
             let c = f * ph.power;
             raw += c;
-            let w0 = if let Some(w1) = self.fixed_w1 {
+            let w0 = if has_delta && self.after_delta(photons.0, ph) {
+                // BDD=1 cannot sample a path with a delta vertex between x₀ and x₁.
+                if self.pilot {
+                    out.pilot.add(f64::from(luminance(c) * k), 0.0, false);
+                }
+                1.0
+            } else if let Some(w1) = self.fixed_w1 {
                 1.0 - w1
             } else if self.camera_x1_weighting() {
                 1.0 - camera_w1.unwrap_or(0.0)

@@ -3,6 +3,7 @@
 //! run in parallel; each pixel's plan is built once (crate::plan) and its samples placed by
 //! the sampler; an estimator says only what one pixel's samples give, into its row's results,
 //! which come back in row order, so the image does not depend on the threads.
+use bdpm_bdf::Transport;
 use bdpm_scene::Scene;
 use bdpm_settings::RenderSettings;
 use glam::{DVec3, Vec3};
@@ -177,17 +178,17 @@ impl PixelEstimator for FirstHits<'_> {
         let (scene, cam) = (self.scene, self.scene.camera());
         let (mut albedo, mut normal) = (DVec3::ZERO, DVec3::ZERO);
         for k in 0..self.spp {
-            let [jx, jy] = plan.sample(k).offset;
+            let mut c = plan.sample(k);
+            let [jx, jy] = c.offset;
             let dir = cam.ray_direction(plan.x as f32 + jx, plan.y as f32 + jy);
-            let Some(hit) = scene
-                .geometry()
-                .intersect(cam.position(), dir, f32::INFINITY)
-            else {
+            // The first non-delta surface, as denoisers expect: a mirror shows what it reflects.
+            let walk = scene
+                .walk_to_non_delta(cam.position(), dir, Transport::Radiance, || c.rng.uniform());
+            let Some(walk) = walk else {
                 continue;
             };
-            let wo = -dir;
-            let sh = scene.shade(&hit, wo);
-            let a = scene.bdf_at(&sh).albedo(sh.frame.to_local(wo));
+            let (sh, wo) = (walk.sh, walk.wo);
+            let a = walk.beta * scene.bdf_at(&sh).albedo(sh.frame.to_local(wo));
             albedo += a.clamp(Vec3::ZERO, Vec3::ONE).as_dvec3();
             normal += sh.frame.n.as_dvec3();
         }

@@ -99,7 +99,7 @@ impl Mix<'_> {
     ) {
         // Depth 0 is direct light at x, which the camera side adds exactly. (`bdd1` has no
         // BDD=0 part and never light-traces: `Mix::light_tracing` is false for it.)
-        if a.vertex.depth == 0 {
+        if a.vertex.depth == 0 || a.delta {
             return;
         }
         let Some(c) = connect(self.scene, &a.shading, a.vertex.incoming, a.power) else {

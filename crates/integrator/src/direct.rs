@@ -25,7 +25,7 @@
 //! stays an unbiased, independent, identically distributed estimate, and the per-pass
 //! variance layer stays exact.
 
-use bdpm_bdf::luminance;
+use bdpm_bdf::{Transport, luminance};
 use bdpm_geometry::Rng;
 use bdpm_scene::Scene;
 use bdpm_settings::RenderSettings;
@@ -54,22 +54,25 @@ impl DirectExtra {
                 self.corner[0] + a * self.size[0],
                 self.corner[1] + b * self.size[1],
             );
-            sum += direct_through(scene, x, y).as_dvec3();
+            let rng = &mut self.rng;
+            sum += direct_through(scene, x, y, || rng.uniform()).as_dvec3();
         }
         sum / (self.count + 1) as f64
     }
 }
 
-/// L₀ at the first surface the camera ray through image point (`x`, `y`) (pixels) meets,
-/// seen along that ray, W·m⁻²·sr⁻¹: a primary ray and shadow rays (0 if it meets nothing).
-pub(crate) fn direct_through(scene: &Scene, x: f32, y: f32) -> Vec3 {
+/// L₀ at the first non-delta surface the camera ray through image point (`x`, `y`) (pixels)
+/// meets, seen along that ray and through the mirrors and glass before it (their throughput
+/// included; `uniform` chooses their branches, [`Scene::walk_to_non_delta`]), W·m⁻²·sr⁻¹: a
+/// primary ray and shadow rays (0 if it meets nothing).
+pub(crate) fn direct_through(scene: &Scene, x: f32, y: f32, uniform: impl FnMut() -> f32) -> Vec3 {
     let cam = scene.camera();
     let dir = cam.ray_direction(x, y);
     scene
-        .geometry()
-        .intersect(cam.position(), dir, f32::INFINITY)
-        .map_or(Vec3::ZERO, |hit| {
-            scene.direct(&scene.shade(&hit, -dir), -dir)
+        .walk_to_non_delta(cam.position(), dir, Transport::Radiance, uniform)
+        .map_or(Vec3::ZERO, |w| {
+            let l0 = scene.direct(&w.sh, w.wo);
+            if w.vertices == 0 { l0 } else { w.beta * l0 }
         })
 }
 
@@ -138,8 +141,10 @@ impl DirectSamples {
 /// The standard deviation of L₀'s luminance over the [`PROBES`] of pixel (x, y),
 /// W·m⁻²·sr⁻¹ (a probe that meets nothing counts as 0).
 fn spread(scene: &Scene, x: u32, y: u32) -> f64 {
-    let values = PROBES
-        .map(|[dx, dy]| luminance(direct_through(scene, x as f32 + dx, y as f32 + dy)) as f64);
+    let values = PROBES.map(|[dx, dy]| {
+        // A fixed branch through glass: the probes use no random numbers.
+        luminance(direct_through(scene, x as f32 + dx, y as f32 + dy, || 0.5)) as f64
+    });
     let mean = values.iter().sum::<f64>() / 4.0;
     (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / 4.0).sqrt()
 }

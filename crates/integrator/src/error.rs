@@ -45,6 +45,12 @@ pub enum RenderError {
         "light_tracing = true: mode '{0}' then samples BDD=0 by light tracing, which the noise model and the weight maps (both of the merge at x0) do not describe; set light_tracing = false"
     )]
     LightTracing(&'static str),
+    /// Light tracing in BDD=0's place with mirrors or glass in the scene: it cannot sample the
+    /// paths seen through them (its connections end at the camera), which the merge at x₀ does.
+    #[error(
+        "light_tracing = true with mirror or dielectric materials: light tracing cannot sample what is seen through them (the merge at x0 can); set light_tracing = false"
+    )]
+    LightTracingDelta,
     /// The weights asked for read the pixel table's A and B, which the mode did not build.
     #[error(
         "the weights '{weights}' need the pixel table's A and B, which mode '{mode}' does not build"

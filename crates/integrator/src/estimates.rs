@@ -24,6 +24,15 @@ impl Techniques {
     pub fn total(&self) -> DVec3 {
         self.direct + self.x0_weighted + self.x1_weighted
     }
+
+    /// Multiplies the merges' parts by `beta`: the throughput of the mirrors and glass between
+    /// the camera and x₀ (the direct part has it already).
+    pub(crate) fn scale_merges(&mut self, beta: DVec3) {
+        self.x0_raw *= beta;
+        self.x0_weighted *= beta;
+        self.x1_raw *= beta;
+        self.x1_weighted *= beta;
+    }
 }
 
 /// Counts of weight evaluations, for the run report (method.md §4 asks that clamped c·B and

@@ -546,14 +546,11 @@ pub(crate) mod tests {
             Bdf::lambert(Vec3::new(0.7, 0.5, 0.3))
         };
         let materials = vec![
-            Material {
-                name: "lambert".into(),
-                bdf: Bdf::lambert(Vec3::splat(0.6)).expect("valid albedo"),
-            },
-            Material {
-                name: "back".into(),
-                bdf: back.expect("valid BDF"),
-            },
+            Material::new(
+                "lambert",
+                Bdf::lambert(Vec3::splat(0.6)).expect("valid albedo"),
+            ),
+            Material::new("back", back.expect("valid BDF")),
         ];
         let lights = vec![
             PointLight {

@@ -31,8 +31,10 @@ impl PixelEstimator for DirectPixels<'_> {
     fn pixel(&self, plan: &PixelPlan<'_>, _: &mut (), row: &mut EstimateRow) {
         let mut sum = DVec3::ZERO;
         for k in 0..self.spp {
-            let [jx, jy] = plan.sample(k).offset;
-            let mut l = direct_through(self.scene, plan.x as f32 + jx, plan.y as f32 + jy);
+            let mut c = plan.sample(k);
+            let [jx, jy] = c.offset;
+            let (x, y) = (plan.x as f32 + jx, plan.y as f32 + jy);
+            let mut l = direct_through(self.scene, x, y, || c.rng.uniform());
             if let Some(mut extra) = plan.direct_extra(k) {
                 l = extra.mean_with(self.scene, l).as_vec3();
             }
@@ -74,7 +76,8 @@ pub(crate) fn render_light_pass(
     };
     // Splats come back in photon order, so the sums below do not depend on the thread count.
     let splats: Vec<(u32, Vec3)> = trace_photons(scene, &options, |arrival, out| {
-        if arrival.vertex.depth == 0 {
+        // Nothing connects to a delta vertex: its BSDF is zero for every given pair.
+        if arrival.vertex.depth == 0 || arrival.delta {
             return;
         }
         let sh = &arrival.shading;

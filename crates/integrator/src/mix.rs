@@ -6,6 +6,7 @@ use bdpm_bdf::{Bdf, Outgoing, luminance};
 use bdpm_cache::RadianceCache;
 use bdpm_geometry::Hit;
 use bdpm_mis::{Budget, Heuristic, Needs, Pair, PixelTerms, Weigher, acceptance_area};
+use bdpm_photon::{Photon, PhotonMap};
 use bdpm_scene::{Scene, Shading};
 use glam::Vec3;
 
@@ -67,6 +68,9 @@ pub(crate) struct FirstVertex<'s> {
     pub(crate) acceptance_area: f64,
     /// `camis` only (else 0): p_C(x₀), the camera's density of x₀ within its pixel, m⁻².
     pub(crate) primary_density: f64,
+    /// The throughput of the mirrors and glass the camera ray passed before x₀ (per
+    /// channel), `None` where it met none.
+    pub(crate) beta: Option<Vec3>,
 }
 
 impl<'a> Mix<'a> {
@@ -101,7 +105,19 @@ impl<'a> Mix<'a> {
             bdf,
             acceptance_area,
             primary_density,
+            beta: None,
         })
+    }
+
+    /// True iff the photon `ph` of `map` left a delta vertex (a mirror or glass) last: its
+    /// path has no non-delta x₁ next to x₀, which BDD=1 cannot sample, so its merge at x₀
+    /// takes weight 1. Always false in a scene without delta materials (no read).
+    #[inline]
+    pub(crate) fn after_delta(&self, map: &PhotonMap, ph: &Photon) -> bool {
+        self.scene.has_delta()
+            && self
+                .scene
+                .is_delta(map.vertices()[ph.prev as usize].at.material)
     }
 
     /// `camis`'s acceptance area A (m²) and p_C(x₀) (m⁻²) for x₀ at `sh` seen along −u.

@@ -1,4 +1,5 @@
 //! The unidirectional reference: path tracing with next-event estimation to point lights.
+use bdpm_bdf::Transport;
 use bdpm_geometry::Rng;
 use bdpm_scene::Scene;
 use glam::Vec3;
@@ -42,6 +43,20 @@ pub(crate) fn trace_path_with_first(
         };
         let wo = -dir;
         let sh = scene.shade(&hit, wo);
+        if scene.is_delta(sh.material) {
+            // No direct light at a mirror or glass (a point light is never on its delta):
+            // follow its step; the sampler's numbers wait for the first non-delta vertex.
+            let Some(step) = scene.delta_step(&sh, wo, rng.uniform(), Transport::Radiance) else {
+                break;
+            };
+            beta *= step.weight;
+            if !survives(&mut beta, depth, roulette_depth, rng) {
+                break;
+            }
+            origin = scene.spawn(&sh, step.direction);
+            dir = step.direction;
+            continue;
+        }
         radiance += beta * scene.direct(&sh, wo);
         let wo_local = sh.frame.to_local(wo);
         if wo_local.z <= 0.0 {
@@ -57,15 +72,25 @@ pub(crate) fn trace_path_with_first(
             break;
         }
         beta *= s.weight;
-        if depth + 1 >= roulette_depth {
-            let q = beta.max_element().min(MAX_SURVIVAL);
-            if q <= 0.0 || rng.uniform() >= q {
-                break;
-            }
-            beta /= q;
+        if !survives(&mut beta, depth, roulette_depth, rng) {
+            break;
         }
         origin = scene.spawn(&sh, wi);
         dir = wi;
     }
     radiance
+}
+
+/// Russian roulette after scattering `depth` (from 0): from `roulette_depth` scatterings on,
+/// the path goes on with probability min(max channel of `beta`, 0.95), `beta` divided by it.
+#[inline]
+fn survives(beta: &mut Vec3, depth: u32, roulette_depth: u32, rng: &mut Rng) -> bool {
+    if depth + 1 >= roulette_depth {
+        let q = beta.max_element().min(MAX_SURVIVAL);
+        if q <= 0.0 || rng.uniform() >= q {
+            return false;
+        }
+        *beta /= q;
+    }
+    true
 }

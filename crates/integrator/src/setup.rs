@@ -46,6 +46,9 @@ impl<'a> Setup<'a> {
                 settings: (settings.width, settings.height),
             });
         }
+        if scene.has_delta() && settings.light_traced() {
+            return Err(RenderError::LightTracingDelta);
+        }
         let footprint = scene.pixel_footprint();
         let radius = resolve_radius(scene, settings, footprint)?;
         Ok(Self::with_radius(scene, settings, radius, footprint))
@@ -103,7 +106,12 @@ impl<'a> Setup<'a> {
     /// The mix of mode `heuristic` with this setup's constants and the radiance cache and
     /// radius map among `products`.
     pub(crate) fn mix<'p>(&'p self, heuristic: Heuristic, products: &'p Products) -> Mix<'p> {
-        let needs = heuristic.needs();
+        let mut needs = heuristic.needs();
+        // `bdd1` has no BDD=0 part to sample.
+        let light_tracing = self.settings.light_tracing && needs.photons_at_x0;
+        // BDD=1 cannot sample a path with a mirror or glass between x₀ and x₁ or the light:
+        // the merge at x₀ takes those whole (`Mix::after_delta`), in `bdd1` too.
+        needs.photons_at_x0 |= self.scene.has_delta();
         Mix {
             scene: self.scene,
             heuristic,
@@ -115,8 +123,7 @@ impl<'a> Setup<'a> {
             radius_map: products.get::<RadiusMap>(),
             cache: products.get::<RadianceCache>(),
             pilot: false,
-            // `bdd1` has no BDD=0 part to sample.
-            light_tracing: self.settings.light_tracing && needs.photons_at_x0,
+            light_tracing,
             #[cfg(feature = "test-hooks")]
             hooks: self.hooks,
         }

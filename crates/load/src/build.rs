@@ -3,7 +3,6 @@
 
 use std::path::{Path, PathBuf};
 
-use bdpm_bdf::Bdf;
 use bdpm_geometry::{
     BOX_FACES, Geometry, GeometryError, TriangleMesh, geodesic_sphere_triangle_count,
 };
@@ -12,159 +11,15 @@ use bdpm_scene::{Camera, CameraError, Material, PointLight, Scene, SceneError, S
 // Numbers in messages as written, the same way the settings' messages write them.
 use bdpm_settings::number_text as num;
 use bdpm_settings::{PartialSettings, RenderSettings};
-use glam::{Mat4, Vec2, Vec3};
+use glam::{Vec2, Vec3};
 
+use crate::ctx::Ctx;
 use crate::gltf_mesh::{Assets, Origin, load_gltf};
 use crate::materials::Materials;
 use crate::memory::{Budget, MemoryLimit};
 use crate::mesh_file::{Held, MeshFormat, MeshOrigin, load_mesh_file};
-use crate::schema::{CameraDef, MaterialDef, MeshFileDef, Point, SceneFile, ShapeDef, Triple};
+use crate::schema::{CameraDef, MaterialDef, MeshFileDef, Point, SceneFile, ShapeDef};
 use crate::{LoadError, LoadReport, LoadedScene, limits};
-
-/// The file being loaded: the source of every message's prefix.
-struct Ctx<'a> {
-    file: &'a Path,
-}
-
-impl Ctx<'_> {
-    fn bad(&self, field: impl Into<String>, message: impl Into<String>) -> LoadError {
-        LoadError::Invalid {
-            path: self.file.to_path_buf(),
-            field: field.into(),
-            message: message.into(),
-        }
-    }
-
-    fn required<T>(&self, field: &str, value: Option<T>, what: &str) -> Result<T, LoadError> {
-        value.ok_or_else(|| self.bad(field, format!("missing (required: {what})")))
-    }
-
-    /// A point as written, checked in the precision it was written in (so that 1e300 is
-    /// reported as 1e300, not as its f32 rounding `inf`) and converted to f32.
-    fn point(&self, field: &str, p: Point) -> Result<Vec3, LoadError> {
-        let text = point_text(p.0);
-        for c in p.0 {
-            if !c.is_finite() {
-                return Err(self.bad(field, format!("{text} is not finite (NaN or infinite)")));
-            }
-            if c.abs() > f32::MAX as f64 {
-                return Err(self.bad(
-                    field,
-                    format!(
-                        "{text}: {} is beyond the single-precision range (±3.4e38)",
-                        num(c)
-                    ),
-                ));
-            }
-        }
-        Ok(Vec3::new(p.0[0] as f32, p.0[1] as f32, p.0[2] as f32))
-    }
-
-    /// A positive length as written, converted to f32 ([`bdpm_settings::metres`], the check
-    /// the render settings' lengths get too).
-    fn positive(&self, field: &str, v: f64) -> Result<f32, LoadError> {
-        bdpm_settings::metres(v).map_err(|e| self.bad(field, e.to_string()))
-    }
-
-    /// A number as written in [lo, hi], compared in f64 (the bounds as written, not their
-    /// f32 roundings), converted to f32.
-    fn within(&self, field: &str, v: f64, lo: f64, hi: f64) -> Result<f32, LoadError> {
-        if v >= lo && v <= hi {
-            Ok(v as f32)
-        } else {
-            Err(self.bad(field, format!("{} is outside [{lo}, {hi}]", num(v))))
-        }
-    }
-
-    fn count<T: PartialOrd + std::fmt::Display>(
-        &self,
-        field: &str,
-        v: T,
-        lo: T,
-        hi: T,
-    ) -> Result<T, LoadError> {
-        if v >= lo && v <= hi {
-            Ok(v)
-        } else {
-            Err(self.bad(field, format!("{v} is outside [{lo}, {hi}]")))
-        }
-    }
-
-    /// Every channel of `t` finite and in [lo, hi] (checked as written, in f64).
-    fn channels(
-        &self,
-        field: &str,
-        t: Triple,
-        lo: f64,
-        hi: Option<f64>,
-    ) -> Result<Vec3, LoadError> {
-        let range = match hi {
-            Some(hi) => format!("is outside [{lo}, {hi}]"),
-            None => format!("must be >= {lo}"),
-        };
-        let channels = t.value.into_iter().zip(["red", "green", "blue"]);
-        for (c, name) in channels {
-            if c.is_finite() && c >= lo && hi.is_none_or(|hi| c <= hi) && c <= f32::MAX as f64 {
-                continue;
-            }
-            let range = if c.is_finite() && c > f32::MAX as f64 {
-                "is beyond the single-precision range (3.4e38)".to_string()
-            } else {
-                range.clone()
-            };
-            let message = if t.scalar {
-                format!("{} {range}", num(c))
-            } else if !c.is_finite() {
-                format!(
-                    "{name} channel {} is not finite (in {})",
-                    num(c),
-                    point_text(t.value)
-                )
-            } else {
-                format!(
-                    "{name} channel {} {range} (in {})",
-                    num(c),
-                    point_text(t.value)
-                )
-            };
-            return Err(self.bad(field, message));
-        }
-        Ok(Vec3::new(
-            t.value[0] as f32,
-            t.value[1] as f32,
-            t.value[2] as f32,
-        ))
-    }
-
-    /// `scale` (non-zero finite per axis, also in f32) then `translate` as one matrix.
-    fn placement(
-        &self,
-        prefix: &str,
-        scale: Option<Triple>,
-        translate: Option<Point>,
-    ) -> Result<Mat4, LoadError> {
-        let written = scale.map_or([1.0; 3], |s| s.value);
-        let s = Vec3::new(written[0] as f32, written[1] as f32, written[2] as f32);
-        if !(s.is_finite() && s.cmpne(Vec3::ZERO).all()) {
-            return Err(self.bad(
-                format!("{prefix}.scale"),
-                format!(
-                    "{} must be finite and non-zero on every axis (in single precision)",
-                    point_text(written)
-                ),
-            ));
-        }
-        let t = self.point(
-            &format!("{prefix}.translate"),
-            translate.unwrap_or(Point([0.0; 3])),
-        )?;
-        Ok(Mat4::from_translation(t) * Mat4::from_scale(s))
-    }
-}
-
-fn point_text(p: [f64; 3]) -> String {
-    format!("[{}, {}, {}]", num(p[0]), num(p[1]), num(p[2]))
-}
 
 pub(crate) fn build(
     file: SceneFile,
@@ -665,50 +520,8 @@ fn materials(
     let mut out = Materials::with_capacity(defs.len());
     for (name, def) in defs {
         let prefix = format!("material.{name}");
-        let kd = ctx.required(
-            &format!("{prefix}.kd"),
-            def.kd,
-            "Lambert albedo, a number or [r, g, b] in [0, 1]",
-        )?;
-        let kd = ctx.channels(&format!("{prefix}.kd"), kd, 0.0, Some(1.0))?;
-        let gr = match def.gr {
-            Some(gr) => ctx.channels(&format!("{prefix}.gr"), gr, 0.0, Some(1.0))?,
-            None => Vec3::ZERO,
-        };
-        let sum = kd + gr;
-        if sum.max_element() > 1.0 + 1e-6 {
-            return Err(ctx.bad(&prefix, format!("kd + gr = {sum} exceeds 1 (kd = {kd}, gr = {gr}); the surface would create energy")));
-        }
-        let bdf = if gr == Vec3::ZERO {
-            if let Some(d) = def.delta {
-                // A lobe width without a lobe is harmless but still must be a number.
-                let _ = ctx.within(
-                    &format!("{prefix}.delta"),
-                    d,
-                    limits::DELTA_MIN_DEGREES,
-                    limits::DELTA_MAX_DEGREES,
-                )?;
-            }
-            Bdf::lambert(kd)
-        } else {
-            let delta = ctx.required(
-                &format!("{prefix}.delta"),
-                def.delta,
-                "lobe width in degrees, needed because gr > 0",
-            )?;
-            let delta = ctx.within(
-                &format!("{prefix}.delta"),
-                delta,
-                limits::DELTA_MIN_DEGREES,
-                limits::DELTA_MAX_DEGREES,
-            )?;
-            Bdf::new(kd, gr, delta.to_radians())
-        }
-        .map_err(|e| ctx.bad(&prefix, e.to_string()))?;
-        out.add_named(Material {
-            name: name.clone(),
-            bdf,
-        });
+        let model = crate::material_types::model(ctx, &prefix, def)?;
+        out.add_named(Material::new(name.clone(), model));
     }
     Ok(out)
 }

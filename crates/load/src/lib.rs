@@ -46,11 +46,13 @@
 //! ```
 
 mod build;
+mod ctx;
 mod error;
 mod files;
 mod gltf_mesh;
 mod identity;
 mod image;
+mod material_types;
 mod materials;
 mod memory;
 mod mesh_file;

@@ -65,7 +65,7 @@ impl Materials {
     /// Adds a Lambert material made from a glTF file (not reachable by name from shapes).
     pub(crate) fn add_lambert(&mut self, name: String, kd: Vec3) -> Result<u32, String> {
         let bdf = Bdf::lambert(kd).map_err(|e| e.to_string())?;
-        self.list.push(Material { name, bdf });
+        self.list.push(Material::new(name, bdf));
         Ok(self.list.len() as u32 - 1)
     }
 

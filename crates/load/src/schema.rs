@@ -47,13 +47,40 @@ pub(crate) struct LightDef {
     pub(crate) flux: Option<Triple>,
 }
 
-/// One `[material.NAME]`.
+/// One `[material.NAME]`: `type` is `"smooth"` (the default: `kd`, `gr`, `delta`),
+/// `"mirror"` (`reflectance`, `eta` and `k`) or `"dielectric"` (`ior`, `reflect_tint`,
+/// `transmit_tint`).
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct MaterialDef {
+    #[serde(rename = "type")]
+    pub(crate) kind: Option<String>,
     pub(crate) kd: Option<Triple>,
     pub(crate) gr: Option<Triple>,
     pub(crate) delta: Option<f64>,
+    pub(crate) reflectance: Option<Triple>,
+    pub(crate) eta: Option<Triple>,
+    pub(crate) k: Option<Triple>,
+    pub(crate) ior: Option<f64>,
+    pub(crate) reflect_tint: Option<Triple>,
+    pub(crate) transmit_tint: Option<Triple>,
+}
+
+impl MaterialDef {
+    /// The keys given, by name, each with whether it is given.
+    pub(crate) fn keys(&self) -> [(&'static str, bool); 9] {
+        [
+            ("kd", self.kd.is_some()),
+            ("gr", self.gr.is_some()),
+            ("delta", self.delta.is_some()),
+            ("reflectance", self.reflectance.is_some()),
+            ("eta", self.eta.is_some()),
+            ("k", self.k.is_some()),
+            ("ior", self.ior.is_some()),
+            ("reflect_tint", self.reflect_tint.is_some()),
+            ("transmit_tint", self.transmit_tint.is_some()),
+        ]
+    }
 }
 
 /// One `[[shape]]`, told apart by its `type` key.

@@ -45,7 +45,7 @@
 //! let mesh = TriangleMesh::cuboid(Vec3::ZERO, Vec3::ONE, true, 0);
 //! let scene = Scene::new(
 //!     Geometry::new(mesh).unwrap(),
-//!     vec![Material { name: "white".into(), bdf: Bdf::lambert(Vec3::splat(0.5)).unwrap() }],
+//!     vec![Material::new("white", Bdf::lambert(Vec3::splat(0.5)).unwrap())],
 //!     vec![PointLight { position: Vec3::splat(0.5), flux: Vec3::ONE }],
 //!     Camera::look_at(Vec3::new(0.5, 0.5, 0.1), Vec3::new(0.5, 0.5, 1.0), Vec3::Y, 60.0, 8, 8).unwrap(),
 //! ).unwrap();

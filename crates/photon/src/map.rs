@@ -176,7 +176,7 @@ impl PhotonMap {
             },
             |(vertices, positions, photons, acc), a| {
                 visit(acc, a, vertices);
-                if a.vertex.depth >= 1 {
+                if a.vertex.depth >= 1 && !a.delta {
                     // The path went on from its previous arrival, which was therefore the last
                     // vertex pushed.
                     positions.push(a.vertex.at.p);

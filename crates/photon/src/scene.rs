@@ -35,6 +35,14 @@ pub trait PhotonScene: Sync {
     /// sampling failed. The tracer drops samples below the geometric normal itself.
     fn scatter(&self, sh: &Shading, incoming: Vec3, u: [f32; 3]) -> (f32, Option<Scatter>);
 
+    /// True iff the surface at `sh` is a delta one (a mirror or a dielectric): the walk then
+    /// stores no photon there, takes [`Self::scatter`]'s direction on either side of the
+    /// surface (a refraction crosses it), and asks no light visibility. The default: never.
+    fn is_delta(&self, sh: &Shading) -> bool {
+        let _ = sh;
+        false
+    }
+
     /// The origin of a ray leaving `sh` along `dir`, pushed off the surface so that it does
     /// not hit it again, m.
     fn spawn(&self, sh: &Shading, dir: Vec3) -> Vec3;
@@ -54,7 +62,8 @@ pub trait PhotonScene: Sync {
     }
 }
 
-/// The BDF sample drawn at an arrival (before the roulette decision).
+/// The BDF sample drawn at an arrival (before the roulette decision). At a delta vertex
+/// ([`PhotonScene::is_delta`]) `f` and `pdf` are 0 and `weight` is the delta step's.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Scatter {
     /// Unit world direction leaving the surface, on the side of the vertex's

@@ -136,6 +136,9 @@ pub struct PhotonArrival {
     pub scatter: Option<Scatter>,
     /// True iff the photon survived the roulette and the depth cap and left along `scatter`.
     pub continued: bool,
+    /// True iff the vertex is a delta one ([`PhotonScene::is_delta`]): no photon is stored
+    /// there and nothing connects to it; `scatter` is the delta step.
+    pub delta: bool,
 }
 
 /// Traces the pass described by `options` in parallel and returns the records that `visit`
@@ -235,6 +238,7 @@ fn trace_one<S: PhotonScene + ?Sized>(
         // view of one arrival never shifts the stream of another.
         let u_rr = rng.uniform();
         let u_bdf = rng.uniform3();
+        let delta = scene.is_delta(&sh);
         let (survival, sample) = scene.scatter(&sh, incoming, u_bdf);
         let mut vertex = PathVertex {
             // The visibility bits are filled below once it is known whether the path goes on.
@@ -245,12 +249,18 @@ fn trace_one<S: PhotonScene + ?Sized>(
             survival,
         };
         // The shading normal may disagree with the geometric one; a direction that would pass
-        // through the surface carries no light (no transmission in our models).
-        let scatter = sample.filter(|s| sh.ng.dot(s.direction) > 0.0);
+        // through the surface carries no light (no transmission in the non-delta models). A
+        // delta step has been checked by the scene and may refract through.
+        let scatter = if delta {
+            sample
+        } else {
+            sample.filter(|s| sh.ng.dot(s.direction) > 0.0)
+        };
         let continued = scatter.is_some() && u_rr < survival && depth < max_depth;
         // Only a vertex the path leaves is some photon's previous vertex, the one place the
-        // weights read light visibility: a path's last vertex would waste its shadow rays.
-        if options.light_visibility && continued {
+        // weights read light visibility: a path's last vertex would waste its shadow rays (and
+        // a delta vertex is nobody's y_p the weights read).
+        if options.light_visibility && continued && !delta {
             vertex.at.lights = if depth == 0 {
                 scene.visible_light_mask_reached(&sh, e.light)
             } else {
@@ -265,6 +275,7 @@ fn trace_one<S: PhotonScene + ?Sized>(
             shading: sh,
             scatter,
             continued,
+            delta,
         });
         let Some(s) = scatter.filter(|_| continued) else {
             break;

@@ -26,11 +26,13 @@
 //! ```
 
 mod camera;
+mod delta;
 mod texture;
 mod traits;
 mod vertex;
 
 pub use camera::Camera;
+pub use delta::{DeltaStep, DeltaWalk, MAX_DELTA_CHAIN};
 pub use texture::{SceneTextures, TexelImage, Texture, TextureError, Wrap, srgb_to_linear};
 // The plain data the photon tracer, the cache and the weights share lives in bdpm-core.
 pub use bdpm_core::{MASKED_LIGHTS, PointLight, Shading, WeightVertex};
@@ -43,12 +45,43 @@ use bdpm_geometry::{Frame, Geometry, Hit};
 use glam::{Vec2, Vec3};
 
 /// A named scattering model.
+///
+/// Invariant (kept by [`Material::new`]): a smooth material has `delta: None` and its model in
+/// `bdf`; a mirror or dielectric has its model in `delta` and a black `bdf` (kd = 0), so that
+/// code which only knows non-delta surfaces sees it as absorbing, never as a wrong reflector.
 #[derive(Clone, Debug)]
 pub struct Material {
     /// Name from the scene file (for reports and overrides).
     pub name: String,
-    /// The model.
+    /// The non-delta model; black for a delta material.
     pub bdf: Bdf,
+    /// The delta model (a mirror or a dielectric), or `None` for a smooth material.
+    pub delta: Option<bdpm_bdf::Material>,
+}
+
+impl Material {
+    /// A material named `name` of the model `model`: smooth (a [`Bdf`]) or delta.
+    pub fn new(name: impl Into<String>, model: impl Into<bdpm_bdf::Material>) -> Material {
+        let name = name.into();
+        match model.into() {
+            bdpm_bdf::Material::Smooth(bdf) => Material {
+                name,
+                bdf,
+                delta: None,
+            },
+            delta => Material {
+                name,
+                bdf: Bdf::lambert(Vec3::ZERO).expect("kd = 0 is a valid Lambert albedo"),
+                delta: Some(delta),
+            },
+        }
+    }
+
+    /// True iff the material is a mirror or a dielectric.
+    #[inline]
+    pub fn is_delta(&self) -> bool {
+        self.delta.is_some()
+    }
 }
 
 /// Why a set of parts cannot form a scene.
@@ -199,6 +232,10 @@ pub struct Scene {
     camera: Camera,
     light_cdf: Vec<f32>,
     textures: SceneTextures,
+    /// Per material index: is it a delta material ([`Material::is_delta`]).
+    delta: Vec<bool>,
+    /// Whether any material is a delta one: scenes without keep every path as it was.
+    has_delta: bool,
 }
 
 impl Scene {
@@ -210,10 +247,7 @@ impl Scene {
         lights: Vec<PointLight>,
         camera: Camera,
     ) -> Result<Scene, SceneError> {
-        let material = Material {
-            name: "material".into(),
-            bdf,
-        };
+        let material = Material::new("material", bdf);
         Scene::new(geometry, vec![material], lights, camera)
     }
 
@@ -257,8 +291,11 @@ impl Scene {
             l.position -= origin;
         }
         camera.position -= origin;
+        let delta: Vec<bool> = materials.iter().map(Material::is_delta).collect();
         Ok(Scene {
             geometry,
+            has_delta: delta.contains(&true),
+            delta,
             materials,
             lights,
             camera,
@@ -459,9 +496,22 @@ impl Scene {
         self.lights.iter().map(|l| l.flux).sum()
     }
 
-    /// True when every material is pure Lambert (the radiance is then isotropic per point).
+    /// True when every non-delta material is pure Lambert (the radiance leaving every surface
+    /// that stores photons is then isotropic per point); mirrors and dielectrics store none.
     pub fn all_lambert(&self) -> bool {
         self.materials.iter().all(|m| m.bdf.is_lambert())
+    }
+
+    /// True iff some material is a mirror or a dielectric.
+    #[inline]
+    pub fn has_delta(&self) -> bool {
+        self.has_delta
+    }
+
+    /// True iff material index `material` is a mirror or a dielectric.
+    #[inline]
+    pub fn is_delta(&self, material: u32) -> bool {
+        self.has_delta && self.delta[material as usize]
     }
 
     /// Picks a light with probability proportional to its flux luminance: (index, probability).

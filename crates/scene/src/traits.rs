@@ -2,7 +2,7 @@
 //! here, with the scene, so that `bdpm-photon` and `bdpm-cache` need neither the BVH nor the
 //! BDF models.
 
-use bdpm_bdf::{luminance, survival_at};
+use bdpm_bdf::{Transport, luminance, survival_at};
 use bdpm_cache::CacheSurfaces;
 use bdpm_photon::{PhotonScene, Scatter};
 use glam::Vec3;
@@ -30,7 +30,15 @@ impl PhotonScene for Scene {
     }
 
     #[inline]
+    fn is_delta(&self, sh: &Shading) -> bool {
+        Scene::is_delta(self, sh.material)
+    }
+
+    #[inline]
     fn scatter(&self, sh: &Shading, incoming: Vec3, u: [f32; 3]) -> (f32, Option<Scatter>) {
+        if Scene::is_delta(self, sh.material) {
+            return self.scatter_delta(sh, incoming, u[0]);
+        }
         let bdf = self.bdf_at(sh);
         let in_local = bdf.outgoing(sh.frame.to_local(incoming));
         let survival = survival_at(&bdf, &in_local);
@@ -56,6 +64,25 @@ impl PhotonScene for Scene {
     #[inline]
     fn visible_light_mask_reached(&self, sh: &Shading, light: usize) -> u32 {
         Scene::visible_light_mask_reached(self, sh, light)
+    }
+}
+
+impl Scene {
+    /// [`PhotonScene::scatter`] at a delta vertex: survival q = the largest channel of the
+    /// material's albedo for `incoming` (1 for clear glass and white mirrors, so lossless
+    /// chains are never rouletted), and the delta step as a [`Scatter`] whose `f` and `pdf`
+    /// are 0 (a delta has no value per steradian).
+    fn scatter_delta(&self, sh: &Shading, incoming: Vec3, u: f32) -> (f32, Option<Scatter>) {
+        let albedo = self.delta_albedo(sh, incoming).unwrap_or(Vec3::ZERO);
+        let survival = albedo.max_element().clamp(0.0, 1.0);
+        let step = self.delta_step(sh, incoming, u, Transport::Importance);
+        let scatter = step.map(|s| Scatter {
+            direction: s.direction,
+            f: Vec3::ZERO,
+            pdf: 0.0,
+            weight: s.weight,
+        });
+        (survival, scatter)
     }
 }
 

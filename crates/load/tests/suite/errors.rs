@@ -445,3 +445,65 @@ fn radius_in_pixels_loads_and_bad_text_is_named() {
         assert!(m.contains("render.radius: ") && m.contains(why), "{v}: {m}");
     }
 }
+
+#[test]
+fn mirror_and_dielectric_materials_load_as_delta_materials() {
+    for (text, delta) in [
+        ("type = \"mirror\"", true),
+        ("type = \"mirror\"\nreflectance = 0.9", true),
+        (
+            "type = \"mirror\"\neta = [0.2, 0.4, 1.4]\nk = [4.0, 2.4, 1.6]",
+            true,
+        ),
+        ("type = \"dielectric\"\nior = 1.5", true),
+        (
+            "type = \"dielectric\"\nior = 1.33\ntransmit_tint = [0.9, 1.0, 0.9]",
+            true,
+        ),
+        ("type = \"smooth\"\nkd = 0.3", false),
+    ] {
+        let s = load_scene_str(
+            &with("kd = [0.6, 0.1, 0.1]", text),
+            Path::new("scenes"),
+            Path::new("scenes/bad.toml"),
+        )
+        .unwrap_or_else(|e| panic!("{text}: {e}"));
+        assert_eq!(s.scene.is_delta(0), delta, "{text}");
+        assert_eq!(s.scene.has_delta(), delta, "{text}");
+    }
+}
+
+#[test]
+fn material_types_refuse_what_they_do_not_read() {
+    let cases = [
+        (
+            "type = \"metal\"",
+            "material.red.type: \"metal\" is not a material type (one of: smooth, mirror, dielectric)",
+        ),
+        (
+            "type = \"mirror\"\nkd = 0.5",
+            "material.red.kd: a mirror material has no key kd (its keys: reflectance, eta, k)",
+        ),
+        ("type = \"dielectric\"", "material.red.ior: missing"),
+        (
+            "type = \"dielectric\"\nior = 0.0",
+            "material.red.ior: 0 is outside [0.01",
+        ),
+        (
+            "type = \"mirror\"\neta = 1.5",
+            "material.red.k: missing (a conductor's index needs both eta and k",
+        ),
+        (
+            "type = \"mirror\"\nreflectance = 1.5",
+            "material.red.reflectance",
+        ),
+        (
+            "kd = 0.5\nior = 1.5",
+            "material.red.ior: a smooth material has no key ior",
+        ),
+    ];
+    for (text, expected) in cases {
+        let msg = error_of(&with("kd = [0.6, 0.1, 0.1]", text));
+        assert!(msg.contains(expected), "{text}: {msg}");
+    }
+}

@@ -23,10 +23,7 @@ pub(crate) fn scene(mesh: TriangleMesh, bdfs: Vec<Bdf>, lights: &[(Vec3, Vec3)])
     let materials = bdfs
         .into_iter()
         .enumerate()
-        .map(|(i, bdf)| Material {
-            name: format!("m{i}"),
-            bdf,
-        })
+        .map(|(i, bdf)| Material::new(format!("m{i}"), bdf))
         .collect();
     let lights = lights
         .iter()

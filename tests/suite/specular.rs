@@ -1,0 +1,187 @@
+//! Mirrors and glass in the BDPM modes (issue 45): a planar mirror against the room it
+//! mirrors, and a glass sphere's caustic against the `light` reference.
+
+use std::path::Path;
+
+use bdpm_integrator::{Film, RenderSettings};
+use bdpm_load::load_scene_str;
+use bdpm_scene::Scene;
+use bdpm_suite::{films_agree, render, with_mode};
+
+/// A `[[shape]]` quad of `material` through four corners.
+fn quad(material: &str, corners: [[f64; 3]; 4]) -> String {
+    let v: Vec<String> = corners
+        .iter()
+        .map(|c| format!("[{}, {}, {}]", c[0], c[1], c[2]))
+        .collect();
+    format!(
+        "[[shape]]\ntype = \"quad\"\nmaterial = \"{material}\"\nvertices = [{}]\n\n",
+        v.join(", ")
+    )
+}
+
+/// The box x, y ∈ [0, 1], z ∈ [z0, z1] of quads: floor, ceiling and the x walls of `walls`,
+/// the end walls z = z0 of `near` and z = z1 of `walls`.
+fn room(z0: f64, z1: f64, near: &str) -> String {
+    let w = "walls";
+    [
+        quad(w, [[0., 0., z0], [1., 0., z0], [1., 0., z1], [0., 0., z1]]),
+        quad(w, [[0., 1., z0], [0., 1., z1], [1., 1., z1], [1., 1., z0]]),
+        quad(w, [[0., 0., z0], [0., 0., z1], [0., 1., z1], [0., 1., z0]]),
+        quad(w, [[1., 0., z0], [1., 1., z0], [1., 1., z1], [1., 0., z1]]),
+        quad(
+            near,
+            [[0., 0., z0], [0., 1., z0], [1., 1., z0], [1., 0., z0]],
+        ),
+        quad(w, [[0., 0., z1], [1., 0., z1], [1., 1., z1], [0., 1., z1]]),
+    ]
+    .concat()
+}
+
+fn light(p: [f64; 3]) -> String {
+    format!(
+        "[[light]]\nposition = [{}, {}, {}]\nflux = [1.0, 1.0, 1.0]\n\n",
+        p[0], p[1], p[2]
+    )
+}
+
+const RENDER: &str = "[render]\nresolution = [24, 24]\nseed = 3\nradius = 0.004\n\n";
+
+fn load(text: &str) -> (Scene, RenderSettings) {
+    let loaded = load_scene_str(text, Path::new("."), Path::new("inline.toml"))
+        .unwrap_or_else(|e| panic!("{e}"));
+    (loaded.scene, loaded.settings)
+}
+
+/// A room whose wall z = 0 is a perfect mirror, seen from inside, looking at the mirror, and
+/// the room twice as long (z ∈ [−1, 1]) with the mirror image of the light added: the camera
+/// sees the same radiance in both, pixel by pixel (unfolding a perfect planar mirror). It
+/// takes every path kind through the mirror: seen in it (…–D–S–E), lit through it (L–S–D…),
+/// and a mirror between x₀ and x₁, which only the merge at x₀ samples.
+#[test]
+fn a_planar_mirror_shows_the_room_it_mirrors() {
+    let camera = "[camera]\nposition = [0.5, 0.5, 0.9]\nlook_at = [0.5, 0.45, 0.0]\n\
+                  up = [0.0, 1.0, 0.0]\nvfov = 70\n\n";
+    let walls = "[material.walls]\nkd = 0.5\n\n";
+    let mirror = "[material.mirror]\ntype = \"mirror\"\n\n";
+    let lit = [0.3, 0.75, 0.55];
+    let mirrored = format!(
+        "{RENDER}{camera}{}{walls}{mirror}{}",
+        light(lit),
+        room(0.0, 1.0, "mirror")
+    );
+    let unfolded = format!(
+        "{RENDER}{camera}{}{}{walls}{}",
+        light(lit),
+        light([lit[0], lit[1], -lit[2]]),
+        room(-1.0, 1.0, "walls")
+    );
+    let (scene_m, settings) = load(&mirrored);
+    let (scene_u, _) = load(&unfolded);
+    let mut failures = Vec::new();
+    for mode in ["bdd0", "bdd1", "balance", "optimal"] {
+        let s = with_mode(&settings, mode, 16, 4, 60_000);
+        let (a, b) = (render(&scene_m, &s), render(&scene_u, &s));
+        let (within, diff, se) = films_agree(&a, &b, 4.0);
+        eprintln!("{mode:>8}: within {within:.4}, mean {diff:+.4} ± {se:.4}");
+        assert_eq!(a.dropped() + b.dropped(), 0, "{mode}");
+        if !(within >= 0.98 && diff.abs() < (4.0 * se).max(0.005) && se < 0.01) {
+            failures.push(format!("{mode}: within {within}, mean {diff:+} ± {se}"));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// Whether any of the centre and corners of pixel (x, y) sees the glass first.
+fn sees_glass(scene: &Scene, x: u32, y: u32) -> bool {
+    let cam = scene.camera();
+    [(0.5, 0.5), (0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
+        .iter()
+        .any(|(dx, dy)| {
+            let d = cam.ray_direction(x as f32 + dx, y as f32 + dy);
+            scene
+                .geometry()
+                .intersect(cam.position(), d, f32::INFINITY)
+                .is_some_and(|h| scene.is_delta(h.material))
+        })
+}
+
+/// [`films_agree`] over the pixels where `keep` is true: the fraction of their channels within
+/// `k` combined standard errors, and the relative difference of the means with its error.
+fn agree_where(a: &Film, b: &Film, keep: &[bool], k: f64) -> (f64, f64, f64) {
+    let (ma, mb) = (a.mean(), b.mean());
+    let (sa, sb) = (a.standard_error(), b.standard_error());
+    let (mut within, mut total) = (0usize, 0usize);
+    let (mut sum_a, mut sum_b, mut var) = (0.0f64, 0.0f64, 0.0f64);
+    for i in (0..ma.len()).filter(|&i| keep[i]) {
+        for c in 0..3 {
+            let s2 = sa[i][c].powi(2) + sb[i][c].powi(2);
+            within += usize::from((ma[i][c] - mb[i][c]).abs() <= k * s2.sqrt());
+            total += 1;
+            sum_a += ma[i][c];
+            sum_b += mb[i][c];
+            var += s2;
+        }
+    }
+    (
+        within as f64 / total as f64,
+        (sum_a - sum_b) / sum_b,
+        var.sqrt() / sum_b,
+    )
+}
+
+/// A glass sphere over the floor of a closed room focuses the light onto the floor: every
+/// BDPM mode (merging the caustic at x₀, or at x₁ when a wall sees it) agrees with the `light`
+/// reference (light tracing connects each photon's floor arrival to the camera, code that
+/// shares nothing with the merges) wherever the camera sees no glass; and the modes agree
+/// with each other through the glass.
+#[test]
+fn a_glass_sphere_caustic_agrees_with_light_tracing() {
+    let camera = "[camera]\nposition = [0.5, 0.6, 0.98]\nlook_at = [0.5, 0.1, 0.4]\n\
+                  up = [0.0, 1.0, 0.0]\nvfov = 60\n\n";
+    let materials = "[material.walls]\nkd = 0.5\n\n\
+                     [material.glass]\ntype = \"dielectric\"\nior = 1.5\n\n";
+    let sphere = "[[shape]]\ntype = \"sphere\"\ncenter = [0.5, 0.25, 0.45]\nradius = 0.2\n\
+                  subdivisions = 16\nmaterial = \"glass\"\n\n";
+    let text = format!(
+        "{RENDER}{camera}{}{materials}{sphere}{}",
+        light([0.5, 0.85, 0.45]),
+        room(0.0, 1.0, "walls")
+    );
+    let (scene, settings) = load(&text);
+    let (w, h) = (scene.camera().width(), scene.camera().height());
+    let no_glass: Vec<bool> = (0..w * h)
+        .map(|i| !sees_glass(&scene, i % w, i / w))
+        .collect();
+    let glass = no_glass.iter().filter(|k| !**k).count();
+    assert!(glass > 20 && glass < 200, "{glass} pixels see the glass");
+    let reference = render(&scene, &with_mode(&settings, "light", 48, 4, 100_000));
+    let bdd0 = render(&scene, &with_mode(&settings, "bdd0", 32, 4, 100_000));
+    let every = vec![true; (w * h) as usize];
+    let mut failures = Vec::new();
+    for mode in ["bdd0", "bdd1", "balance", "optimal"] {
+        let other;
+        let film = if mode == "bdd0" {
+            &bdd0
+        } else {
+            other = render(&scene, &with_mode(&settings, mode, 32, 4, 100_000));
+            &other
+        };
+        assert_eq!(film.dropped(), 0, "{mode}");
+        let (within, diff, se) = agree_where(film, &reference, &no_glass, 4.0);
+        eprintln!("{mode:>8} vs light: within {within:.4}, mean {diff:+.4} ± {se:.4}");
+        if !(within >= 0.98 && diff.abs() < (4.0 * se).max(0.005) && se < 0.01) {
+            failures.push(format!(
+                "{mode} vs light: within {within}, mean {diff:+} ± {se}"
+            ));
+        }
+        let (within, diff, se) = agree_where(film, &bdd0, &every, 4.0);
+        eprintln!("{mode:>8} vs bdd0: within {within:.4}, mean {diff:+.4} ± {se:.4}");
+        if mode != "bdd0" && !(within >= 0.98 && diff.abs() < (4.0 * se).max(0.005)) {
+            failures.push(format!(
+                "{mode} vs bdd0: within {within}, mean {diff:+} ± {se}"
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
