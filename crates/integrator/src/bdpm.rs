@@ -185,13 +185,10 @@ impl<'a> Mix<'a> {
         let scene = self.scene;
         let cam = &scene.camera();
         let dir = cam.ray_direction(job.x, job.y);
-        // Through mirrors and glass to x₀ (a scene without them: the primary hit, beta = 1).
-        let rng = &mut job.rng;
-        let walk =
-            scene.walk_to_non_delta(cam.position(), dir, Transport::Radiance, || rng.uniform());
-        let direct = walk.as_ref().map_or(Vec3::ZERO, |w| {
-            let l0 = scene.direct(&w.sh, w.wo);
-            if w.vertices == 0 { l0 } else { w.beta * l0 }
+        let (sh0, u, beta) = self.camera_x0(dir, &mut job.rng);
+        let direct = sh0.as_ref().map_or(Vec3::ZERO, |sh| {
+            let l0 = scene.direct(sh, u);
+            beta.map_or(l0, |b| b * l0)
         });
         slot.out.techniques.direct = match plan.direct_extra(job.k) {
             // The mean of L₀ over the sample's point and the further ones, whether or not
@@ -199,13 +196,13 @@ impl<'a> Mix<'a> {
             Some(mut extra) => extra.mean_with(scene, direct),
             None => direct.as_dvec3(),
         };
-        let Some(walk) = walk else {
+        let Some(sh0) = sh0 else {
             return;
         };
-        let Some(mut x0) = self.first_vertex_shaded(walk.sh, walk.wo) else {
+        let Some(mut x0) = self.first_vertex_shaded(sh0, u) else {
             return;
         };
-        x0.beta = (walk.vertices > 0).then_some(walk.beta);
+        x0.beta = beta;
         let r = self.radius * plan.radius_scale;
         if self.merges_at_x0() {
             map.restart_query_within(&mut slot.query0, x0.sh.p, r);
@@ -223,6 +220,24 @@ impl<'a> Mix<'a> {
             );
         }
         slot.x0 = Some(x0);
+    }
+
+    /// The camera ray along `dir` to x₀: its shading, the direction back along the ray that
+    /// reached it, and the throughput of the mirrors and glass before it (`None` where there
+    /// were none). Through delta vertices only in a scene that has them (`rng` chooses their
+    /// branches); otherwise the primary hit alone, as cheaply as before there were any.
+    #[inline]
+    fn camera_x0(&self, dir: Vec3, rng: &mut Rng) -> (Option<Shading>, Vec3, Option<Vec3>) {
+        let scene = self.scene;
+        let origin = scene.camera().position();
+        if !scene.has_delta() {
+            let hit = scene.geometry().intersect(origin, dir, f32::INFINITY);
+            return (hit.map(|hit| scene.shade(&hit, -dir)), -dir, None);
+        }
+        match scene.walk_to_non_delta(origin, dir, Transport::Radiance, || rng.uniform()) {
+            Some(w) => (Some(w.sh), w.wo, (w.vertices > 0).then_some(w.beta)),
+            None => (None, -dir, None),
+        }
     }
 
     /// BDD=1 up to its gather: sample v at x₀ (never absorbed), find x₁, weigh the one-bounce

@@ -53,6 +53,8 @@ impl Scene {
     /// A dielectric's exterior is the side the triangle's own normal faces (outward for the
     /// closed shapes of a scene file): `sh`'s frame faces `wo`, so it is turned back where
     /// `wo` lies inside.
+    #[cold]
+    #[inline(never)]
     pub fn delta_step(
         &self,
         sh: &Shading,

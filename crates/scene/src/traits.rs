@@ -71,7 +71,10 @@ impl Scene {
     /// [`PhotonScene::scatter`] at a delta vertex: survival q = the largest channel of the
     /// material's albedo for `incoming` (1 for clear glass and white mirrors, so lossless
     /// chains are never rouletted), and the delta step as a [`Scatter`] whose `f` and `pdf`
-    /// are 0 (a delta has no value per steradian).
+    /// are 0 (a delta has no value per steradian). Out of line and cold: inlined into the photon
+    /// walk it cost scenes without delta materials 0.7 % of a pass's instructions.
+    #[cold]
+    #[inline(never)]
     fn scatter_delta(&self, sh: &Shading, incoming: Vec3, u: f32) -> (f32, Option<Scatter>) {
         let albedo = self.delta_albedo(sh, incoming).unwrap_or(Vec3::ZERO);
         let survival = albedo.max_element().clamp(0.0, 1.0);
