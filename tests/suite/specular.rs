@@ -60,9 +60,25 @@ fn load(text: &str) -> (Scene, RenderSettings) {
 /// and a mirror between x₀ and x₁, which only the merge at x₀ samples.
 #[test]
 fn a_planar_mirror_shows_the_room_it_mirrors() {
+    mirror_against_unfolded("kd = 0.5", &["bdd0", "bdd1", "balance", "optimal"]);
+}
+
+/// The same with glossy walls: a glossy x₀ sees x₁ through the mirror, and BDD=1 follows the
+/// mirror to it (with `Mix::chain_w1`, the lobe's share of x₀'s albedo; all of it in `bdd1`).
+#[test]
+fn a_planar_mirror_shows_the_glossy_room_it_mirrors() {
+    mirror_against_unfolded(
+        "kd = 0.25\ngr = 0.5\ndelta = 12",
+        &["bdd1", "balance", "optimal"],
+    );
+}
+
+/// Renders the mirror room and its unfolding with walls of `walls` (a material's keys) in each
+/// of `modes` and checks that they agree pixel by pixel.
+fn mirror_against_unfolded(walls: &str, modes: &[&str]) {
     let camera = "[camera]\nposition = [0.5, 0.5, 0.9]\nlook_at = [0.5, 0.45, 0.0]\n\
                   up = [0.0, 1.0, 0.0]\nvfov = 70\n\n";
-    let walls = "[material.walls]\nkd = 0.5\n\n";
+    let walls = format!("[material.walls]\n{walls}\n\n");
     let mirror = "[material.mirror]\ntype = \"mirror\"\n\n";
     let lit = [0.3, 0.75, 0.55];
     let mirrored = format!(
@@ -79,7 +95,7 @@ fn a_planar_mirror_shows_the_room_it_mirrors() {
     let (scene_m, settings) = load(&mirrored);
     let (scene_u, _) = load(&unfolded);
     let mut failures = Vec::new();
-    for mode in ["bdd0", "bdd1", "balance", "optimal"] {
+    for &mode in modes {
         let s = with_mode(&settings, mode, 16, 4, 60_000);
         let (a, b) = (render(&scene_m, &s), render(&scene_u, &s));
         let (within, diff, se) = films_agree(&a, &b, 4.0);

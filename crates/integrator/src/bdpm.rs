@@ -11,7 +11,7 @@ use glam::Vec3;
 use crate::correction::CandidateSums;
 use crate::estimates::{Techniques, WeightStats};
 use crate::inputs::Arrival;
-use crate::mix::{FirstVertex, Mix};
+use crate::mix::{DeltaChain, FirstVertex, Mix};
 use crate::plan::PixelPlan;
 
 /// Camera samples that [`Mix::sample_batch`] takes together: enough for each sample's
@@ -102,6 +102,9 @@ struct Second {
     weight: Vec3,
     direct_raw: Vec3,
     direct_weighted: Vec3,
+    /// True when x₁ was reached through delta vertices: every path through it takes
+    /// `w_const` ([`Mix::chain_w1`]), and `v` is the last segment's direction.
+    chain: bool,
 }
 
 impl<'a> Mix<'a> {
@@ -213,7 +216,7 @@ impl<'a> Mix<'a> {
             slot.second = self.start_second(
                 &x0,
                 map,
-                (bdf_u, r),
+                (bdf_u, r, &mut job.rng),
                 weights,
                 &mut slot.query1,
                 &mut slot.out.pilot,
@@ -246,7 +249,7 @@ impl<'a> Mix<'a> {
         &self,
         x0: &FirstVertex<'_>,
         map: &PhotonMap,
-        (u, r): ([f32; 3], f32),
+        (u, r, rng): ([f32; 3], f32, &mut Rng),
         (weigher, stats): (&Weigher, &mut WeightStats),
         query: &mut PhotonQuery,
         pilot: &mut CandidateSums,
@@ -260,10 +263,10 @@ impl<'a> Mix<'a> {
         let hit1 = scene
             .geometry()
             .intersect(scene.spawn(&x0.sh, v), v, f32::INFINITY)?;
-        // A mirror or glass between x₀ and x₁: BDD=1 does not sample such paths (w₁ = 0), the
-        // merge at x₀ takes them whole (`Mix::after_delta`).
+        // A mirror or glass between x₀ and x₁: through it, with the weight of such paths.
         if scene.is_delta(hit1.material) {
-            return None;
+            let through = (s.weight, v, r);
+            return self.second_through_delta(x0, map, through, rng, query, pilot);
         }
         // Started before the shadow ray and the weight's inputs, which hide its first fetch.
         map.restart_query_within(query, hit1.p, r);
@@ -327,6 +330,48 @@ impl<'a> Mix<'a> {
             weight: s.weight,
             direct_raw,
             direct_weighted,
+            chain: false,
+        })
+    }
+
+    /// BDD=1 through the delta vertices the direction `v` sampled at x₀ (with weight `e`,
+    /// f·cos/p) meets first, to the first non-delta x₁ (`rng` chooses the branches): x₁'s
+    /// direct light and the start of its gather, every path weighted by [`Mix::chain_w1`].
+    /// `None` where that weight is 0 (nothing traced) or the walk ends.
+    fn second_through_delta(
+        &self,
+        x0: &FirstVertex<'_>,
+        map: &PhotonMap,
+        (e, v, r): (Vec3, Vec3, f32),
+        rng: &mut Rng,
+        query: &mut PhotonQuery,
+        pilot: &mut CandidateSums,
+    ) -> Option<Second> {
+        let w = self.chain_w1(x0);
+        if w <= 0.0 {
+            return None;
+        }
+        let scene = self.scene;
+        let origin = scene.spawn(&x0.sh, v);
+        let walk = scene.walk_to_non_delta(origin, v, Transport::Radiance, || rng.uniform())?;
+        let sh1 = walk.sh;
+        map.restart_query_within(query, sh1.p, r);
+        let direct_raw = scene.direct(&sh1, walk.wo);
+        let weight = e * walk.beta;
+        if self.pilot && direct_raw != Vec3::ZERO {
+            pilot.add(f64::from(luminance(weight * direct_raw)), w, true);
+        }
+        Some(Second {
+            sh1,
+            x1: WeightVertex::at(&sh1, 0),
+            v: -walk.wo,
+            dist2: 0.0,
+            pair: Pair::default(),
+            w_const: w,
+            weight,
+            direct_raw,
+            direct_weighted: direct_raw * w as f32,
+            chain: true,
         })
     }
 
@@ -352,10 +397,11 @@ impl<'a> Mix<'a> {
             weight: e,
             direct_raw,
             direct_weighted,
+            chain,
         } = second;
         let wo1 = -v;
         // Weights that read the light path's own inputs differ from photon to photon.
-        let per_path = self.needs.densities || self.needs.x1_scattering;
+        let per_path = (self.needs.densities || self.needs.x1_scattering) && !chain;
         let mut ph_raw = Vec3::ZERO;
         let mut ph_weighted = Vec3::ZERO;
         let bdf1 = scene.bdf_at(&sh1);
@@ -397,6 +443,7 @@ impl<'a> Mix<'a> {
         let scene = self.scene;
         // Read once, not per photon: a scene without mirrors or glass pays nothing for them.
         let has_delta = scene.has_delta();
+        let chain_w1 = if has_delta { self.chain_w1(x0) } else { 0.0 };
         let mut raw = Vec3::ZERO;
         let mut weighted = Vec3::ZERO;
         photons.0.finish_query_indexed(query, |i, ph| {
@@ -407,12 +454,21 @@ impl<'a> Mix<'a> {
             }
             let c = f * ph.power;
             raw += c;
-            let w0 = if has_delta && self.after_delta(photons.0, ph) {
-                // BDD=1 cannot sample a path with a delta vertex between x₀ and x₁.
+            let chain = if has_delta {
+                self.after_delta(photons.0, ph)
+            } else {
+                None
+            };
+            let w0 = if let Some(chain) = chain {
+                // BDD=1 cannot sample L–S…–x₀; …–x₁–S…–x₀ it takes with `chain_w1`.
+                let w1 = match chain {
+                    DeltaChain::FromLight => 0.0,
+                    DeltaChain::FromVertex => chain_w1,
+                };
                 if self.pilot {
-                    out.pilot.add(f64::from(luminance(c) * k), 0.0, false);
+                    out.pilot.add(f64::from(luminance(c) * k), w1, false);
                 }
-                1.0
+                1.0 - w1
             } else if let Some(w1) = self.fixed_w1 {
                 1.0 - w1
             } else if self.camera_x1_weighting() {

@@ -54,6 +54,16 @@ pub(crate) struct Hooks {
     pub(crate) two_way_splat_weights: bool,
 }
 
+/// What lies before the chain of delta vertices a photon left last ([`Mix::after_delta`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum DeltaChain {
+    /// The chain goes back to the light (L–S…–x₀): no technique but the merge at x₀ samples it.
+    FromLight,
+    /// A non-delta vertex x₁ lies before the chain (…–x₁–S…–x₀): BDD=1 samples it too, with
+    /// [`Mix::chain_w1`].
+    FromVertex,
+}
+
 /// The camera side of x₀: the shading point, its outgoing direction and its BDF data.
 pub(crate) struct FirstVertex<'s> {
     pub(crate) sh: Shading,
@@ -109,17 +119,44 @@ impl<'a> Mix<'a> {
         })
     }
 
-    /// True iff the photon `ph` of `map` left a delta vertex (a mirror or glass) last: its
-    /// path has no non-delta x₁ next to x₀, which BDD=1 cannot sample, so its merge at x₀
-    /// takes weight 1. Always false in a scene without delta materials (no read).
+    /// Whether the photon `ph` of `map` left a delta vertex (a mirror or glass) last, and if so
+    /// what lies before that chain of delta vertices: `None` for a photon whose y_p is a
+    /// non-delta vertex (always, in a scene without delta materials). The stored vertices of a
+    /// path lie in path order, so the vertex before a depth-d one (d ≥ 1) is the one before it.
     #[inline]
-    pub(crate) fn after_delta(&self, map: &PhotonMap, ph: &Photon) -> bool {
-        self.scene.has_delta()
-            && self
-                .scene
-                .is_delta(map.vertices()[ph.prev as usize].at.material)
+    pub(crate) fn after_delta(&self, map: &PhotonMap, ph: &Photon) -> Option<DeltaChain> {
+        let vertices = map.vertices();
+        let mut i = ph.prev as usize;
+        if !self.scene.is_delta(vertices[i].at.material) {
+            return None;
+        }
+        loop {
+            if vertices[i].depth == 0 {
+                return Some(DeltaChain::FromLight);
+            }
+            i -= 1;
+            if !self.scene.is_delta(vertices[i].at.material) {
+                return Some(DeltaChain::FromVertex);
+            }
+        }
     }
 
+    /// w₁ of a path with a chain of delta vertices between x₀ and a non-delta x₁, the same for
+    /// both techniques: the fixed w₁ of `bdd0`/`bdd1`, else the lobe's share of x₀'s
+    /// directional albedo towards the camera, 1 − kd/µ(u) (luminance; 0 at a Lambert x₀, so
+    /// BDD=1 does not trace these chains there). A function of x₀ alone, so the camera side
+    /// (BDD=1 through the chain) and the photon side (the merge at x₀) agree on it whatever
+    /// the chain; a stand-in until the noise model sees through delta vertices
+    /// (docs/method-notes.md, "Mirrors and glass").
+    pub(crate) fn chain_w1(&self, x0: &FirstVertex<'_>) -> f64 {
+        if let Some(w1) = self.fixed_w1 {
+            return w1;
+        }
+        if x0.albedo <= 0.0 {
+            return 0.0;
+        }
+        f64::from(1.0 - luminance(x0.bdf.kd()) / x0.albedo).clamp(0.0, 1.0)
+    }
     /// `camis`'s acceptance area A (m²) and p_C(x₀) (m⁻²) for x₀ at `sh` seen along −u.
     ///
     /// Both are functions of x₀ alone. A pixel is sampled uniformly over its area a_pix on
