@@ -201,3 +201,65 @@ fn a_glass_sphere_caustic_agrees_with_light_tracing() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// A furnace with a glass shell around its light: the sphere furnace (method.md §10: the inside
+/// of a sphere of radius R = 1 m, Lambert albedo k = 0.5) with its point light at the centre,
+/// enclosed in a clear glass shell (IOR 1.5, radii 0.24 and 0.25 m, concentric geodesic spheres
+/// whose facets are parallel). The light's rays cross the shell along radii (each facet pair a
+/// slab: displaced by micrometres, not turned), so the direct irradiance on the wall stays
+/// Φ/(4πR²) everywhere, now brought only by photons through the glass (the shadow rays are
+/// blocked); the wall's radiance is then uniform, and a lossless glass object in a uniform
+/// isotropic radiance field is invisible. Every pixel, through the glass or not, must show
+/// L = kΦ/(4π²R²(1 − k)). (The shell fills most of the view: `light` could not check this.)
+#[test]
+fn a_glass_shell_in_the_furnace_is_invisible() {
+    let text = format!(
+        "{}[camera]\nposition = [-0.5, 0.0, 0.0]\nlook_at = [0.5, 0.0, 0.0]\n\
+         up = [0.0, 1.0, 0.0]\nvfov = 60\n\n{}\
+         [material.inside]\nkd = 0.5\n\n[material.glass]\ntype = \"dielectric\"\nior = 1.5\n\n\
+         [[shape]]\ntype = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\n\
+         subdivisions = 32\nfacing = \"inside\"\nmaterial = \"inside\"\n\n\
+         [[shape]]\ntype = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = 0.25\n\
+         subdivisions = 32\nmaterial = \"glass\"\n\n\
+         [[shape]]\ntype = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = 0.24\n\
+         subdivisions = 32\nfacing = \"inside\"\nmaterial = \"glass\"\n\n",
+        RENDER.replace("radius = 0.004", "radius = 0.05"),
+        light([0.0, 0.0, 0.0]),
+    );
+    let (scene, settings) = load(&text);
+    let k = 0.5;
+    let exact = k / (4.0 * std::f64::consts::PI.powi(2) * (1.0 - k));
+    let (w, h) = (scene.camera().width(), scene.camera().height());
+    let glass: Vec<bool> = (0..w * h)
+        .map(|i| sees_glass(&scene, i % w, i / w))
+        .collect();
+    let seen = glass.iter().filter(|g| **g).count();
+    assert!(seen > 30, "{seen} pixels see the glass");
+    let mut failures = Vec::new();
+    for mode in ["bdd1", "balance", "optimal"] {
+        let film = render(&scene, &with_mode(&settings, mode, 24, 4, 150_000));
+        assert_eq!(film.dropped(), 0, "{mode}");
+        let (mean, se) = (film.mean(), film.standard_error());
+        let n = mean.len() as f64;
+        let m = mean.iter().map(|v| v.x).sum::<f64>() / n;
+        let m_se = se.iter().map(|s| s.x * s.x).sum::<f64>().sqrt() / n;
+        let within = |keep: bool| {
+            let pixels: Vec<usize> = (0..mean.len()).filter(|&i| glass[i] == keep).collect();
+            let ok = pixels
+                .iter()
+                .filter(|&&i| (mean[i].x - exact).abs() <= 4.0 * se[i].x);
+            ok.count() as f64 / pixels.len() as f64
+        };
+        let (through, beside) = (within(true), within(false));
+        let rel = m / exact - 1.0;
+        eprintln!(
+            "{mode:>8}: mean {rel:+.4} ± {:.4}, within 4σ: {through:.3} through the glass, \
+             {beside:.3} beside it",
+            m_se / exact
+        );
+        if !(rel.abs() < (4.0 * m_se / exact).max(0.01) && through >= 0.97 && beside >= 0.97) {
+            failures.push(format!("{mode}: mean {rel:+}, within {through} / {beside}"));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
