@@ -102,9 +102,16 @@ struct Second {
     weight: Vec3,
     direct_raw: Vec3,
     direct_weighted: Vec3,
-    /// True when x₁ was reached through delta vertices: every path through it takes
-    /// `w_const` ([`Mix::chain_w1`]), and `v` is the last segment's direction.
-    chain: bool,
+}
+
+impl Second {
+    /// True when x₁ was reached through delta vertices, which `dist2` = 0 marks (a chain has no
+    /// straight distance; a real x₁ is never at x₀): every path through it then takes `w_const`
+    /// ([`Mix::chain_w1`]), and `v` is the last segment's direction. A field of its own made
+    /// the struct's moves a memcpy call (+0.4 % instructions a pass).
+    fn chain(&self) -> bool {
+        self.dist2 == 0.0
+    }
 }
 
 impl<'a> Mix<'a> {
@@ -166,7 +173,13 @@ impl<'a> Mix<'a> {
             }
             if self.merges_at_x0() {
                 let at_x0 = (&*query0, camera_w1);
-                self.merge_at_x0(x0, (photons, k), at_x0, (weigher, &mut *stats), out);
+                let weights = (weigher, &mut *stats);
+                // Compiled twice: without delta materials the merge has no delta branch at all.
+                if self.scene.has_delta() {
+                    self.merge_at_x0::<true>(x0, (photons, k), at_x0, weights, out);
+                } else {
+                    self.merge_at_x0::<false>(x0, (photons, k), at_x0, weights, out);
+                }
             }
             if let Some(beta) = x0.beta {
                 out.techniques.scale_merges(beta.as_dvec3());
@@ -330,14 +343,16 @@ impl<'a> Mix<'a> {
             weight: s.weight,
             direct_raw,
             direct_weighted,
-            chain: false,
         })
     }
 
     /// BDD=1 through the delta vertices the direction `v` sampled at x₀ (with weight `e`,
     /// f·cos/p) meets first, to the first non-delta x₁ (`rng` chooses the branches): x₁'s
     /// direct light and the start of its gather, every path weighted by [`Mix::chain_w1`].
-    /// `None` where that weight is 0 (nothing traced) or the walk ends.
+    /// `None` where that weight is 0 (nothing traced) or the walk ends. Out of line: only
+    /// scenes with delta materials come here.
+    #[cold]
+    #[inline(never)]
     fn second_through_delta(
         &self,
         x0: &FirstVertex<'_>,
@@ -371,7 +386,6 @@ impl<'a> Mix<'a> {
             weight,
             direct_raw,
             direct_weighted: direct_raw * w as f32,
-            chain: true,
         })
     }
 
@@ -397,8 +411,8 @@ impl<'a> Mix<'a> {
             weight: e,
             direct_raw,
             direct_weighted,
-            chain,
         } = second;
+        let chain = second.chain();
         let wo1 = -v;
         // Weights that read the light path's own inputs differ from photon to photon.
         let per_path = (self.needs.densities || self.needs.x1_scattering) && !chain;
@@ -431,8 +445,9 @@ impl<'a> Mix<'a> {
 
     /// BDD=0: photons around x₀ (`query`), each weighted by 1 − w₁(x₀, y_p) (method.md §2),
     /// into the sample's output `out`; `camera_w1` is the camera's w₁ at its own x₁ (for the
-    /// biased test variant only).
-    fn merge_at_x0(
+    /// biased test variant only). `DELTA`: the scene has delta materials
+    /// ([`bdpm_scene::Scene::has_delta`]), whose paths [`Mix::after_delta`] tells apart.
+    fn merge_at_x0<const DELTA: bool>(
         &self,
         x0: &FirstVertex<'_>,
         (photons, k): ((&PhotonMap, &[[f32; 3]]), f32),
@@ -441,9 +456,7 @@ impl<'a> Mix<'a> {
         out: &mut SampleOut,
     ) {
         let scene = self.scene;
-        // Read once, not per photon: a scene without mirrors or glass pays nothing for them.
-        let has_delta = scene.has_delta();
-        let chain_w1 = if has_delta { self.chain_w1(x0) } else { 0.0 };
+        let chain_w1 = if DELTA { self.chain_w1(x0) } else { 0.0 };
         let mut raw = Vec3::ZERO;
         let mut weighted = Vec3::ZERO;
         photons.0.finish_query_indexed(query, |i, ph| {
@@ -454,7 +467,7 @@ impl<'a> Mix<'a> {
             }
             let c = f * ph.power;
             raw += c;
-            let chain = if has_delta {
+            let chain = if DELTA {
                 self.after_delta(photons.0, ph)
             } else {
                 None
