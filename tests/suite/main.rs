@@ -15,6 +15,7 @@ mod new_scenes;
 mod noise_model;
 mod precision;
 mod predict;
+mod predict_specular;
 mod seams;
 mod specular;
 mod stages;

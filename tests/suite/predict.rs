@@ -17,7 +17,7 @@ fn measured_mean_variance(renderer: &Renderer<'_>) -> (f64, f64) {
 }
 
 /// [`measured_mean_variance`] over each group of pixels: `group[i]` is pixel i's, of `groups`.
-fn measured_group_variances(
+pub(crate) fn measured_group_variances(
     renderer: &Renderer<'_>,
     group: &[usize],
     groups: usize,
@@ -62,7 +62,7 @@ fn measured_group_variances(
 /// Photons of the noise model's cache in these tests (`bdpm predict` takes
 /// `MODEL_CACHE_PHOTONS`, made for 256² renders of the Cornell box): enough for the furnace's
 /// closed form within its 3 % and for the small images here, in a fraction of the time.
-const MODEL_PHOTONS: u64 = 1_000_000;
+pub(crate) const MODEL_PHOTONS: u64 = 1_000_000;
 
 fn lum(c: DVec3) -> f64 {
     0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z

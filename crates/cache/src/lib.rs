@@ -295,6 +295,19 @@ impl RadianceCache {
         settings: &CacheSettings,
         stop: &(dyn Fn() -> bool + Sync),
     ) -> Option<RadianceCache> {
+        Self::build_of_until(scene, settings, &|_| true, stop)
+    }
+
+    /// [`Self::build_until`] of the part of the secondary light whose arrivals `keep` accepts
+    /// (asked only for arrivals the cache would record): e.g. only caustic light
+    /// ([`bdpm_photon::PhotonArrival::caustic`]), the light that reaches a surface through
+    /// mirrors and glass alone. L_d and b then hold that part's radiance and b.
+    pub fn build_of_until<S: PhotonScene + CacheSurfaces + ?Sized>(
+        scene: &S,
+        settings: &CacheSettings,
+        keep: &(dyn Fn(&bdpm_photon::PhotonArrival) -> bool + Sync),
+        stop: &(dyn Fn() -> bool + Sync),
+    ) -> Option<RadianceCache> {
         let mut cache = RadianceCache::empty(scene, settings.bins, settings.cell_size);
         let options = TraceOptions {
             photons: settings.photons.max(1),
@@ -313,7 +326,7 @@ impl RadianceCache {
             |arrival, out| {
                 // Only light that has scattered at least once is secondary (L_d, method.md §5).
                 // A delta vertex (mirror, glass) has no radiance of its own to cache.
-                if arrival.vertex.depth == 0 || arrival.delta {
+                if arrival.vertex.depth == 0 || arrival.delta || !keep(arrival) {
                     return;
                 }
                 let Some(sc) = arrival.scatter else { return };

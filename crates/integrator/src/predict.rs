@@ -48,10 +48,12 @@
 //! w_ob = w_m = w and both readings coincide.
 //!
 //! Units: every term is a variance of a radiance, W²·m⁻⁴·sr⁻².
-use bdpm_bdf::luminance;
+use bdpm_bdf::{Transport, luminance};
 use bdpm_cache::RadianceCache;
 use bdpm_geometry::{Domain, Rng};
 use bdpm_mis::{Heuristic, Weigher, effective_samples};
+use bdpm_scene::Shading;
+use glam::Vec3;
 
 use crate::inputs::Arrival;
 use rayon::prelude::*;
@@ -60,7 +62,7 @@ use crate::error::RenderError;
 use crate::mix::{FirstVertex, Mix};
 use crate::render::Renderer;
 use crate::sampler::{direction_strata, in_cell, pixel_strata, random_cell};
-use crate::table::footprint_overlap;
+use crate::table::{footprint_overlap, pixel_walk};
 use bdpm_settings::PINHOLE_TABLE_RAYS;
 
 /// Jittered primary rays per pixel for T_jitter (method.md §12 leaves this term out; 16 gives
@@ -185,39 +187,41 @@ impl Renderer<'_> {
         })
     }
 
-    /// The terms of pixel (x, y), or None if its centre sees no surface facing the camera.
+    /// The terms of pixel (x, y), or None if its centre sees no surface facing the camera
+    /// (through mirrors and glass, on their more probable branches: [`pixel_walk`]).
     fn pixel_terms(&self, mix: &Mix<'_>, cache: &RadianceCache, x: u32, y: u32) -> Option<Terms> {
         let scene = self.scene();
         let s = self.settings();
-        let cam = &scene.camera();
         let pixel = y as u64 * s.width as u64 + x as u64;
         let centre = (x as f32 + 0.5, y as f32 + 0.5);
-        let dir = cam.ray_direction(centre.0, centre.1);
-        let hit0 = scene
-            .geometry()
-            .intersect(cam.position(), dir, f32::INFINITY)?;
-        let x0 = mix.first_vertex(&hit0, -dir)?;
+        let walk = pixel_walk(scene, centre)?;
+        let x0 = mix.first_vertex_shaded(walk.sh, walk.wo)?;
 
         let n_b = s.spp as f64;
         // The pixel's radius (`adaptive_radius`): its merges, S, N_eff and weights are its own.
         let scale = mix.radius_scale(x, y);
-        let overlap = if s.pixel_jitter {
-            let radius = self.radius() * scale;
-            footprint_overlap(scene, &x0.sh, centre, radius, pixel_strata(s))
-        } else {
-            1.0
+        let radius = self.radius() * scale;
+        let overlap_at = |sh: &Shading, chain: (u32, u64)| {
+            if s.pixel_jitter {
+                footprint_overlap(scene, sh, centre, radius, pixel_strata(s), chain)
+            } else {
+                1.0
+            }
         };
+        let overlap = overlap_at(&x0.sh, (walk.vertices, walk.branches));
         let n_eff = effective_samples(n_b, overlap);
         // The weights' inputs exactly as the renderer passes them.
         let table = self.pixel_table().map(|t| t.get(x, y));
         let factor = self.correction().map_or(1.0, |c| c.get(x, y));
         let inputs = (table.map(|p| p.camera_samples), table.map(|p| &p.terms));
         let weigher = mix.weigher(inputs, factor, scale);
+        let caustic = self.caustic_cache();
 
         // The model's own directions: as many as the preprint's A/B rays unless given, so that
         // a prediction does not get noisier where the table takes fewer.
         let rays = s.pixel_table_rays.unwrap_or(PINHOLE_TABLE_RAYS).max(2);
         let (mut sum, mut sum_sq, mut photons_x0, mut photons_x1) = (0.0, 0.0, 0.0, 0.0);
+        let mut caustic_x0 = 0.0;
         let grid = direction_strata(s);
         // With stratified directions, rays 2i and 2i + 1 fall in one random cell of the
         // sampler's grid: half their squared difference estimates that cell's variance.
@@ -235,15 +239,31 @@ impl Renderer<'_> {
                 let [a, b] = in_cell(cell, grid, [u[1], u[2]]);
                 u = [u[0], a, b];
             }
-            let d = direction(mix, cache, &weigher, &x0, u).unwrap_or_default();
-            sum += d.value;
-            sum_sq += d.value * d.value;
-            photons_x0 += d.photons_x0;
-            photons_x1 += d.photons_x1;
-            if j % 2 == 1 {
-                within += 0.5 * (d.value - previous).powi(2);
+            // Through mirrors and glass each sample takes its own branches to its own x₀
+            // (key slot 5), whose light the chain's throughput β scales; its N_eff is that of
+            // its own footprint. Without a chain: the centre's x₀, β = 1 (bits unchanged).
+            let own = (walk.vertices > 0)
+                .then(|| self.sample_x0(mix, centre, [pixel, j as u64, 5], &overlap_at))
+                .flatten();
+            let (at, beta, share) = match &own {
+                Some((x0, beta, n)) => (x0, *beta, n / n_eff),
+                None if walk.vertices > 0 => (&x0, 0.0, 0.0),
+                None => (&x0, 1.0, 1.0),
+            };
+            let d = direction(mix, cache, &weigher, at, u, &mut rng).unwrap_or_default();
+            let value = beta * d.value;
+            sum += value;
+            sum_sq += value * value;
+            photons_x0 += share * beta * beta * d.photons_x0;
+            photons_x1 += beta * beta * d.photons_x1;
+            if let Some(c) = caustic {
+                let b = c.lookup(at.sh.prim, at.sh.p, at.u).1 as f64;
+                caustic_x0 += share * beta * beta * b;
             }
-            previous = d.value;
+            if j % 2 == 1 {
+                within += 0.5 * (value - previous).powi(2);
+            }
+            previous = value;
         }
         let n = rays as f64;
         let b = mix.pixel_budget(None, scale);
@@ -261,13 +281,37 @@ impl Renderer<'_> {
         } else {
             0.0
         };
+        // The caustic's photons at x₀ (light → mirrors and glass → x₀) are the merge at x₀'s
+        // alone, (1 − w)² = 1: their noise is α·N_eff/N_B·b_caustic(x₀→u).
         Some(Terms {
-            t0: alpha * n_eff / n_b * photons_x0 / n,
+            t0: alpha * n_eff / n_b * (photons_x0 + caustic_x0) / n,
             t1: jumps / n_b,
             t2: alpha / n_b * photons_x1 / n,
             jitter,
             overlap,
         })
+    }
+
+    /// One camera sample's way through the pixel's mirrors and glass from its centre
+    /// (`centre`, pixels) with its own branches and roulette drawn from the stream `key`: x₀,
+    /// the luminance of the chain's throughput β, and N_eff of its footprint (`overlap_at`).
+    fn sample_x0<'m>(
+        &self,
+        mix: &'m Mix<'_>,
+        centre: (f32, f32),
+        key: [u64; 3],
+        overlap_at: &dyn Fn(&Shading, (u32, u64)) -> f64,
+    ) -> Option<(FirstVertex<'m>, f64, f64)> {
+        let scene = self.scene();
+        let cam = scene.camera();
+        let mut rng = Rng::new(self.settings().seed, Domain::PixelTable, key);
+        let dir = cam.ray_direction(centre.0, centre.1);
+        let walk =
+            scene.walk_to_non_delta(cam.position(), dir, Transport::Radiance, || rng.uniform())?;
+        let x0 = mix.first_vertex_shaded(walk.sh, walk.wo)?;
+        let overlap = overlap_at(&x0.sh, (walk.vertices, walk.branches));
+        let n_eff = effective_samples(self.settings().spp as f64, overlap);
+        Some((x0, luminance(walk.beta) as f64, n_eff))
     }
 
     /// Var over the pixel's footprint of L₀(x₀→u) + L_d(x₀→u), from [`JITTER_RAYS`]
@@ -310,12 +354,12 @@ impl Renderer<'_> {
             }
             let [jx, jy] = jitter;
             let dir = cam.ray_direction(x as f32 + jx, y as f32 + jy);
+            // Through mirrors and glass with this ray's own branches (none drawn without).
             let value = scene
-                .geometry()
-                .intersect(cam.position(), dir, f32::INFINITY)
-                .map_or([0.0; 2], |hit| {
-                    let u = -dir;
-                    let sh = scene.shade(&hit, u);
+                .walk_to_non_delta(cam.position(), dir, Transport::Radiance, || rng.uniform())
+                .map_or([0.0; 2], |walk| {
+                    let (u, sh) = (walk.wo, walk.sh);
+                    let beta = luminance(walk.beta) as f64;
                     let direct = luminance(scene.direct(&sh, u)) as f64;
                     let faces = sh.frame.to_local(u).z > 0.0;
                     let same_plane = sh.ng.dot(n0) > SAME_PLANE_COS
@@ -323,9 +367,9 @@ impl Renderer<'_> {
                     let ld = match () {
                         _ if !faces => 0.0,
                         _ if same_plane => ld_centre,
-                        _ => cache.lookup(hit.prim, hit.p, u).0 as f64,
+                        _ => cache.lookup(sh.prim, sh.p, u).0 as f64,
                     };
-                    [direct, ld]
+                    [beta * direct, beta * ld]
                 });
             let [d, l] = value;
             sum[0] += d;
@@ -365,12 +409,16 @@ impl Renderer<'_> {
 
 /// One BDF-sampled direction v at x₀: its BDD=1 value and its photon-noise integrands, or None
 /// when the sample finds no x₁ (it then contributes zero, as in the renderer).
+///
+/// A direction that meets a mirror or glass is followed through it to a non-delta x₁
+/// ([`chain_direction`]), with numbers from `rng`; none are drawn otherwise.
 fn direction(
     mix: &Mix<'_>,
     cache: &RadianceCache,
     weigher: &Weigher,
     x0: &FirstVertex<'_>,
     u: [f32; 3],
+    rng: &mut Rng,
 ) -> Option<Direction> {
     let scene = mix.scene;
     let s = x0.bdf.sample_at(&x0.out, u)?;
@@ -383,6 +431,9 @@ fn direction(
         .intersect(scene.spawn(&x0.sh, v), v, f32::INFINITY)?;
     let wo1 = -v;
     let sh1 = scene.shade(&hit1, wo1);
+    if scene.is_delta(sh1.material) {
+        return chain_direction(mix, cache, x0, (&s, v), rng);
+    }
     let x1 = scene.weight_vertex(&sh1);
     let pair = mix.pair(x0, &x1, v, mix.f_at_x0(x0, v));
     let dist2 = (x1.p - x0.sh.p).length_squared();
@@ -429,5 +480,39 @@ fn direction(
         value: e * (l0_w + ld * w_merge),
         photons_x0: (l0_w0_sq + ld * (1.0 - w_merge).powi(2)) * f * f * cos / pdf,
         photons_x1: w_merge * w_merge * e * e * b,
+    })
+}
+
+/// [`direction`] for a v that meets mirrors or glass before a non-delta x₁: the render weighs
+/// these paths with [`Mix::chain_w1`] on both sides, and the chain's throughput β (luminance)
+/// scales the radiance x₀ receives through it (the photons at x₀ keep their power, so their
+/// noise scales with β; a merge at x₁ seen through the chain, with β²).
+#[cold]
+fn chain_direction(
+    mix: &Mix<'_>,
+    cache: &RadianceCache,
+    x0: &FirstVertex<'_>,
+    (s, v): (&bdpm_bdf::BdfSample, Vec3),
+    rng: &mut Rng,
+) -> Option<Direction> {
+    let scene = mix.scene;
+    let walk = scene.walk_to_non_delta(scene.spawn(&x0.sh, v), v, Transport::Radiance, || {
+        rng.uniform()
+    })?;
+    let (sh1, wo1) = (walk.sh, walk.wo);
+    let x1 = scene.weight_vertex(&sh1);
+    let beta = luminance(walk.beta) as f64;
+    let l0: f64 = (0..scene.lights().len())
+        .map(|l| luminance(scene.direct_from_masked(&sh1, wo1, l, x1.lights)) as f64)
+        .sum();
+    let (ld, b) = mix.model_lookup(cache, &x1, wo1);
+    let w = mix.chain_w1(x0);
+    let (f, cos, pdf) = (luminance(s.f) as f64, s.wi.z as f64, s.pdf as f64);
+    let e = f * cos / pdf;
+    let l = beta * (l0 + ld);
+    Some(Direction {
+        value: e * w * l,
+        photons_x0: (1.0 - w).powi(2) * l * f * f * cos / pdf,
+        photons_x1: w * w * e * e * beta * beta * b,
     })
 }

@@ -156,6 +156,13 @@ impl<'a> Renderer<'a> {
         model.cache(self.products.get())
     }
 
+    /// The noise model's cache of the caustic light alone (a scene with mirrors or glass,
+    /// after [`Self::with_model_inputs`]); None otherwise.
+    pub(crate) fn caustic_cache(&self) -> Option<&RadianceCache> {
+        let model: &ModelCache = self.products.get()?;
+        model.caustic()
+    }
+
     /// Whether the weights use per-pixel N_eff from footprints (method.md §12).
     pub(crate) fn footprint_model(&self) -> bool {
         self.setup.footprint_model()

@@ -2,12 +2,13 @@
 //! own random stream and frozen: the overlap factor ρ and N_eff of method.md §12 (from the
 //! pixel's footprint), and the integrals A and B of method.md §6 (preprint §6.2) over the
 //! second vertex of the partial weight W₁ (computed with the pixel's N_eff).
+use bdpm_bdf::Transport;
 use bdpm_geometry::{Domain, Rng};
 use bdpm_mis::{
     Budget, PixelTerms, effective_samples, overlap_factor, overlap_factor_stratified,
     split_weighted_radiance, w1_partial,
 };
-use bdpm_scene::{Scene, Shading};
+use bdpm_scene::{DeltaWalk, Scene, Shading};
 use rayon::prelude::*;
 
 use crate::mix::{FirstVertex, Mix};
@@ -111,9 +112,12 @@ pub(crate) fn pixel_terms(
     PixelTerms { a: a / n, b: b / n }
 }
 
-/// ρ for the camera samples of the pixel whose image point (x, y) (pixels) sees x₀ at `sh`:
-/// the footprint is the parallelogram where the rays through (x ± ½, y ± ½) cross x₀'s tangent
-/// plane (ray differentials, as pbrt does for texture filtering).
+/// ρ for the camera samples of the pixel whose image point (x, y) (pixels) sees x₀ at `sh`
+/// through the delta chain `chain` ((vertices, branches) of its [`DeltaWalk`]; (0, 0) where
+/// it sees x₀ directly): the footprint is the parallelogram where the rays through
+/// (x ± ½, y ± ½) cross x₀'s tangent plane (ray differentials, as pbrt does for texture
+/// filtering), each taken through the same mirrors and glass with the same branches
+/// ([`Scene::follow_branches`]; a ray that cannot follow them makes the footprint unbounded).
 ///
 /// A footprint that crosses an edge or a silhouette is treated as if it continued on x₀'s
 /// plane. Pairs of samples on the two sides of the edge share no photons, but the pairs on each
@@ -129,20 +133,28 @@ pub(crate) fn footprint_overlap(
     (x, y): (f32, f32),
     radius: f32,
     strata: Option<(u32, u32)>,
+    (vertices, branches): (u32, u64),
 ) -> f64 {
     let cam = &scene.camera();
     let n = sh.ng.as_dvec3();
-    let origin = cam.position().as_dvec3();
-    let plane = n.dot(sh.p.as_dvec3() - origin);
-    let cross = |px: f32, py: f32| {
-        let d = cam.ray_direction(px, py).as_dvec3();
-        let t = plane / n.dot(d);
-        // Behind the camera or parallel to the plane: an unbounded footprint.
+    let unbounded = glam::DVec3::splat(f64::INFINITY);
+    let cross_from = |origin: glam::DVec3, d: glam::DVec3| {
+        let t = n.dot(sh.p.as_dvec3() - origin) / n.dot(d);
+        // Behind the ray's origin or parallel to the plane: an unbounded footprint.
         if t > 0.0 && t.is_finite() {
             origin + d * t
         } else {
-            glam::DVec3::splat(f64::INFINITY)
+            unbounded
         }
+    };
+    let cross = |px: f32, py: f32| {
+        let d = cam.ray_direction(px, py);
+        if vertices == 0 {
+            return cross_from(cam.position().as_dvec3(), d.as_dvec3());
+        }
+        scene
+            .follow_branches(cam.position(), d, vertices, branches)
+            .map_or(unbounded, |(o, d)| cross_from(o.as_dvec3(), d.as_dvec3()))
     };
     let edge_x = cross(x + 0.5, y) - cross(x - 0.5, y);
     let edge_y = cross(x, y + 0.5) - cross(x, y - 0.5);
@@ -175,12 +187,13 @@ pub(crate) fn pixel_weights(
     x0: &FirstVertex<'_>,
     (x, y): (f32, f32),
     spec: &TableSpec,
-    key: u64,
+    (key, chain): (u64, (u32, u64)),
 ) -> PixelWeights {
     let n_b = mix.budget.camera_samples;
     let scale = mix.radius_scale(x as u32, y as u32);
     let overlap = if spec.footprint {
-        footprint_overlap(mix.scene, &x0.sh, (x, y), spec.radius * scale, spec.strata)
+        let radius = spec.radius * scale;
+        footprint_overlap(mix.scene, &x0.sh, (x, y), radius, spec.strata, chain)
     } else {
         1.0
     };
@@ -196,7 +209,17 @@ pub(crate) fn pixel_weights(
     }
 }
 
-/// Builds the table: for each pixel, the primary ray through its centre finds x₀; ρ comes from
+/// The way of the ray through image point `centre` (pixels) to the x₀ that stands for its
+/// pixel: the first surface it hits, or through mirrors and glass the first non-delta one on
+/// their more probable branches ([`Scene::walk_principal`]). `None` where it finds none.
+pub(crate) fn pixel_walk(scene: &Scene, centre: (f32, f32)) -> Option<DeltaWalk> {
+    let cam = scene.camera();
+    let dir = cam.ray_direction(centre.0, centre.1);
+    scene.walk_principal(cam.position(), dir, Transport::Radiance)
+}
+
+/// Builds the table: for each pixel, the primary ray through its centre finds x₀ (through
+/// mirrors and glass, [`pixel_walk`]); ρ comes from
 /// the pixel's footprint there, and (with `spec.rays`) `rays` directions v are sampled from the
 /// BDF at x₀ (no absorption) and A += W₁ f̃ L cos/p, B += W₁ L cos/p with
 /// L = L₀(x₁→x₀) + L_d(x₁→x₀), divided by `rays`. A pixel whose centre sees nothing gets ρ = 0
@@ -211,7 +234,6 @@ pub(crate) fn build(
     stop: &(dyn Fn() -> bool + Sync),
 ) -> Option<PixelTable> {
     let scene = mix.scene;
-    let cam = &scene.camera();
     let n_b = mix.budget.camera_samples;
     let missed = PixelWeights {
         terms: PixelTerms::default(),
@@ -232,17 +254,14 @@ pub(crate) fn build(
                 }
                 let pixel = (y * width as usize + x) as u64;
                 let centre = (x as f32 + 0.5, y as f32 + 0.5);
-                let dir = cam.ray_direction(centre.0, centre.1);
-                let Some(hit0) = scene
-                    .geometry()
-                    .intersect(cam.position(), dir, f32::INFINITY)
-                else {
+                let Some(walk) = pixel_walk(scene, centre) else {
                     continue;
                 };
-                let Some(x0) = mix.first_vertex(&hit0, -dir) else {
+                let Some(x0) = mix.first_vertex_shaded(walk.sh, walk.wo) else {
                     continue;
                 };
-                *out = pixel_weights(mix, &x0, centre, spec, pixel);
+                let chain = (walk.vertices, walk.branches);
+                *out = pixel_weights(mix, &x0, centre, spec, (pixel, chain));
             }
         });
     if stopped.into_inner() {

@@ -90,7 +90,7 @@ impl Renderer<'_> {
                 radius: self.radius(),
                 seed: s.seed,
             };
-            pixel_weights(&mix, &x0, image_point, &spec, u64::MAX)
+            pixel_weights(&mix, &x0, image_point, &spec, (u64::MAX, (0, 0)))
         });
         let budget = mix.pixel_budget(pixel.map(|p| p.camera_samples), scale);
         let (w, hgt) = (cam.width() as usize, cam.height() as usize);

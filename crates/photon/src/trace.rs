@@ -139,6 +139,10 @@ pub struct PhotonArrival {
     /// True iff the vertex is a delta one ([`PhotonScene::is_delta`]): no photon is stored
     /// there and nothing connects to it; `scatter` is the delta step.
     pub delta: bool,
+    /// True iff the photon has scattered only at delta vertices since it left the light (and
+    /// at least once): it arrives by light → mirrors and glass → here, a caustic's path,
+    /// which no technique but a merge here can sample from a point light.
+    pub caustic: bool,
 }
 
 /// Traces the pass described by `options` in parallel and returns the records that `visit`
@@ -232,6 +236,8 @@ fn trace_one<S: PhotonScene + ?Sized>(
     let mut power = e.power;
     let mut previous: Option<PathVertex> = None;
     let mut depth: u32 = 0;
+    // Every vertex so far was a delta one (vacuously at the first hit).
+    let mut only_delta = true;
     while let Some(sh) = scene.intersect(origin, dir) {
         let incoming = -dir;
         // The random numbers are drawn in a fixed order whatever happens, so that a visitor's
@@ -276,7 +282,9 @@ fn trace_one<S: PhotonScene + ?Sized>(
             scatter,
             continued,
             delta,
+            caustic: depth >= 1 && only_delta,
         });
+        only_delta &= delta;
         let Some(s) = scatter.filter(|_| continued) else {
             break;
         };

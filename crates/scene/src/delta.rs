@@ -26,6 +26,9 @@ pub struct DeltaStep {
     pub weight: Vec3,
     /// True iff the step refracted through the surface.
     pub refracted: bool,
+    /// Probability that the branch taken was sampled (a dielectric's F or 1 − F; 1 at a
+    /// mirror).
+    pub probability: f32,
 }
 
 /// Where a ray's walk through delta vertices ended (see [`Scene::walk_to_non_delta`]).
@@ -40,6 +43,9 @@ pub struct DeltaWalk {
     pub beta: Vec3,
     /// Delta vertices passed before `sh`.
     pub vertices: u32,
+    /// Bit i set iff the walk refracted at its i-th delta vertex (0 = the first): with
+    /// `vertices`, the branches [`Scene::follow_branches`] takes again for a nearby ray.
+    pub branches: u64,
 }
 
 impl Scene {
@@ -73,6 +79,7 @@ impl Scene {
             direction,
             weight: s.weight,
             refracted: s.refracted,
+            probability: s.probability,
         })
     }
 
@@ -106,12 +113,46 @@ impl Scene {
     /// [`Scene::shade`] gives it, with `beta` = 1.
     pub fn walk_to_non_delta(
         &self,
-        mut origin: Vec3,
-        mut dir: Vec3,
+        origin: Vec3,
+        dir: Vec3,
         mode: Transport,
         mut uniform: impl FnMut() -> f32,
     ) -> Option<DeltaWalk> {
+        self.walk_with(origin, dir, |sh, wo| {
+            let step = self.delta_step(sh, wo, uniform(), mode)?;
+            let beta = roulette(step.weight, &mut uniform)?;
+            Some((step, beta))
+        })
+    }
+
+    /// The walk of [`Self::walk_to_non_delta`] that takes at every delta vertex its more
+    /// probable branch (reflection where the Fresnel reflectance is at least ½) and plays no
+    /// roulette: the one x₀ that stands for a pixel whose samples may split between branches
+    /// (the weights' per-pixel table). `beta` is the product of the steps' weights times their
+    /// probabilities: the share of the light through the pixel that takes this chain (per
+    /// channel).
+    pub fn walk_principal(&self, origin: Vec3, dir: Vec3, mode: Transport) -> Option<DeltaWalk> {
+        self.walk_with(origin, dir, |sh, wo| {
+            // u = 0 reflects with probability F wherever F > 0.
+            let reflect = self.delta_step(sh, wo, 0.0, mode);
+            let step = match reflect {
+                Some(r) if r.refracted || r.probability >= 0.5 => r,
+                _ => self.delta_step(sh, wo, 1.0 - f32::EPSILON, mode)?,
+            };
+            Some((step, step.weight * step.probability))
+        })
+    }
+
+    /// The walk through delta vertices that `step` scatters at (returning the step and its
+    /// factor of `beta`): the loop of [`Self::walk_to_non_delta`] and [`Self::walk_principal`].
+    fn walk_with(
+        &self,
+        mut origin: Vec3,
+        mut dir: Vec3,
+        mut step: impl FnMut(&Shading, Vec3) -> Option<(DeltaStep, Vec3)>,
+    ) -> Option<DeltaWalk> {
         let mut beta = Vec3::ONE;
+        let mut branches = 0u64;
         for vertices in 0..=MAX_DELTA_CHAIN {
             let hit = self.geometry().intersect(origin, dir, f32::INFINITY)?;
             let wo = -dir;
@@ -122,17 +163,51 @@ impl Scene {
                     wo,
                     beta,
                     vertices,
+                    branches,
                 });
             }
             if vertices == MAX_DELTA_CHAIN {
                 return None;
             }
-            let step = self.delta_step(&sh, wo, uniform(), mode)?;
-            beta *= roulette(step.weight, &mut uniform)?;
+            let (s, factor) = step(&sh, wo)?;
+            beta *= factor;
+            branches |= u64::from(s.refracted) << vertices;
+            origin = self.spawn(&sh, s.direction);
+            dir = s.direction;
+        }
+        None
+    }
+
+    /// The ray from `origin` along the unit `dir` taken through `vertices` delta vertices with
+    /// the branches of `branches` (bit i: refract at the i-th; see [`DeltaWalk::branches`]),
+    /// as a ray differential follows a nearby ray through the same chain: the origin and unit
+    /// direction of its last segment, or `None` where it meets a non-delta surface, leaves the
+    /// scene, or cannot take its branch (total internal reflection) before the end.
+    pub fn follow_branches(
+        &self,
+        mut origin: Vec3,
+        mut dir: Vec3,
+        vertices: u32,
+        branches: u64,
+    ) -> Option<(Vec3, Vec3)> {
+        for i in 0..vertices.min(MAX_DELTA_CHAIN) {
+            let hit = self.geometry().intersect(origin, dir, f32::INFINITY)?;
+            let wo = -dir;
+            let sh = self.shade(&hit, wo);
+            if !self.is_delta(sh.material) {
+                return None;
+            }
+            let refract = (branches >> i) & 1 == 1;
+            // u = 0 reflects wherever F > 0; u just below 1 refracts wherever F < 1.
+            let u = if refract { 1.0 - f32::EPSILON } else { 0.0 };
+            let step = self.delta_step(&sh, wo, u, Transport::Radiance)?;
+            if step.refracted != refract {
+                return None;
+            }
             origin = self.spawn(&sh, step.direction);
             dir = step.direction;
         }
-        None
+        Some((origin, dir))
     }
 }
 

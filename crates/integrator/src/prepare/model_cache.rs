@@ -5,7 +5,7 @@
 use bdpm_cache::RadianceCache;
 use bdpm_settings::RenderSettings;
 
-use super::radiance_cache::{build, build_item, report};
+use super::radiance_cache::{build, build_caustics, build_item, report};
 use super::{BuildContext, MemoryScale, Preparation};
 use crate::error::RenderError;
 use crate::memory::{Lower, MemoryEstimate, MemoryItem};
@@ -67,6 +67,10 @@ fn item(photons: u64, scale: &MemoryScale) -> MemoryItem {
 /// (as fine as its own would be).
 pub(crate) struct ModelCache {
     own: Option<RadianceCache>,
+    /// In a scene with mirrors or glass, the caustic light alone (light → delta vertices →
+    /// here): its b at x₀ is the photon noise of the merges at x₀ that no direction sampled
+    /// at x₀ finds (docs/method-notes.md, "Mirrors and glass").
+    caustic: Option<RadianceCache>,
 }
 
 impl ModelCache {
@@ -76,6 +80,11 @@ impl ModelCache {
         weights: Option<&'c RadianceCache>,
     ) -> Option<&'c RadianceCache> {
         self.own.as_ref().or(weights)
+    }
+
+    /// The caustic light's cache; `None` in a scene without mirrors or glass.
+    pub(crate) fn caustic(&self) -> Option<&RadianceCache> {
+        self.caustic.as_ref()
     }
 }
 
@@ -113,12 +122,23 @@ impl Preparation for ModelCachePrep {
             s.cache_photons.unwrap_or(s.photons) == photons
                 && (s.cache_bins == model.cache_bins || !c.stats().stores_b)
         });
+        let interrupted = RenderError::Interrupted(Stage::RadianceCache);
+        let scene = cx.setup.scene;
+        let caustic = match scene.has_delta() {
+            true => Some(
+                build_caustics(scene, s.seed, (photons, model.cache_bins), cx.stop)
+                    .ok_or(interrupted.clone())?,
+            ),
+            false => None,
+        };
         if as_fine {
-            return Ok(Some(ModelCache { own: None }));
+            return Ok(Some(ModelCache { own: None, caustic }));
         }
-        let own = build(cx.setup.scene, s.seed, (photons, model.cache_bins), cx.stop)
-            .ok_or(RenderError::Interrupted(Stage::RadianceCache))?;
-        Ok(Some(ModelCache { own: Some(own) }))
+        let own = build(scene, s.seed, (photons, model.cache_bins), cx.stop).ok_or(interrupted)?;
+        Ok(Some(ModelCache {
+            own: Some(own),
+            caustic,
+        }))
     }
 
     fn report(&self, cache: &ModelCache, setup: &Setup<'_>) -> Option<(u64, String)> {

@@ -61,14 +61,30 @@ pub(super) fn build(
     (photons, bins): (u64, u32),
     stop: &(dyn Fn() -> bool + Sync),
 ) -> Option<RadianceCache> {
+    RadianceCache::build_until(scene, &cache_settings(scene, seed, (photons, bins)), stop)
+}
+
+/// [`build`] of the caustic light alone: what reaches a surface from a light through mirrors
+/// and glass only ([`bdpm_photon::PhotonArrival::caustic`]).
+pub(super) fn build_caustics(
+    scene: &Scene,
+    seed: u64,
+    (photons, bins): (u64, u32),
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Option<RadianceCache> {
+    let settings = cache_settings(scene, seed, (photons, bins));
+    RadianceCache::build_of_until(scene, &settings, &|a| a.caustic, stop)
+}
+
+/// The cache settings of `scene`: cells from its extent.
+fn cache_settings(scene: &Scene, seed: u64, (photons, bins): (u64, u32)) -> CacheSettings {
     let (lo, hi) = scene.geometry().bounds();
-    let settings = CacheSettings {
+    CacheSettings {
         bins,
         cell_size: (hi - lo).max_element() / CACHE_CELLS_PER_EXTENT,
         photons,
         seed,
-    };
-    RadianceCache::build_until(scene, &settings, stop)
+    }
 }
 
 /// A cache's report: its bytes and one line (`purpose` prefixes it) of cells, bins, where b
