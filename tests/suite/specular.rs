@@ -263,3 +263,69 @@ fn a_glass_shell_in_the_furnace_is_invisible() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// The model-based weights' per-pixel inputs see through a planar mirror: a pixel that sees
+/// the room in the mirror gets the ρ (and so N_eff) of its footprint on the x₀ behind the
+/// mirror, which is the footprint the unfolded room's pixel has on the mirror image of that
+/// x₀ (ray differentials reflected by the plane: equal up to rounding), and A, B of that x₀.
+/// Before the table followed delta chains, these pixels had ρ = 0 and A = B = 0.
+#[test]
+fn the_pixel_table_sees_through_a_planar_mirror() {
+    let camera = "[camera]\nposition = [0.5, 0.5, 0.9]\nlook_at = [0.5, 0.45, 0.0]\n\
+                  up = [0.0, 1.0, 0.0]\nvfov = 70\n\n";
+    let walls = "[material.walls]\nkd = 0.5\n\n";
+    let mirror = "[material.mirror]\ntype = \"mirror\"\n\n";
+    let lit = [0.3, 0.75, 0.55];
+    let mirrored = format!(
+        "{RENDER}{camera}{}{walls}{mirror}{}",
+        light(lit),
+        room(0.0, 1.0, "mirror")
+    );
+    let unfolded = format!(
+        "{RENDER}{camera}{}{}{walls}{}",
+        light(lit),
+        light([lit[0], lit[1], -lit[2]]),
+        room(-1.0, 1.0, "walls")
+    );
+    let (scene_m, settings) = load(&mirrored);
+    let (scene_u, _) = load(&unfolded);
+    let mut s = with_mode(&settings, "optimal", 1, 4, 20_000);
+    s.radius = Some(0.03);
+    let table = |scene: &Scene| {
+        bdpm_integrator::Renderer::new(scene, &s)
+            .expect("valid settings")
+            .pixel_table()
+            .expect("optimal builds a table")
+            .clone()
+    };
+    let (tm, tu) = (table(&scene_m), table(&scene_u));
+    let (mut mirror_pixels, mut shared) = (0, 0);
+    for y in 0..24 {
+        for x in 0..24 {
+            let cam = scene_m.camera();
+            let d = cam.ray_direction(x as f32 + 0.5, y as f32 + 0.5);
+            let hit = scene_m
+                .geometry()
+                .intersect(cam.position(), d, f32::INFINITY);
+            if !hit.is_some_and(|h| scene_m.is_delta(scene_m.shade(&h, -d).material)) {
+                continue;
+            }
+            mirror_pixels += 1;
+            let (a, b) = (tm.get(x, y), tu.get(x, y));
+            assert!(
+                (a.overlap - b.overlap).abs() <= 1e-4 + 1e-3 * b.overlap,
+                "pixel ({x}, {y}): rho {} through the mirror, {} unfolded",
+                a.overlap,
+                b.overlap
+            );
+            assert_eq!(a.camera_samples > 1.0, b.camera_samples > 1.0);
+            assert!(
+                a.terms.a > 0.0 && a.terms.b > 0.0,
+                "pixel ({x}, {y}): A, B 0"
+            );
+            shared += usize::from(a.overlap > 0.05);
+        }
+    }
+    eprintln!("{mirror_pixels} mirror pixels, {shared} with rho > 0.05");
+    assert!(mirror_pixels > 200 && shared > mirror_pixels / 2);
+}

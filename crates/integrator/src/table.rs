@@ -116,8 +116,9 @@ pub(crate) fn pixel_terms(
 /// through the delta chain `chain` ((vertices, branches) of its [`DeltaWalk`]; (0, 0) where
 /// it sees x₀ directly): the footprint is the parallelogram where the rays through
 /// (x ± ½, y ± ½) cross x₀'s tangent plane (ray differentials, as pbrt does for texture
-/// filtering), each taken through the same mirrors and glass with the same branches
-/// ([`Scene::follow_branches`]; a ray that cannot follow them makes the footprint unbounded).
+/// filtering), each taken with the centre's ray through the same mirrors and glass on the same
+/// branches as a ray differential ([`Scene::follow_branches`]; one that cannot follow makes
+/// the footprint unbounded).
 ///
 /// A footprint that crosses an edge or a silhouette is treated as if it continued on x₀'s
 /// plane. Pairs of samples on the two sides of the edge share no photons, but the pairs on each
@@ -138,26 +139,32 @@ pub(crate) fn footprint_overlap(
     let cam = &scene.camera();
     let n = sh.ng.as_dvec3();
     let unbounded = glam::DVec3::splat(f64::INFINITY);
+    // A nearby ray's last segment after a chain is a line of the differential: it may cross
+    // x₀'s plane before the last delta vertex's plane (t < 0) where the centre's crosses it
+    // after. From the camera, a crossing behind it is none.
+    let behind_ok = vertices > 0;
     let cross_from = |origin: glam::DVec3, d: glam::DVec3| {
         let t = n.dot(sh.p.as_dvec3() - origin) / n.dot(d);
-        // Behind the ray's origin or parallel to the plane: an unbounded footprint.
-        if t > 0.0 && t.is_finite() {
+        // Behind the camera or parallel to the plane: an unbounded footprint.
+        if (t > 0.0 || behind_ok) && t.is_finite() {
             origin + d * t
         } else {
             unbounded
         }
     };
-    let cross = |px: f32, py: f32| {
-        let d = cam.ray_direction(px, py);
-        if vertices == 0 {
-            return cross_from(cam.position().as_dvec3(), d.as_dvec3());
-        }
+    let offsets = [(0.5, 0.0), (-0.5, 0.0), (0.0, 0.5), (0.0, -0.5)];
+    let near = offsets.map(|(dx, dy)| cam.ray_direction(x + dx, y + dy));
+    let c = if vertices == 0 {
+        near.map(|d| cross_from(cam.position().as_dvec3(), d.as_dvec3()))
+    } else {
+        let centre = (cam.position(), cam.ray_direction(x, y));
         scene
-            .follow_branches(cam.position(), d, vertices, branches)
-            .map_or(unbounded, |(o, d)| cross_from(o.as_dvec3(), d.as_dvec3()))
+            .follow_branches(centre, (vertices, branches), near)
+            .map_or([unbounded; 4], |rays| {
+                rays.map(|(o, d)| cross_from(o.as_dvec3(), d.as_dvec3()))
+            })
     };
-    let edge_x = cross(x + 0.5, y) - cross(x - 0.5, y);
-    let edge_y = cross(x, y + 0.5) - cross(x, y - 0.5);
+    let (edge_x, edge_y) = (c[0] - c[1], c[2] - c[3]);
     let (edge_x, edge_y, radius) = (edge_x.to_array(), edge_y.to_array(), radius as f64);
     match strata {
         Some(strata) => overlap_factor_stratified(edge_x, edge_y, radius, strata),

@@ -178,36 +178,51 @@ impl Scene {
         None
     }
 
-    /// The ray from `origin` along the unit `dir` taken through `vertices` delta vertices with
-    /// the branches of `branches` (bit i: refract at the i-th; see [`DeltaWalk::branches`]),
-    /// as a ray differential follows a nearby ray through the same chain: the origin and unit
-    /// direction of its last segment, or `None` where it meets a non-delta surface, leaves the
-    /// scene, or cannot take its branch (total internal reflection) before the end.
-    pub fn follow_branches(
+    /// Ray differentials through a delta chain: the ray from `origin` along the unit `dir`
+    /// is taken through its first `vertices` delta vertices on the branches of `branches`
+    /// (bit i: refract at the i-th; see [`DeltaWalk::branches`]), and each nearby ray of
+    /// `near` (from the same origin, unit directions) with it: at each of the ray's delta
+    /// vertices a nearby ray's line crosses that vertex's tangent plane (ahead or behind) and
+    /// scatters there as the ray does (same normal, same branch), whatever the surface does
+    /// beside the vertex. The nearby rays' last segments (origin, unit direction), or `None`
+    /// where the ray leaves the chain or a nearby ray is parallel to a plane or cannot take
+    /// the branch (total internal reflection).
+    pub fn follow_branches<const N: usize>(
         &self,
-        mut origin: Vec3,
-        mut dir: Vec3,
-        vertices: u32,
-        branches: u64,
-    ) -> Option<(Vec3, Vec3)> {
+        (mut origin, mut dir): (Vec3, Vec3),
+        (vertices, branches): (u32, u64),
+        near: [Vec3; N],
+    ) -> Option<[(Vec3, Vec3); N]> {
+        let mut rays = near.map(|d| (origin, d));
         for i in 0..vertices.min(MAX_DELTA_CHAIN) {
             let hit = self.geometry().intersect(origin, dir, f32::INFINITY)?;
-            let wo = -dir;
-            let sh = self.shade(&hit, wo);
+            let sh = self.shade(&hit, -dir);
             if !self.is_delta(sh.material) {
                 return None;
             }
             let refract = (branches >> i) & 1 == 1;
             // u = 0 reflects wherever F > 0; u just below 1 refracts wherever F < 1.
             let u = if refract { 1.0 - f32::EPSILON } else { 0.0 };
-            let step = self.delta_step(&sh, wo, u, Transport::Radiance)?;
-            if step.refracted != refract {
-                return None;
+            let forced = |sh: &Shading, d: Vec3| {
+                let step = self.delta_step(sh, -d, u, Transport::Radiance)?;
+                (step.refracted == refract)
+                    .then(|| (self.spawn(sh, step.direction), step.direction))
+            };
+            for (o, d) in rays.iter_mut() {
+                // A line of the differential: its crossing may lie behind its origin.
+                let t = sh.ng.dot(sh.p - *o) / sh.ng.dot(*d);
+                if !t.is_finite() {
+                    return None;
+                }
+                let at = Shading {
+                    p: *o + *d * t,
+                    ..sh
+                };
+                (*o, *d) = forced(&at, *d)?;
             }
-            origin = self.spawn(&sh, step.direction);
-            dir = step.direction;
+            (origin, dir) = forced(&sh, dir)?;
         }
-        Some((origin, dir))
+        Some(rays)
     }
 }
 
