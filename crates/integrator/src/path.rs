@@ -37,6 +37,8 @@ pub(crate) fn trace_path_with_first(
 ) -> Vec3 {
     let mut radiance = Vec3::ZERO;
     let mut beta = Vec3::ONE;
+    // The radiance scaling of the refractions so far (Π 1/η²), which the roulette leaves out.
+    let mut eta_scale = 1.0f32;
     for depth in 0..MAX_DEPTH {
         let Some(hit) = scene.geometry().intersect(origin, dir, f32::INFINITY) else {
             break;
@@ -50,7 +52,8 @@ pub(crate) fn trace_path_with_first(
                 break;
             };
             beta *= step.weight;
-            if !survives(&mut beta, depth, roulette_depth, rng) {
+            eta_scale *= step.eta_scale;
+            if !survives(&mut beta, eta_scale, depth, roulette_depth, rng) {
                 break;
             }
             origin = scene.spawn(&sh, step.direction);
@@ -72,7 +75,7 @@ pub(crate) fn trace_path_with_first(
             break;
         }
         beta *= s.weight;
-        if !survives(&mut beta, depth, roulette_depth, rng) {
+        if !survives(&mut beta, eta_scale, depth, roulette_depth, rng) {
             break;
         }
         origin = scene.spawn(&sh, wi);
@@ -82,11 +85,18 @@ pub(crate) fn trace_path_with_first(
 }
 
 /// Russian roulette after scattering `depth` (from 0): from `roulette_depth` scatterings on,
-/// the path goes on with probability min(max channel of `beta`, 0.95), `beta` divided by it.
+/// the path goes on with probability min(max channel of `beta`/`eta_scale`, 0.95), `beta`
+/// divided by it (`eta_scale`: the refractions' radiance scaling, 1 without glass).
 #[inline]
-fn survives(beta: &mut Vec3, depth: u32, roulette_depth: u32, rng: &mut Rng) -> bool {
+fn survives(
+    beta: &mut Vec3,
+    eta_scale: f32,
+    depth: u32,
+    roulette_depth: u32,
+    rng: &mut Rng,
+) -> bool {
     if depth + 1 >= roulette_depth {
-        let q = beta.max_element().min(MAX_SURVIVAL);
+        let q = (*beta / eta_scale).max_element().min(MAX_SURVIVAL);
         if q <= 0.0 || rng.uniform() >= q {
             return false;
         }

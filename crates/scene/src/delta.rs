@@ -29,6 +29,11 @@ pub struct DeltaStep {
     /// Probability that the branch taken was sampled (a dielectric's F or 1 − F; 1 at a
     /// mirror).
     pub probability: f32,
+    /// The factor by which the step scales radiance for crossing into another medium: 1/η²
+    /// (η = η_t/η_i) for a refraction in [`Transport::Radiance`], else 1. `weight` divided by
+    /// it is the light the step keeps; a roulette keys on that, as pbrt-v4 does with its
+    /// `etaScale`, or it would end most paths entering glass and weight the rest by η².
+    pub eta_scale: f32,
 }
 
 /// Where a ray's walk through delta vertices ended (see [`Scene::walk_to_non_delta`]).
@@ -80,6 +85,10 @@ impl Scene {
             weight: s.weight,
             refracted: s.refracted,
             probability: s.probability,
+            eta_scale: match mode {
+                Transport::Radiance if s.refracted => 1.0 / (s.eta * s.eta),
+                _ => 1.0,
+            },
         })
     }
 
@@ -120,8 +129,8 @@ impl Scene {
     ) -> Option<DeltaWalk> {
         self.walk_with(origin, dir, |sh, wo| {
             let step = self.delta_step(sh, wo, uniform(), mode)?;
-            let beta = roulette(step.weight, &mut uniform)?;
-            Some((step, beta))
+            let kept = roulette(step.weight / step.eta_scale, &mut uniform)?;
+            Some((step, kept * step.eta_scale))
         })
     }
 
