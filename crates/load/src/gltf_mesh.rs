@@ -213,8 +213,12 @@ fn read_document(origin: &Origin<'_>, budget: &Budget) -> Result<gltf::Gltf, Loa
             invalid(e)
         }
     })?;
-    let json = raw.document.into_json();
+    let mut json = raw.document.into_json();
     check_required_extensions(&json).map_err(|m| origin.err(m))?;
+    // gltf-json 1.4 parses KHR_materials_volume but leaves it off the list its validator
+    // accepts in extensionsRequired; the check above has accepted it.
+    json.extensions_required
+        .retain(|e| e != "KHR_materials_volume");
     // gltf-json 1.4's validator indexes the accessor list with a primitive's POSITION index
     // before checking it (mesh.rs, primitive_validate_hook), so that case is checked first.
     for (m, mesh) in json.meshes.iter().enumerate() {
