@@ -9,6 +9,7 @@ mod cornell;
 mod determinism;
 mod doc_claims;
 mod furnace;
+mod gltf_glass;
 mod light_leak;
 mod mesh_files;
 mod new_scenes;

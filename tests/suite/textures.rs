@@ -87,7 +87,8 @@ const GLTF: &str = r#"{
   "samplers": [ { "wrapS": 33071, "wrapT": 33071 } ],
   "textures": [ { "source": 0, "sampler": 0 } ],
   "materials": [ { "pbrMetallicRoughness": {
-    "baseColorFactor": [0.9, 0.8, 1.0, 1.0], "baseColorTexture": { "index": 0 } } } ],
+    "baseColorFactor": [0.9, 0.8, 1.0, 1.0], "baseColorTexture": { "index": 0 },
+    "metallicFactor": 0.0 } } ],
   "meshes": [ { "primitives": [ { "attributes": { "POSITION": 0, "TEXCOORD_0": 1 },
     "indices": 2, "material": 0 } ] } ],
   "nodes": [ { "mesh": 0 } ],

@@ -441,6 +441,13 @@ fn count_gltf(report: &mut LoadReport, part: &crate::gltf_mesh::GltfPart) {
     report.textured_materials += part.textured_materials;
     report.other_textures += part.other_textures;
     report.flat_primitives += part.flat_primitives;
+    report.gltf_mirrors += part.mapped.mirrors;
+    report.gltf_dielectrics += part.mapped.dielectrics;
+    for line in &part.mapped.warnings {
+        if !report.material_warnings.contains(line) {
+            report.material_warnings.push(line.clone());
+        }
+    }
 }
 
 /// The loader's message for a geometry that cannot be built (`skipped`: glTF point or line

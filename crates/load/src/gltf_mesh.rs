@@ -22,6 +22,7 @@ use gltf::mesh::Mode;
 use gltf::{Accessor, Node, Semantic};
 
 use crate::LoadError;
+use crate::gltf_material::{Made, Tally, make};
 use crate::materials::Materials;
 use crate::memory::Budget;
 
@@ -55,6 +56,8 @@ pub(crate) struct GltfPart {
     pub(crate) other_textures: usize,
     /// Triangle primitives without normals, shaded flat as glTF requires.
     pub(crate) flat_primitives: usize,
+    /// What this file's materials became: mirrors, dielectrics, and what was approximated.
+    pub(crate) mapped: Tally,
 }
 
 /// Where the file came from, for messages.
@@ -210,8 +213,12 @@ fn read_document(origin: &Origin<'_>, budget: &Budget) -> Result<gltf::Gltf, Loa
             invalid(e)
         }
     })?;
-    let json = raw.document.into_json();
+    let mut json = raw.document.into_json();
     check_required_extensions(&json).map_err(|m| origin.err(m))?;
+    // gltf-json 1.4 parses KHR_materials_volume but leaves it off the list its validator
+    // accepts in extensionsRequired; the check above has accepted it.
+    json.extensions_required
+        .retain(|e| e != "KHR_materials_volume");
     // gltf-json 1.4's validator indexes the accessor list with a primitive's POSITION index
     // before checking it (mesh.rs, primitive_validate_hook), so that case is checked first.
     for (m, mesh) in json.meshes.iter().enumerate() {
@@ -232,9 +239,14 @@ fn read_document(origin: &Origin<'_>, budget: &Budget) -> Result<gltf::Gltf, Loa
     })
 }
 
-/// Extensions a file may list in `extensionsRequired` that the loader reads (the material
-/// ones change only what bdpm ignores anyway: it renders base colour).
-const READ_EXTENSIONS: [&str; 2] = ["KHR_lights_punctual", "KHR_texture_transform"];
+/// Extensions a file may list in `extensionsRequired` that the loader reads.
+const READ_EXTENSIONS: [&str; 5] = [
+    "KHR_lights_punctual",
+    "KHR_texture_transform",
+    "KHR_materials_transmission",
+    "KHR_materials_ior",
+    "KHR_materials_volume",
+];
 
 /// One line for a file whose `extensionsRequired` names an extension bdpm cannot read, with
 /// what to do; the validator would otherwise list every accessor the extension left empty
@@ -381,10 +393,10 @@ struct Seen<'a> {
 }
 
 /// The scene material of a primitive and the TEXCOORD set its texture reads: the TOML
-/// material of the same name if there is one (used as it is, without a texture), otherwise a
-/// Lambert material with kd = baseColorFactor × the base-colour texture if it has one, or the
-/// shared default (kd = 0.8) when the primitive has none. Materials are counted once, when
-/// first met.
+/// material of the same name if there is one (used as it is, without a texture), otherwise
+/// the model `gltf_material::map` makes of it (a mirror, a dielectric, or Lambert with
+/// kd = baseColorFactor × the base-colour texture if it has one), or the shared default
+/// (kd = 0.8) when the primitive has none. Materials are counted once, when first met.
 fn primitive_material(
     origin: &Origin<'_>,
     prim: &gltf::Primitive<'_>,
@@ -414,13 +426,15 @@ fn primitive_material(
             Some(name) => name.to_string(),
             None => format!("gltf:{}#{index}", origin.written.display()),
         };
-        let [r, g, b, _] = mat.pbr_metallic_roughness().base_color_factor();
-        let kd = Vec3::new(r, g, b);
-        if !(kd.is_finite() && kd.min_element() >= 0.0 && kd.max_element() <= 1.0) {
-            return Err(origin.err(format!(
-                "material {index} ('{name}'): baseColorFactor {kd} has a channel outside [0, 1]"
-            )));
-        }
+        let (json, tally) = (seen.json, &mut seen.part.mapped);
+        let made = make(json, index, &name, origin.written, materials, tally);
+        let kd = match made.map_err(|m| origin.err(m))? {
+            Made::Lambert(kd) => kd,
+            Made::Delta(m) => {
+                let _ = seen.materials.insert(index, (m, None));
+                return Ok((m, None));
+            }
+        };
         let m = materials
             .add_lambert(name, kd)
             .map_err(|e| origin.err(format!("material {index}: {e}")))?;

@@ -49,6 +49,7 @@ mod build;
 mod ctx;
 mod error;
 mod files;
+mod gltf_material;
 mod gltf_mesh;
 mod identity;
 mod image;
@@ -151,14 +152,24 @@ pub struct LoadReport {
     /// glTF materials with normal, occlusion, emissive or metallic-roughness textures, which
     /// are ignored.
     pub other_textures: usize,
+    /// glTF materials made perfect mirrors (metallicFactor 1, roughnessFactor ≤ 0.05).
+    pub gltf_mirrors: usize,
+    /// glTF materials made smooth dielectrics (transmitted share ≥ 0.5, roughnessFactor
+    /// ≤ 0.05).
+    pub gltf_dielectrics: usize,
+    /// One line per approximation a glTF material needed (rough or partial metal and
+    /// transmission rendered as Lambert, textures a mirror or glass does not apply, …), naming
+    /// the glTF file and the material; each line once, however many shapes show the file.
+    pub material_warnings: Vec<String>,
     /// Whether `[render].radius` was given; otherwise the settings hold the default (`"0.5px"`).
     pub radius_given: bool,
 }
 
 impl LoadReport {
     /// One line for each kind of content that was left out, skipped or simplified
-    /// (zero-area triangles, glTF primitives, lights, cameras, textures), for the driver to
-    /// print as warnings; empty when nothing was.
+    /// (zero-area triangles, glTF primitives, lights, cameras, textures), and one for each
+    /// glTF material approximation (the first [`MATERIAL_WARNINGS_SHOWN`], then a count), for
+    /// the driver to print as warnings; empty when nothing was.
     pub fn warnings(&self) -> Vec<String> {
         let mut out = Vec::new();
         if self.degenerate_triangles > 0 {
@@ -192,9 +203,21 @@ impl LoadReport {
                 self.other_textures
             ));
         }
+        let shown = self.material_warnings.len().min(MATERIAL_WARNINGS_SHOWN);
+        out.extend_from_slice(&self.material_warnings[..shown]);
+        if self.material_warnings.len() > shown {
+            out.push(format!(
+                "glTF: {} more material approximation(s) (material_warnings in the load report)",
+                self.material_warnings.len() - shown
+            ));
+        }
         out
     }
 }
+
+/// Most of [`LoadReport::material_warnings`] that [`LoadReport::warnings`] lists one by one;
+/// the rest are counted in one line.
+pub const MATERIAL_WARNINGS_SHOWN: usize = 8;
 
 /// How to load a scene.
 #[derive(Clone, Debug, Default)]

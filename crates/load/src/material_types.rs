@@ -11,7 +11,7 @@ use crate::schema::MaterialDef;
 
 /// The range of `ior`: bdpm_bdf's [`bdpm_bdf::ETA_MIN`] and [`bdpm_bdf::ETA_MAX`] as written
 /// (their f32 values print as 0.009999…).
-const IOR_RANGE: (f64, f64) = (0.01, 100.0);
+pub(crate) const IOR_RANGE: (f64, f64) = (0.01, 100.0);
 const _: () =
     assert!(IOR_RANGE.0 as f32 == bdpm_bdf::ETA_MIN && IOR_RANGE.1 as f32 == bdpm_bdf::ETA_MAX);
 

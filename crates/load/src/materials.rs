@@ -69,6 +69,12 @@ impl Materials {
         Ok(self.list.len() as u32 - 1)
     }
 
+    /// Adds a mirror or dielectric made from a glTF file (not reachable by name from shapes).
+    pub(crate) fn add_delta(&mut self, name: String, model: bdpm_bdf::Material) -> u32 {
+        self.list.push(Material::new(name, model));
+        self.list.len() as u32 - 1
+    }
+
     /// Gives material `m` a base-colour texture.
     pub(crate) fn set_texture(&mut self, m: u32, texture: Arc<Texture>) {
         let m = m as usize;

@@ -218,6 +218,13 @@ struct GltfOut {
     textures: usize,
     /// Materials whose normal, occlusion, emissive or metallic-roughness textures were ignored.
     other_textures: usize,
+    /// Materials made perfect mirrors (smooth metal).
+    mirrors: usize,
+    /// Materials made smooth dielectrics (smooth transmission).
+    dielectrics: usize,
+    /// What glTF materials needed approximated, one line each (all of them; the `warnings`
+    /// list the first few).
+    material_warnings: Vec<String>,
 }
 
 #[derive(Serialize)]
@@ -281,6 +288,9 @@ impl SceneOut {
                 textured_materials: load.textured_materials,
                 textures: load.textures,
                 other_textures: load.other_textures,
+                mirrors: load.gltf_mirrors,
+                dielectrics: load.gltf_dielectrics,
+                material_warnings: load.material_warnings.clone(),
             },
         }
     }

@@ -379,7 +379,8 @@ fn truncated_and_corrupted_files_never_panic() {
 // ---- Issue 15: strips and fans, reported skips, confined buffer URIs, real files.
 
 /// glTF using the unit quad's positions (accessor 0) as a strip, a fan and points, with a
-/// textured material on the strip and a camera node.
+/// textured material on the strip (a dielectric: glTF's default metallicFactor 1 would add a
+/// rough-metal warning) and a camera node.
 fn modes_json(buffer_uri: &str) -> String {
     format!(
         r#"{{
@@ -392,7 +393,7 @@ fn modes_json(buffer_uri: &str) -> String {
   "images": [ {{ "uri": "wood.png" }} ],
   "textures": [ {{ "source": 0 }} ],
   "materials": [
-    {{ "name": "wood", "pbrMetallicRoughness": {{ "baseColorTexture": {{ "index": 0 }} }} }}
+    {{ "name": "wood", "pbrMetallicRoughness": {{ "baseColorTexture": {{ "index": 0 }}, "metallicFactor": 0 }} }}
   ],
   "cameras": [ {{ "type": "perspective", "perspective": {{ "yfov": 0.8, "znear": 0.1 }} }} ],
   "meshes": [

@@ -6,6 +6,7 @@
 mod errors;
 mod fuzz;
 mod gltf;
+mod gltf_materials;
 mod mesh_files;
 mod round4;
 mod scenes;
