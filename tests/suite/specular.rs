@@ -408,3 +408,38 @@ fn a_glass_slab_transmits_its_closed_form() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// The run report's account of the path kinds through mirrors and glass: none in a scene
+/// without them; in the glass-caustic room, camera chains in every mode, photons through the
+/// glass but for `path`, caustics merged at x₀ where the mode merges there, and BDD=1 through
+/// the glass only where its weight can be non-zero (`bdd1`; Lambert walls give 0 otherwise).
+#[test]
+fn the_report_says_which_paths_through_glass_ran() {
+    let (plain, settings) = bdpm_suite::load("cornell-lambert.toml", 8, 8);
+    let s = with_mode(&settings, "balance", 1, 1, 1000);
+    let ran = bdpm_integrator::Renderer::new(&plain, &s)
+        .expect("valid")
+        .paths_ran();
+    assert_eq!(ran, bdpm_integrator::PathsRan::default());
+    assert!(ran.summary().is_none());
+    let (glass, settings) = bdpm_suite::load("glass-caustic.toml", 8, 8);
+    for (mode, x1, photons, caustics) in [
+        ("balance", false, true, true),
+        ("bdd1", true, true, false),
+        ("path", true, false, false),
+    ] {
+        let s = with_mode(&settings, mode, 1, 1, 1000);
+        let ran = bdpm_integrator::Renderer::new(&glass, &s)
+            .expect("valid")
+            .paths_ran();
+        assert_eq!(ran.delta_materials, 1, "{mode}");
+        assert!(ran.camera_through_delta, "{mode}");
+        assert_eq!(ran.x1_through_delta, x1, "{mode}");
+        assert_eq!(ran.photons_through_delta, photons, "{mode}");
+        assert_eq!(ran.caustics_merged_at_x0, caustics, "{mode}");
+        assert!(
+            ran.summary()
+                .is_some_and(|l| l.contains("1 delta material)"))
+        );
+    }
+}

@@ -657,6 +657,9 @@ impl<'a> RenderSession<'a> {
             (self.samples - self.replayed_samples) as f64 / self.render_seconds.max(1e-9) / 1e6,
             prep.pool.current_num_threads()
         );
+        if let Some(line) = self.renderer.paths_ran().summary() {
+            say!("{line}");
+        }
         for w in &self.warnings[known_before..] {
             say!("warning: {w}");
         }

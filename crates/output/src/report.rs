@@ -268,6 +268,32 @@ pub struct RunReport {
     warnings: Vec<String>,
     /// The memory estimate made before rendering, its limit and the measured peak.
     memory: MemoryOut,
+    /// Which path kinds through mirrors and glass the render sampled.
+    paths: PathsOut,
+}
+
+/// [`bdpm_integrator::PathsRan`] as the report writes it.
+#[derive(Serialize)]
+struct PathsOut {
+    delta_materials: usize,
+    camera_through_delta: bool,
+    x1_through_delta: bool,
+    caustics_merged_at_x0: bool,
+    photons_through_delta: bool,
+    light_connections: bool,
+}
+
+impl From<bdpm_integrator::PathsRan> for PathsOut {
+    fn from(p: bdpm_integrator::PathsRan) -> PathsOut {
+        PathsOut {
+            delta_materials: p.delta_materials,
+            camera_through_delta: p.camera_through_delta,
+            x1_through_delta: p.x1_through_delta,
+            caustics_merged_at_x0: p.caustics_merged_at_x0,
+            photons_through_delta: p.photons_through_delta,
+            light_connections: p.light_connections,
+        }
+    }
 }
 
 impl SceneOut {
@@ -403,6 +429,7 @@ impl RunReport {
             outputs: f.outputs.all().map(|p| p.display().to_string()),
             warnings: f.warnings.to_vec(),
             memory: MemoryOut::of(&f.memory),
+            paths: f.renderer.paths_ran().into(),
         }
     }
 
