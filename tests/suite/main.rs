@@ -17,6 +17,7 @@ mod precision;
 mod predict;
 mod seams;
 mod specular;
+mod specular_scenes;
 mod stages;
 mod stiff;
 mod textures;
