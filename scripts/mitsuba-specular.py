@@ -364,6 +364,8 @@ def block_means(imgs, mask):
 def compare(name, b_mean, b_se, b_passes, m_runs, mask):
     """The statistics of one comparison (bdpm first, Mitsuba second) over the masked pixels."""
     k = len(m_runs)
+    if not mask.any():
+        return {"comparison": name, "pixels": 0}
     m_mean = m_runs.mean(axis=0)
     m_se = m_runs.std(axis=0, ddof=1) / math.sqrt(k)
     sel = mask[:, :, None] & np.ones(3, dtype=bool)
@@ -393,6 +395,10 @@ def compare(name, b_mean, b_se, b_passes, m_runs, mask):
 
 def print_row(r):
     """One comparison as a line."""
+    if r["pixels"] == 0:
+        print(f"{r['comparison']:<28} no pixels: the camera sees a mirror or glass first "
+              "everywhere")
+        return
     f = lambda v, fmt: "-" if v is None else format(v, fmt)
     print(f"{r['comparison']:<28} pixels {r['pixels']:6d}  mean ratio "
           f"{r['mean_ratio']:.4f} ± {r['mean_ratio_se']:.4f}  pixels within 4σ "
