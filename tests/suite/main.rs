@@ -19,6 +19,7 @@ mod predict;
 mod predict_specular;
 mod seams;
 mod specular;
+mod specular_scenes;
 mod stages;
 mod stiff;
 mod textures;
