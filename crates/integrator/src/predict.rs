@@ -227,18 +227,7 @@ impl Renderer<'_> {
         // sampler's grid: half their squared difference estimates that cell's variance.
         let (mut cell, mut previous, mut within) = ((0, 0), 0.0, 0.0);
         for j in 0..rays {
-            // Key slot 1: the A/B rays of table.rs use slot 0 with the same pixel and ray.
-            let mut rng = Rng::new(s.seed, Domain::PixelTable, [pixel, j as u64, 1]);
-            let mut u = rng.uniform3();
-            if let Some(grid) = grid {
-                if j % 2 == 0 {
-                    // Key slot 3: the cell of pair j/2.
-                    let key = [pixel, j as u64 / 2, 3];
-                    cell = random_cell(grid, &mut Rng::new(s.seed, Domain::PixelTable, key));
-                }
-                let [a, b] = in_cell(cell, grid, [u[1], u[2]]);
-                u = [u[0], a, b];
-            }
+            let (mut rng, u) = direction_numbers(s.seed, (pixel, j), grid, &mut cell);
             // Through mirrors and glass each sample takes its own branches to its own x₀
             // (key slot 5), whose light the chain's throughput β scales; its N_eff is that of
             // its own footprint. Without a chain: the centre's x₀, β = 1 (bits unchanged).
@@ -405,6 +394,30 @@ impl Renderer<'_> {
             }
         }
     }
+}
+
+/// The stream and the three numbers of the model's direction `j` of `pixel`: with the
+/// sampler's direction strata `grid`, directions 2i and 2i + 1 share one random cell (`cell`,
+/// drawn at the even one).
+fn direction_numbers(
+    seed: u64,
+    (pixel, j): (u64, u32),
+    grid: Option<(u32, u32)>,
+    cell: &mut (u32, u32),
+) -> (Rng, [f32; 3]) {
+    // Key slot 1: the A/B rays of table.rs use slot 0 with the same pixel and ray.
+    let mut rng = Rng::new(seed, Domain::PixelTable, [pixel, j as u64, 1]);
+    let mut u = rng.uniform3();
+    if let Some(grid) = grid {
+        if j % 2 == 0 {
+            // Key slot 3: the cell of pair j/2.
+            let key = [pixel, j as u64 / 2, 3];
+            *cell = random_cell(grid, &mut Rng::new(seed, Domain::PixelTable, key));
+        }
+        let [a, b] = in_cell(*cell, grid, [u[1], u[2]]);
+        u = [u[0], a, b];
+    }
+    (rng, u)
 }
 
 /// One BDF-sampled direction v at x₀: its BDD=1 value and its photon-noise integrands, or None
