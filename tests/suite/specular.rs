@@ -73,9 +73,10 @@ fn a_planar_mirror_shows_the_glossy_room_it_mirrors() {
     );
 }
 
-/// Renders the mirror room and its unfolding with walls of `walls` (a material's keys) in each
-/// of `modes` and checks that they agree pixel by pixel.
-fn mirror_against_unfolded(walls: &str, modes: &[&str]) {
+/// The room whose wall z = 0 is a perfect mirror and its unfolding (the room twice as long with
+/// the mirrored light added), walls of `walls` (a material's keys), the same camera looking at
+/// the mirror; and the mirror room's settings.
+fn mirror_rooms(walls: &str) -> (Scene, Scene, RenderSettings) {
     let camera = "[camera]\nposition = [0.5, 0.5, 0.9]\nlook_at = [0.5, 0.45, 0.0]\n\
                   up = [0.0, 1.0, 0.0]\nvfov = 70\n\n";
     let walls = format!("[material.walls]\n{walls}\n\n");
@@ -94,6 +95,13 @@ fn mirror_against_unfolded(walls: &str, modes: &[&str]) {
     );
     let (scene_m, settings) = load(&mirrored);
     let (scene_u, _) = load(&unfolded);
+    (scene_m, scene_u, settings)
+}
+
+/// Renders the mirror room and its unfolding with walls of `walls` (a material's keys) in each
+/// of `modes` and checks that they agree pixel by pixel.
+fn mirror_against_unfolded(walls: &str, modes: &[&str]) {
+    let (scene_m, scene_u, settings) = mirror_rooms(walls);
     let mut failures = Vec::new();
     for &mode in modes {
         let s = with_mode(&settings, mode, 16, 4, 60_000);
@@ -271,24 +279,7 @@ fn a_glass_shell_in_the_furnace_is_invisible() {
 /// Before the table followed delta chains, these pixels had ρ = 0 and A = B = 0.
 #[test]
 fn the_pixel_table_sees_through_a_planar_mirror() {
-    let camera = "[camera]\nposition = [0.5, 0.5, 0.9]\nlook_at = [0.5, 0.45, 0.0]\n\
-                  up = [0.0, 1.0, 0.0]\nvfov = 70\n\n";
-    let walls = "[material.walls]\nkd = 0.5\n\n";
-    let mirror = "[material.mirror]\ntype = \"mirror\"\n\n";
-    let lit = [0.3, 0.75, 0.55];
-    let mirrored = format!(
-        "{RENDER}{camera}{}{walls}{mirror}{}",
-        light(lit),
-        room(0.0, 1.0, "mirror")
-    );
-    let unfolded = format!(
-        "{RENDER}{camera}{}{}{walls}{}",
-        light(lit),
-        light([lit[0], lit[1], -lit[2]]),
-        room(-1.0, 1.0, "walls")
-    );
-    let (scene_m, settings) = load(&mirrored);
-    let (scene_u, _) = load(&unfolded);
+    let (scene_m, scene_u, settings) = mirror_rooms("kd = 0.5");
     let mut s = with_mode(&settings, "optimal", 1, 4, 20_000);
     s.radius = Some(0.03);
     let table = |scene: &Scene| {
