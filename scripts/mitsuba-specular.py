@@ -3,7 +3,10 @@
 
 The scene is rebuilt in Mitsuba 3 through its Python dict API, triangle for triangle: quads,
 boxes and geodesic spheres are expanded exactly as crates/geometry/src/shapes.rs does (the same
-icosahedron, subdivision and winding), written as PLY meshes with flat facets. Materials map as
+icosahedron, subdivision and winding), written as PLY meshes: flat facets, except smooth
+spheres (bdpm's default), which carry the sphere's normal at each vertex as bdpm's do. With
+`--analytic-spheres` Mitsuba renders its analytic `sphere` instead: the difference between the
+geodesic sphere bdpm renders and a true sphere (docs/results.md, "Smooth spheres"). Materials map as
 
   Lambert (kd, no lobe)   -> `twosided` `diffuse` (reflectance kd)
   type = "mirror"         -> `twosided` `conductor`: specular_reflectance = reflectance, and
@@ -59,7 +62,7 @@ libLLVM (DRJIT_LIBLLVM_PATH, e.g. /usr/lib/x86_64-linux-gnu/libLLVM-19.so), else
 Usage:
   scripts/mitsuba-specular.py SCENE.toml [--resolution 128] [--out DIR] [--bdpm BIN]
       [--modes balance] [--passes 16] [--photons N] [--spp N] [--mitsuba-spp N] [--runs 16]
-      [--lambert-copy] [--variant llvm_ad_rgb] [--threads 2]
+      [--lambert-copy] [--analytic-spheres] [--variant llvm_ad_rgb] [--threads 2]
       [--equal-time SECONDS --reference REF.exr]
 """
 import argparse
@@ -76,6 +79,8 @@ import numpy as np
 
 BLOCK = 32
 SIGMAS = 4.0
+# --analytic-spheres: Mitsuba renders its own analytic spheres instead of bdpm's geodesic ones.
+ANALYTIC_SPHERES = False
 
 
 def fail(msg):
@@ -182,41 +187,62 @@ def orient(center, p0, p1, p2, inward):
     return np.array([p0, p1, p2] if outward != inward else [p0, p2, p1])
 
 
-def scene_triangles(scene, path):
-    """{material name: (T, 3, 3) array of triangles} for the scene's shapes."""
-    out = {}
+def scene_triangles(scene, path, analytic_spheres=False):
+    """{(material name, smooth): (T, 3, 3) array of triangles} for the scene's shapes, and the
+    list of spheres left analytic. `smooth` groups hold smooth spheres (the default, as bdpm
+    renders them: vertex normals along the sphere's own normal)."""
+    out, spheres = {}, []
     for k, shape in enumerate(scene.get("shape", [])):
         field = f"shape[{k}]"
         kind = shape.get("type")
+        smooth = False
         if kind == "quad":
             scale, translate = placement(shape, field, path)
             corners = np.array(shape["vertices"], dtype=np.float64) * scale + translate
             tris = quad_tris(corners)
         elif kind == "box":
             tris = box_tris(shape, field, path)
+        elif kind == "sphere" and analytic_spheres:
+            spheres.append(shape)
+            continue
         elif kind == "sphere":
             tris = sphere_tris(shape)
+            smooth = bool(shape.get("smooth", True))
         else:
             fail(f"{path}: {field}.type: '{kind}' is not rebuilt in Mitsuba "
                  "(quad, box and sphere are)")
-        out.setdefault(shape["material"], []).extend(tris)
-    return {m: np.array(t) for m, t in out.items()}
+        out.setdefault((shape["material"], smooth), []).extend(
+            [(t, sphere_normals(shape, t) if smooth else None) for t in tris])
+    return {k: v for k, v in out.items()}, spheres
 
 
-def write_ply(filename, tris):
-    """Writes triangles as a binary PLY mesh (3 vertices a triangle, no normals)."""
+def sphere_normals(shape, tri):
+    """The sphere's own unit normals at a triangle's vertices, on its front side."""
+    center = np.array(shape.get("center", [0.0, 0.0, 0.0]), dtype=np.float64)
+    sign = -1.0 if shape.get("facing", "outside") == "inside" else 1.0
+    d = tri - center
+    return sign * d / np.linalg.norm(d, axis=1, keepdims=True)
+
+
+def write_ply(filename, tris, normals=None):
+    """Writes triangles as a binary PLY mesh (3 vertices a triangle), with per-vertex normals
+    if given ((T, 3, 3) like `tris`)."""
     verts = tris.reshape(-1, 3).astype("<f4")
+    props = "property float x\nproperty float y\nproperty float z\n"
+    if normals is not None:
+        verts = np.hstack([verts, normals.reshape(-1, 3).astype("<f4")])
+        props += "property float nx\nproperty float ny\nproperty float nz\n"
     faces = np.empty((len(tris), 4), dtype="<i4")
     faces[:, 0] = 3
     faces[:, 1:] = np.arange(3 * len(tris), dtype="<i4").reshape(-1, 3)
-    header = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(verts)}\n"
-              "property float x\nproperty float y\nproperty float z\n"
+    header = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(tris) * 3}\n"
+              f"{props}"
               f"element face {len(tris)}\nproperty list uchar int vertex_indices\nend_header\n")
     face_bytes = b"".join(
         np.uint8(3).tobytes() + row[1:].tobytes() for row in faces)
     with open(filename, "wb") as f:
         f.write(header.encode())
-        f.write(verts.tobytes())
+        f.write(np.ascontiguousarray(verts).tobytes())
         f.write(face_bytes)
 
 
@@ -268,13 +294,22 @@ def mitsuba_scene(mi, scene, path, res, meshdir, integrator, spp):
         d[f"light{k}"] = {"type": "point", "position": light["position"],
                           "intensity": {"type": "rgb", "value": [f / (4 * math.pi) for f in flux]}}
     materials = scene.get("material", {})
-    for m, tris in scene_triangles(scene, path).items():
+    groups, spheres = scene_triangles(scene, path, ANALYTIC_SPHERES)
+    for (m, smooth), items in groups.items():
         if m not in materials:
             fail(f"{path}: unknown material '{m}'")
-        ply = os.path.join(meshdir, f"mesh-{re.sub(r'[^A-Za-z0-9_-]', '_', m)}.ply")
-        write_ply(ply, tris)
-        d[f"shape-{m}"] = {"type": "ply", "filename": ply, "face_normals": True,
-                           "bsdf": mitsuba_bsdf(m, materials[m], path)}
+        tris = np.array([t for t, _ in items])
+        normals = np.array([n for _, n in items]) if smooth else None
+        tag = re.sub(r'[^A-Za-z0-9_-]', '_', m) + ("-smooth" if smooth else "")
+        ply = os.path.join(meshdir, f"mesh-{tag}.ply")
+        write_ply(ply, tris, normals)
+        d[f"shape-{tag}"] = {"type": "ply", "filename": ply, "face_normals": not smooth,
+                             "bsdf": mitsuba_bsdf(m, materials[m], path)}
+    for k, sp in enumerate(spheres):
+        d[f"sphere-{k}"] = {"type": "sphere", "center": sp.get("center", [0.0, 0.0, 0.0]),
+                            "radius": float(sp["radius"]),
+                            "flip_normals": sp.get("facing", "outside") == "inside",
+                            "bsdf": mitsuba_bsdf(sp["material"], materials[sp["material"]], path)}
     return d
 
 
@@ -541,9 +576,13 @@ def main():
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--variant", default="llvm_ad_rgb")
     ap.add_argument("--lambert-copy", action="store_true")
+    ap.add_argument("--analytic-spheres", action="store_true",
+                    help="Mitsuba renders analytic spheres, not bdpm's geodesic ones")
     ap.add_argument("--equal-time", type=float, default=None)
     ap.add_argument("--reference", default=None)
     args = ap.parse_args()
+    global ANALYTIC_SPHERES
+    ANALYTIC_SPHERES = args.analytic_spheres
     args.modes = [m for m in args.modes.split(",") if m]
     if args.equal_time is not None and not args.reference:
         fail("--equal-time needs --reference REF.exr")

@@ -18,6 +18,7 @@ mod precision;
 mod predict;
 mod predict_specular;
 mod seams;
+mod smooth_spheres;
 mod specular;
 mod specular_scenes;
 mod stages;

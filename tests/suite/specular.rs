@@ -9,7 +9,7 @@ use bdpm_scene::Scene;
 use bdpm_suite::{films_agree, render, with_mode};
 
 /// A `[[shape]]` quad of `material` through four corners.
-fn quad(material: &str, corners: [[f64; 3]; 4]) -> String {
+pub(crate) fn quad(material: &str, corners: [[f64; 3]; 4]) -> String {
     let v: Vec<String> = corners
         .iter()
         .map(|c| format!("[{}, {}, {}]", c[0], c[1], c[2]))
@@ -22,7 +22,7 @@ fn quad(material: &str, corners: [[f64; 3]; 4]) -> String {
 
 /// The box x, y ∈ [0, 1], z ∈ [z0, z1] of quads: floor, ceiling and the x walls of `walls`,
 /// the end walls z = z0 of `near` and z = z1 of `walls`.
-fn room(z0: f64, z1: f64, near: &str) -> String {
+pub(crate) fn room(z0: f64, z1: f64, near: &str) -> String {
     let w = "walls";
     [
         quad(w, [[0., 0., z0], [1., 0., z0], [1., 0., z1], [0., 0., z1]]),
@@ -38,7 +38,7 @@ fn room(z0: f64, z1: f64, near: &str) -> String {
     .concat()
 }
 
-fn light(p: [f64; 3]) -> String {
+pub(crate) fn light(p: [f64; 3]) -> String {
     format!(
         "[[light]]\nposition = [{}, {}, {}]\nflux = [1.0, 1.0, 1.0]\n\n",
         p[0], p[1], p[2]
@@ -47,7 +47,7 @@ fn light(p: [f64; 3]) -> String {
 
 const RENDER: &str = "[render]\nresolution = [24, 24]\nseed = 3\nradius = 0.004\n\n";
 
-fn load(text: &str) -> (Scene, RenderSettings) {
+pub(crate) fn load(text: &str) -> (Scene, RenderSettings) {
     let loaded = load_scene_str(text, Path::new("."), Path::new("inline.toml"))
         .unwrap_or_else(|e| panic!("{e}"));
     (loaded.scene, loaded.settings)
@@ -117,7 +117,7 @@ fn mirror_against_unfolded(walls: &str, modes: &[&str]) {
 }
 
 /// Whether any of the centre and corners of pixel (x, y) sees the glass first.
-fn sees_glass(scene: &Scene, x: u32, y: u32) -> bool {
+pub(crate) fn sees_glass(scene: &Scene, x: u32, y: u32) -> bool {
     let cam = scene.camera();
     [(0.5, 0.5), (0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
         .iter()
@@ -132,7 +132,7 @@ fn sees_glass(scene: &Scene, x: u32, y: u32) -> bool {
 
 /// [`films_agree`] over the pixels where `keep` is true: the fraction of their channels within
 /// `k` combined standard errors, and the relative difference of the means with its error.
-fn agree_where(a: &Film, b: &Film, keep: &[bool], k: f64) -> (f64, f64, f64) {
+pub(crate) fn agree_where(a: &Film, b: &Film, keep: &[bool], k: f64) -> (f64, f64, f64) {
     let (ma, mb) = (a.mean(), b.mean());
     let (sa, sb) = (a.standard_error(), b.standard_error());
     let (mut within, mut total) = (0usize, 0usize);

@@ -29,8 +29,8 @@ impl TriangleMesh {
         let base = self.positions.len() as u32;
         self.positions.extend_from_slice(&v);
         if !self.normals.is_empty() {
-            let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
-            self.normals.extend_from_slice(&[n; 4]);
+            // Zero: the face normal exactly, as if the mesh had no normals.
+            self.normals.extend_from_slice(&[Vec3::ZERO; 4]);
         }
         self.indices.push([base, base + 1, base + 2]);
         self.indices.push([base, base + 2, base + 3]);
@@ -1137,7 +1137,7 @@ mod tests {
     #[test]
     fn planned_bytes_bound_what_the_geometry_keeps() {
         let mut sphere = TriangleMesh::default();
-        sphere.push_geodesic_sphere(Vec3::ZERO, 1.0, 64, false, 0);
+        sphere.push_geodesic_sphere(Vec3::ZERO, 1.0, 64, false, false, 0);
         let mut grid = TriangleMesh::default();
         for j in 0..200 {
             for i in 0..200 {

@@ -126,16 +126,23 @@ impl TriangleMesh {
 
     /// Appends a geodesic sphere of `radius` (m) around `center`: each icosahedron face cut
     /// into `frequency²` triangles whose vertices are projected onto the sphere
-    /// ([`geodesic_sphere_triangle_count`]). Flat facets (no vertex normals); front faces
-    /// point outward, or inward with `inward`.
+    /// ([`geodesic_sphere_triangle_count`]). Front faces point outward, or inward with
+    /// `inward`. With `smooth`, each vertex carries the sphere's own normal there, so that the
+    /// interpolated shading normal follows the sphere rather than the facet (what a mirror or
+    /// glass sphere needs to focus like a sphere); without, the facets are flat.
     pub fn push_geodesic_sphere(
         &mut self,
         center: Vec3,
         radius: f32,
         frequency: u32,
         inward: bool,
+        smooth: bool,
         material: u32,
     ) {
+        let with_normals = smooth || !self.normals.is_empty();
+        if with_normals && self.normals.is_empty() {
+            self.normals = vec![Vec3::ZERO; self.positions.len()];
+        }
         let (ico, faces) = icosahedron();
         let n = frequency.max(1);
         let nf = n as f32;
@@ -151,6 +158,10 @@ impl TriangleMesh {
                     let (wa, wb, wc) = ((n - i - j) as f32 / nf, i as f32 / nf, j as f32 / nf);
                     let p = (a * wa + b * wb + c * wc).normalize();
                     self.positions.push(center + radius * p);
+                    // Zero marks a flat vertex in a mesh that has normals elsewhere.
+                    if with_normals {
+                        self.normals.push(if smooth { p } else { Vec3::ZERO });
+                    }
                 }
             }
             // Row i holds n + 1 − i points, starting at offset(i).
@@ -171,16 +182,17 @@ impl TriangleMesh {
     }
 
     /// A geodesic sphere of `radius` (m) around `center`, front faces outward or, with
-    /// `inward`, inward ([`TriangleMesh::push_geodesic_sphere`]).
+    /// `inward`, inward, flat or `smooth` ([`TriangleMesh::push_geodesic_sphere`]).
     pub fn geodesic_sphere(
         center: Vec3,
         radius: f32,
         frequency: u32,
         inward: bool,
+        smooth: bool,
         material: u32,
     ) -> TriangleMesh {
         let mut mesh = TriangleMesh::default();
-        mesh.push_geodesic_sphere(center, radius, frequency, inward, material);
+        mesh.push_geodesic_sphere(center, radius, frequency, inward, smooth, material);
         mesh
     }
 
@@ -229,7 +241,7 @@ mod tests {
     fn a_geodesic_sphere_lies_on_its_sphere() {
         let center = Vec3::new(1.0, 2.0, 3.0);
         for frequency in [0, 1, 3] {
-            let mesh = TriangleMesh::geodesic_sphere(center, 0.5, frequency, false, 0);
+            let mesh = TriangleMesh::geodesic_sphere(center, 0.5, frequency, false, false, 0);
             assert_eq!(
                 mesh.indices.len() as u64,
                 geodesic_sphere_triangle_count(frequency)
@@ -238,5 +250,35 @@ mod tests {
                 assert!(((*p - center).length() - 0.5).abs() < 1e-6);
             }
         }
+    }
+
+    #[test]
+    fn a_smooth_sphere_shades_with_the_sphere_normal() {
+        // Rays from the centre hit the facets; the sphere's normal there is the ray direction.
+        // Flat facets are off by up to half a facet's angle (≈ 1° at frequency 16); the
+        // interpolated vertex normals by the much smaller error of normalised interpolation.
+        let center = Vec3::new(0.3, -0.2, 0.1);
+        let (mut flat_err, mut smooth_err) = (0.0f32, 0.0f32);
+        for (smooth, err) in [(false, &mut flat_err), (true, &mut smooth_err)] {
+            for inward in [false, true] {
+                let mesh = TriangleMesh::geodesic_sphere(center, 0.5, 16, inward, smooth, 0);
+                assert_eq!(
+                    mesh.normals.len(),
+                    if smooth { mesh.positions.len() } else { 0 }
+                );
+                let geometry = crate::Geometry::new(mesh.clone()).unwrap();
+                let mut rng = crate::Rng::new(7, crate::Domain::Other, [0; 3]);
+                for _ in 0..2000 {
+                    let d = crate::sampling::uniform_sphere(rng.uniform2());
+                    let hit = geometry.intersect(center, d, f32::INFINITY).unwrap();
+                    // ns lies on the side of ng (outward or inward as wound).
+                    assert!(hit.ns.dot(hit.ng) > 0.0);
+                    let exact = if inward { -d } else { d };
+                    *err = err.max(hit.ns.angle_between(exact));
+                }
+            }
+        }
+        assert!(flat_err > 0.01, "flat facets: {flat_err} rad");
+        assert!(smooth_err < 1e-3, "smooth: {smooth_err} rad");
     }
 }

@@ -375,7 +375,10 @@ fn sphere(
         ));
     }
     let inward = facing(ctx, prefix, s.facing.as_deref())?;
-    mesh.push_geodesic_sphere(center, radius, freq, inward, material);
+    // Smooth unless asked otherwise: a sphere is a sphere in every peer renderer, and a glass
+    // sphere with flat facets focuses a mosaic of facet images instead of its caustic.
+    let smooth = s.smooth.unwrap_or(true);
+    mesh.push_geodesic_sphere(center, radius, freq, inward, smooth, material);
     Ok(())
 }
 

@@ -140,6 +140,7 @@ pub(crate) struct SphereDef {
     pub(crate) center: Option<Point>,
     pub(crate) radius: Option<f64>,
     pub(crate) subdivisions: Option<u32>,
+    pub(crate) smooth: Option<bool>,
     pub(crate) material: Option<String>,
     pub(crate) facing: Option<String>,
 }

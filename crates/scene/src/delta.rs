@@ -36,6 +36,19 @@ pub struct DeltaStep {
     pub eta_scale: f32,
 }
 
+/// The factor by which a light path's (importance) throughput at a vertex with a shading
+/// normal differs from the camera path's, |wo·ns|·|wi·ng| / (|wo·ng|·|wi·ns|) for the unit
+/// directions `wo` (back along the arriving path) and `wi` (the one it leaves along): Veach's
+/// adjoint BSDF for shading normals (his thesis, §5.3), without which light tracing and photons
+/// would see a smooth glass or mirror sphere brighter or darker than camera paths do (the
+/// amount is in docs/results.md, "Smooth spheres"). `None` where a cosine vanishes.
+fn shading_normal_adjoint(sh: &Shading, wo: Vec3, wi: Vec3) -> Option<f32> {
+    let num = wo.dot(sh.frame.n).abs() * wi.dot(sh.ng).abs();
+    let den = wo.dot(sh.ng).abs() * wi.dot(sh.frame.n).abs();
+    let factor = num / den;
+    (den > 0.0 && factor.is_finite()).then_some(factor)
+}
+
 /// Where a ray's walk through delta vertices ended (see [`Scene::walk_to_non_delta`]).
 #[derive(Clone, Copy, Debug)]
 pub struct DeltaWalk {
@@ -80,9 +93,15 @@ impl Scene {
         if (s.refracted && side >= 0.0) || (!s.refracted && side <= 0.0) {
             return None;
         }
+        let weight = match mode {
+            Transport::Importance if sh.frame.n != sh.ng => {
+                s.weight * shading_normal_adjoint(sh, wo, direction)?
+            }
+            _ => s.weight,
+        };
         Some(DeltaStep {
             direction,
-            weight: s.weight,
+            weight,
             refracted: s.refracted,
             probability: s.probability,
             eta_scale: match mode {

@@ -178,7 +178,7 @@ fn furnace_density_matches_uniform_indirect_irradiance() {
     let k = 0.5f32;
     let flux = 1.0f32;
     // 20·16² = 5120 flat faces.
-    let mesh = TriangleMesh::geodesic_sphere(Vec3::ZERO, 1.0, 16, false, 0);
+    let mesh = TriangleMesh::geodesic_sphere(Vec3::ZERO, 1.0, 16, false, false, 0);
     assert!(mesh.triangle_count() >= 5000);
     let scene = scene(
         mesh,
