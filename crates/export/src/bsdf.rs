@@ -16,11 +16,14 @@ use crate::xml::Element;
 pub(crate) struct Mapped {
     /// The `<bsdf>` element, with its `id`.
     pub element: Element,
-    /// The texture image to write (path relative to the scene file, bytes), if textured.
-    pub texture: Option<(String, Vec<u8>)>,
+    /// The texture image to write, if textured.
+    pub texture: Option<Image>,
     /// What the mapping changed, one line each.
     pub warnings: Vec<String>,
 }
+
+/// An image file to write beside the scene: its path relative to the scene file, its bytes.
+pub(crate) type Image = (String, Vec<u8>);
 
 /// The id of material `index`'s BSDF in the scene file.
 pub(crate) fn id(index: u32) -> String {
@@ -89,7 +92,7 @@ fn smooth(
     bdf: &Bdf,
     texture: Option<&Texture>,
     warnings: &mut Vec<String>,
-) -> Result<(Element, Option<(String, Vec<u8>)>), String> {
+) -> Result<(Element, Option<Image>), String> {
     let (kd, gr) = (bdf.kd().as_dvec3(), bdf.gr().as_dvec3());
     let lobe = bdf.delta().filter(|_| gr.max_element() > 0.0);
     // In f64, so that kd/(1 − w) and gr/w round to kd and gr's own f32 values where they can.
@@ -135,7 +138,7 @@ fn diffuse(
     kd: Vec3,
     texture: Option<&Texture>,
     warnings: &mut Vec<String>,
-) -> Result<(Element, Option<(String, Vec<u8>)>), String> {
+) -> Result<(Element, Option<Image>), String> {
     let element = Element::plugin("bsdf", "diffuse");
     let Some(texture) = texture else {
         return Ok((element.rgb("reflectance", kd), None));

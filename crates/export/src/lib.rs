@@ -6,7 +6,7 @@
 //!
 //! The scene exported is the *loaded* one: the triangle meshes after placement, glTF node
 //! transforms and sphere tessellation, with their vertex normals and texture coordinates,
-//! in the frame bdpm renders in ([`bdpm_geometry`]'s local frame, which is the world frame
+//! in the frame bdpm renders in (the geometry's local frame, `Geometry::origin`, the world frame
 //! unless the scene lies far from the origin); so both renderers intersect the same f32
 //! triangles. The mapping (docs/scene-format.md, "Export to Mitsuba 3"):
 //!
@@ -17,7 +17,7 @@
 //! - Lambert → `twosided` `diffuse`; mirror → `twosided` `conductor`; dielectric →
 //!   `dielectric`; Lambert plus Gaussian lobe → a stand-in with a warning (see `bsdf`).
 //!
-//! Architecture: reads a [`Scene`], writes files only through [`write`] (staged, then
+//! Architecture: reads a [`Scene`], writes files only through [`write()`] (staged, then
 //! committed as a set by bdpm-output's `files`).
 
 mod bsdf;
