@@ -153,8 +153,8 @@ fn diffuse(
     if wrap_u != wrap_v {
         warnings.push(format!(
             "material '{name}': its texture wraps u by {} and v by {}; Mitsuba's bitmap has one \
-             wrap_mode, written as {} for both (the image differs where v leaves [0, 1] by \
-             more than half a texel)",
+             wrap_mode, written as {} for both (the image can differ where v leaves [0, 1] \
+             or comes within half a texel of its ends; mirror and clamp agree inside it)",
             wrap(wrap_u),
             wrap(wrap_v),
             wrap(wrap_u)
