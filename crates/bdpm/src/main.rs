@@ -3,6 +3,7 @@
 //! library crates; this binary is the IO boundary. The lab's subcommands (study, bench,
 //! compare, predict) come from `bdpm-lab` with the default feature `lab`.
 
+mod export;
 mod render;
 mod session;
 mod signal;
@@ -36,6 +37,10 @@ enum Command {
     /// the help names the modes that have one ([`weights::about`]).
     #[command(about = weights::about())]
     Weights(weights::WeightsArgs),
+    /// Write the scene for another renderer: `--to mitsuba -o DIR` writes DIR/scene.xml (Mitsuba 3),
+    /// the triangles bdpm renders as DIR/meshes/*.ply, textures as DIR/textures/*.exr and the
+    /// report DIR/export.json (every approximation listed, and printed as a warning).
+    Export(export::ExportArgs),
     /// Every mode name, one per line, in the mode table's order: for scripts
     /// (scripts/bit-check.sh renders each), so that no script keeps a list of its own.
     #[command(hide = true)]
@@ -56,6 +61,7 @@ fn main() -> ExitCode {
         Command::Render(args) => render::run(args),
         Command::Merge(args) => render::merge(args),
         Command::Weights(args) => weights::run(args).map(success),
+        Command::Export(args) => export::run(args).map(success),
         Command::Modes => {
             for name in bdpm_settings::Mode::names() {
                 bdpm_output::say!("{name}");

@@ -1066,6 +1066,14 @@ impl Geometry {
         self.tris[prim as usize].v
     }
 
+    /// Unit vertex normals of triangle `prim` (vertices 0, 1, 2), as the shading normal
+    /// interpolates them, or `None` for a flat-shaded triangle (its shading normal is
+    /// [`Geometry::normal`]). For exporters, which must hand another renderer the same normals.
+    pub fn vertex_normals(&self, prim: u32) -> Option<[Vec3; 3]> {
+        let tri = &self.tris[prim as usize];
+        tri.smooth.then_some(tri.n)
+    }
+
     /// Material index of triangle `prim`.
     pub fn material(&self, prim: u32) -> u32 {
         self.tris[prim as usize].material

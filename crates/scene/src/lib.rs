@@ -369,6 +369,13 @@ impl Scene {
         }
     }
 
+    /// Texture coordinates of the three vertices of triangle `prim`, if the scene has any
+    /// textured material (they are kept only then; zero where the triangle's material has no
+    /// texture). For exporters.
+    pub fn texcoords(&self, prim: u32) -> Option<[Vec2; 3]> {
+        self.textures.texcoords.get(prim as usize).copied()
+    }
+
     /// Interpolated texture coordinates at barycentric point `bary` of triangle `prim`.
     fn texcoord(&self, prim: u32, bary: Vec2) -> Vec2 {
         let [t0, t1, t2] = self.textures.texcoords[prim as usize];

@@ -207,6 +207,11 @@ impl Texture {
         self.image.size()
     }
 
+    /// The sampler's wrap modes along u and v.
+    pub fn wraps(&self) -> (Wrap, Wrap) {
+        (self.wrap_u, self.wrap_v)
+    }
+
     /// The texel at column `x`, row `y` (unwrapped).
     pub fn texel(&self, x: u32, y: u32) -> Vec3 {
         self.image

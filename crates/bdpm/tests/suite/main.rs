@@ -4,6 +4,7 @@
 //! per package instead of one per file.
 
 mod cli;
+mod export;
 mod round4_lab;
 mod round4_light;
 mod round4_settings;
