@@ -114,3 +114,9 @@ pub use survival::{MAX_SURVIVAL, survival_at, survival_probability};
 
 // Luminance is shared with the crates below the BDFs (photon tracing, the cache).
 pub use bdpm_core::{LUMINANCE_WEIGHTS, luminance};
+
+// The README (the crate's page on crates.io) as a hidden item, so that `cargo test --doc`
+// compiles and runs its example; the crate documentation above stays as it is.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

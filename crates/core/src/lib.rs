@@ -71,3 +71,9 @@ mod luminance_tests {
         assert_eq!(luminance(glam::Vec3::X), 0.2126f32);
     }
 }
+
+// The README (the crate's page on crates.io) as a hidden item, so that `cargo test --doc`
+// compiles and runs its example; the crate documentation above stays as it is.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

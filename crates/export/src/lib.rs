@@ -350,3 +350,9 @@ pub fn write(export: &Export, dir: &Path) -> Result<(), ExportError> {
     }
     bdpm_output::files::commit_all(staged).map_err(ExportError::Commit)
 }
+
+// The README (the crate's page on crates.io) as a hidden item, so that `cargo test --doc`
+// compiles and runs its example; the crate documentation above stays as it is.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

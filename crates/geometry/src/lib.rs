@@ -43,3 +43,9 @@ pub use mesh::{
     SurfaceSample, TriangleMesh,
 };
 pub use shapes::{BOX_FACES, BoxFace, geodesic_sphere_triangle_count, rect_corners};
+
+// The README (the crate's page on crates.io) as a hidden item, so that `cargo test --doc`
+// compiles and runs its example; the crate documentation above stays as it is.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

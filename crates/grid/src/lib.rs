@@ -751,3 +751,9 @@ mod measure {
         }
     }
 }
+
+// The README (the crate's page on crates.io) as a hidden item, so that `cargo test --doc`
+// compiles and runs its example; the crate documentation above stays as it is.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

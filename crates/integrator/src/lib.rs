@@ -53,3 +53,9 @@ pub use weightmap::{WeightMap, WeightTarget};
 // of the integrator needs one dependency.
 pub use bdpm_settings as settings;
 pub use bdpm_settings::{Mode, NoiseModel, PartialSettings, RenderSettings, Sampler, Setting};
+
+// The README (the crate's page on crates.io) as a hidden item, so that `cargo test --doc`
+// compiles and runs its example; the crate documentation above stays as it is.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

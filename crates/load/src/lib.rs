@@ -354,3 +354,9 @@ fn line_column(text: &str, offset: usize) -> (usize, usize) {
     let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
     (line, column)
 }
+
+// The README (the crate's page on crates.io) as a hidden item, so that `cargo test --doc`
+// compiles and runs its example; the crate documentation above stays as it is.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

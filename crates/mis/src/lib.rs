@@ -1001,3 +1001,9 @@ fn ratio_sat(num: f64, den: f64) -> f64 {
 
 #[cfg(test)]
 mod tests;
+
+// The README (the crate's page on crates.io) as a hidden item, so that `cargo test --doc`
+// compiles and runs its example; the crate documentation above stays as it is.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

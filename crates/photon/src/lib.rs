@@ -77,3 +77,9 @@ pub use scene::{PhotonScene, Scatter};
 pub use trace::{
     MAX_DEPTH, PathVertex, PhotonArrival, TraceOptions, trace_photons, trace_photons_until,
 };
+
+// The README (the crate's page on crates.io) as a hidden item, so that `cargo test --doc`
+// compiles and runs its example; the crate documentation above stays as it is.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

@@ -671,3 +671,9 @@ mod tests {
         assert_eq!(wall_scene(2.0, -Vec3::Z).pixel_footprint(), None);
     }
 }
+
+// The README (the crate's page on crates.io) as a hidden item, so that `cargo test --doc`
+// compiles and runs its example; the crate documentation above stays as it is.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
