@@ -1,6 +1,7 @@
 //! Tests of the `bdpm` binary as a user runs it: the files `render` and `weights` write and
 //! what they contain, one-line errors (exit code 1, never a panic) for bad input, and an
 //! interrupted render that keeps its work.
+use crate::{bdpm, scene};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
@@ -27,16 +28,6 @@ impl TempDir {
             .filter(|n| n.starts_with('.'))
             .collect()
     }
-}
-
-fn bdpm() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_bdpm"))
-}
-
-fn scene(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes")
-        .join(name)
 }
 
 fn run(cmd: &mut Command) -> Output {

@@ -2,18 +2,9 @@
 //! file left), the resolution override, the lobe's warning, and one-line errors for a format
 //! it does not write and an output that is not a directory. The export's contents are tested
 //! in crates/export/tests/export.rs.
-use std::path::{Path, PathBuf};
+use crate::{bdpm, scene};
+use std::path::Path;
 use std::process::{Command, Output};
-
-fn bdpm() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_bdpm"))
-}
-
-fn scene(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes")
-        .join(name)
-}
 
 fn run(cmd: &mut Command) -> (Output, String, String) {
     let out = cmd.output().expect("run bdpm");

@@ -12,6 +12,18 @@ mod round4_textures;
 mod scripts;
 mod study;
 
+/// The `bdpm` binary this package built.
+fn bdpm() -> std::process::Command {
+    std::process::Command::new(env!("CARGO_BIN_EXE_bdpm"))
+}
+
+/// The path of `name` under the repository's scenes/ folder.
+fn scene(name: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes")
+        .join(name)
+}
+
 /// A fresh directory under the system temp dir, named after `tag`, removed when dropped.
 fn temp_dir(tag: &str) -> tempfile::TempDir {
     tempfile::Builder::new()

@@ -2,19 +2,10 @@
 //! `study`, `bench`, `predict`, `weights` and `merge`; a study's time budget, preview names,
 //! output directory and reference; `compare` of identical files; `predict`'s pixels without
 //! predicted noise; the `--modes` help. Each test failed with the binary before its fix.
-use std::path::{Path, PathBuf};
+use crate::{bdpm, scene};
+use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
-
-fn bdpm() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_bdpm"))
-}
-
-fn scene(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes")
-        .join(name)
-}
 
 fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()

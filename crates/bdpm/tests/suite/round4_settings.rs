@@ -2,13 +2,10 @@
 //! documented, a flag that puts right a combination the scene file gets wrong, one line
 //! naming the field and the bound for every bad value of the radius, a `[render]` key, a flag
 //! or a `--modes` entry, and one interrupt during a long preparation that stops it at once.
+use crate::bdpm;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
-
-fn bdpm() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_bdpm"))
-}
 
 fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()

@@ -1,11 +1,8 @@
 //! Round four (issue 43): textures, glTF images and the scene's memory, through the binary.
 //! Every glTF, PNG and JPEG file is made by the test itself.
+use crate::bdpm;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn bdpm() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_bdpm"))
-}
+use std::process::Output;
 
 fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
