@@ -8,6 +8,7 @@ use bdpm_integrator::human_bytes;
 use bdpm_output::accum;
 use bdpm_output::cli::{CliResult, Overrides, parse_bytes, positive, whole};
 use bdpm_output::exr::Precision;
+use bdpm_output::header;
 use bdpm_output::system::available_memory;
 use clap::Args;
 
@@ -20,8 +21,9 @@ use crate::signal;
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]
 pub(crate) struct RenderArgs {
-    /// Scene file (TOML).
-    scene: PathBuf,
+    /// Scene file (TOML); with --resume, the one the accumulation file names by default.
+    #[arg(required_unless_present = "resume")]
+    scene: Option<PathBuf>,
     #[command(flatten)]
     overrides: Overrides,
     /// Output EXR path (default: the scene's `output`, else out/<scene>.exr).
@@ -57,7 +59,8 @@ pub(crate) struct RenderArgs {
     #[arg(long, value_name = "K", value_parser = whole::<u32>)]
     first_pass: Option<u32>,
     /// Continue the render held by this accumulation file (finished or interrupted) with the
-    /// next --passes passes after the last one it holds; same scene and settings required.
+    /// next --passes passes after the last one it holds, with the scene and settings flags its
+    /// header records (a settings flag given again must have the recorded value).
     #[arg(long, value_name = "PREVIOUS.accum.exr")]
     resume: Option<PathBuf>,
     /// Also write OUT.accum.exr, every pass's estimates for `bdpm merge` and `--resume`
@@ -73,6 +76,12 @@ pub(crate) struct RenderArgs {
     /// upper limit).
     #[arg(long, value_name = "X", value_parser = positive)]
     target_noise: Option<f64>,
+    /// Rewrite OUT.png and OUT.exr with the passes so far whenever SECONDS of wall time have
+    /// passed since the last preview (checked after each pass; written as a set, each file
+    /// replaced whole). The report's plan.previews_written counts them.
+    // `-1` is a value here, refused by `positive` with a message naming the flag.
+    #[arg(long, value_name = "SECONDS", value_parser = positive, allow_negative_numbers = true)]
+    preview_every: Option<f64>,
 }
 
 /// Arguments of `bdpm merge`.
@@ -167,9 +176,20 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
         }
         None => None,
     };
+    let (scene, overrides) = match &held {
+        Some(h) => (
+            args.scene.unwrap_or_else(|| h.identity.scene.clone()),
+            header::over_recorded(&h.path, &h.identity.overrides, &args.overrides)?,
+        ),
+        // Without --resume clap requires the scene.
+        None => (
+            args.scene.ok_or("give the scene file (TOML)")?,
+            args.overrides,
+        ),
+    };
     run_job(Job {
-        scene: args.scene,
-        overrides: args.overrides,
+        scene,
+        overrides,
         output: args.output,
         quiet: args.quiet,
         techniques: args.techniques,
@@ -183,6 +203,7 @@ pub(crate) fn run(args: RenderArgs) -> CliResult<ExitCode> {
         accumulate,
         time_budget: args.time_budget,
         target_noise: args.target_noise,
+        preview_every: args.preview_every,
         merge: false,
     })
 }
@@ -220,6 +241,7 @@ pub(crate) fn merge(args: MergeArgs) -> CliResult<ExitCode> {
         accumulate: true,
         time_budget: None,
         target_noise: None,
+        preview_every: None,
         merge: true,
     })
 }

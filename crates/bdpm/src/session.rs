@@ -20,6 +20,7 @@ use bdpm_output::accum::{self, Identity, PassRecord};
 use bdpm_output::cli::{self, CliResult, Overrides, default_output, progress_bar, thread_pool};
 use bdpm_output::exr::{self as exr_file, Precision, RGB, TechniqueSums};
 use bdpm_output::files::{self, OutputLock, Outputs, Staged};
+use bdpm_output::header::Recorded;
 use bdpm_output::memory::{self, MemoryLimit};
 use bdpm_output::preview;
 pub(crate) use bdpm_output::report::StopReason;
@@ -63,6 +64,9 @@ pub(crate) struct Job {
     pub(crate) time_budget: Option<f64>,
     /// `--target-noise`: the mean relative standard error to stop below.
     pub(crate) target_noise: Option<f64>,
+    /// `--preview-every`: seconds of wall time between previews (OUT.png and OUT.exr
+    /// rewritten with the passes so far, at a pass boundary).
+    pub(crate) preview_every: Option<f64>,
     /// `bdpm merge`: render no pass.
     pub(crate) merge: bool,
 }
@@ -308,6 +312,10 @@ pub(crate) struct RenderSession<'a> {
     rendered: u32,
     /// Rendering the passes of this run, s.
     render_seconds: f64,
+    /// Previews written (`--preview-every`), and the wall time they took, s (part of
+    /// `render_seconds`).
+    previews: u32,
+    preview_seconds: f64,
 }
 
 impl<'a> RenderSession<'a> {
@@ -370,6 +378,8 @@ impl<'a> RenderSession<'a> {
             replayed: 0,
             rendered: 0,
             render_seconds: 0.0,
+            previews: 0,
+            preview_seconds: 0.0,
         }))
     }
 
@@ -395,6 +405,7 @@ impl<'a> RenderSession<'a> {
     pub(crate) fn run(&mut self, interrupted: &dyn Fn() -> bool) -> StopReason {
         let (job, first, end) = (&self.prep.job, self.prep.first, self.prep.end);
         let t_render = Instant::now();
+        let mut last_preview = t_render;
         let mut stop = StopReason::Completed;
         for pass in first..end {
             if interrupted() {
@@ -418,6 +429,14 @@ impl<'a> RenderSession<'a> {
             {
                 stop = StopReason::TargetNoise;
                 break;
+            }
+            // After the last pass the final outputs follow at once: no preview of them.
+            if let Some(every) = job.preview_every
+                && !last
+                && last_preview.elapsed().as_secs_f64() >= every
+            {
+                self.write_preview();
+                last_preview = Instant::now();
             }
         }
         self.render_seconds += t_render.elapsed().as_secs_f64();
@@ -462,6 +481,46 @@ impl<'a> RenderSession<'a> {
         }
     }
 
+    /// Rewrites OUT.png and OUT.exr with the passes so far, as a set (EXR last, each renamed
+    /// into place whole: a reader sees the previous preview or the new one, never a torn
+    /// file). A failure (a full disk) does not stop the render: it becomes a warning of the
+    /// report, and the final write tries again.
+    fn write_preview(&mut self) {
+        let t = Instant::now();
+        match self.stage_preview() {
+            Ok(()) => self.previews += 1,
+            Err(e) => self
+                .warnings
+                .push(format!("a preview was not written: {e}")),
+        }
+        self.preview_seconds += t.elapsed().as_secs_f64();
+    }
+
+    /// Stages and commits the preview set: the EXR with the film's layers and the technique
+    /// layers (not the first-hit ones, which cost a pass of primary rays and do not change),
+    /// and the PNG.
+    fn stage_preview(&self) -> CliResult<()> {
+        let header = self.header(None, &files::run_id());
+        let (outputs, job) = (&self.prep.outputs, &self.prep.job);
+        let layers = self
+            .techniques
+            .as_ref()
+            .map(|t| t.layers(self.film.passes()))
+            .unwrap_or_default();
+        let exr = exr_file::stage_exr_with_layers(
+            &outputs.exr,
+            &self.film,
+            &header,
+            &layers,
+            job.precision,
+        )
+        .map_err(named(&outputs.exr))?;
+        let png = preview::encode_png(&self.film)
+            .and_then(|bytes| files::stage_bytes(&outputs.png, &bytes))
+            .map_err(named(&outputs.png))?;
+        files::commit_all(vec![png, exr])
+    }
+
     /// Passes the film holds, replayed and rendered.
     pub(crate) fn passes(&self) -> u32 {
         self.film.passes()
@@ -487,7 +546,7 @@ impl<'a> RenderSession<'a> {
                 self.film.dropped()
             ));
         }
-        let header = self.header(stop, &run_id);
+        let header = self.header(Some(stop), &run_id);
         let exr = self.stage_exr(&header)?;
         let outputs = &self.prep.outputs;
         let png = preview::encode_png(&self.film)
@@ -525,8 +584,10 @@ impl<'a> RenderSession<'a> {
         Ok(())
     }
 
-    /// The EXR header's attributes (also stored in the accumulation file).
-    fn header(&self, stop: StopReason, run_id: &str) -> Vec<(String, String)> {
+    /// The EXR header's attributes (also stored in the accumulation file); `stop` is `None`
+    /// for a preview written while the render runs (`bdpm.stop_reason` = `running`,
+    /// `bdpm.preview` = `true`).
+    fn header(&self, stop: Option<StopReason>, run_id: &str) -> Vec<(String, String)> {
         let prep = self.prep;
         let mut header = report::header_attributes(
             &prep.loaded.settings,
@@ -535,11 +596,23 @@ impl<'a> RenderSession<'a> {
             &prep.scene_hash,
         );
         header.push(("passes_done".into(), self.film.passes().to_string()));
-        let interrupted = stop == StopReason::Interrupted;
+        let interrupted = stop == Some(StopReason::Interrupted);
         header.push(("interrupted".into(), interrupted.to_string()));
         header.push(("pass_list".into(), accum::ranges(&self.held_indices)));
-        header.push(("stop_reason".into(), stop.name().into()));
+        header.push((
+            "stop_reason".into(),
+            stop.map_or("running", StopReason::name).into(),
+        ));
+        if stop.is_none() {
+            header.push(("preview".into(), "true".into()));
+        }
         header.push(("run_id".into(), run_id.to_string()));
+        // What `predict RENDER.exr` reads instead of repeated flags.
+        let recorded = Recorded {
+            scene: prep.identity.scene.clone(),
+            overrides: prep.identity.overrides.clone(),
+        };
+        header.extend(recorded.attributes());
         header
     }
 
@@ -586,6 +659,9 @@ impl<'a> RenderSession<'a> {
             target_noise: job.target_noise,
             mean_relative_standard_error: self.luma.mean_relative_stderr(),
             accumulation_file: accum_path.map(|p| p.display().to_string()),
+            preview_every_seconds: job.preview_every,
+            previews_written: self.previews,
+            preview_seconds: self.preview_seconds,
         };
         let run = report::RunReport::new(report::RunFacts {
             plan: &plan,
@@ -720,6 +796,7 @@ mod tests {
             accumulate: false,
             time_budget: None,
             target_noise: None,
+            preview_every: None,
             merge: false,
         };
         (job, out)

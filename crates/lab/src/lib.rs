@@ -35,8 +35,9 @@ pub use study::StudyArgs;
 /// The lab's subcommands, flattened into `bdpm`'s own.
 #[derive(Subcommand, Debug)]
 pub enum Command {
-    /// Evaluate the noise model of method.md §12 per pixel for a mode's weights and compare it
-    /// with the per-pass variance V of a render made with the same settings (--measured):
+    /// Evaluate the noise model of method.md §12 per pixel for a render's weights and compare
+    /// it with the per-pass variance V it measured (`bdpm predict RENDER.exr`: the scene and
+    /// settings come from its header):
     /// OUT.exr (predicted and measured V, ratio, terms T0, T1, T2, T_jitter), OUT.png
     /// (log2 predicted/measured) and OUT.json (correlations, ratio quantiles, term shares).
     Predict(PredictArgs),

@@ -37,6 +37,7 @@ use bdpm_output::cli::{
 };
 use bdpm_output::colormap::{ColourMap, Legend, compose, format_value};
 use bdpm_output::files::stem_of;
+use bdpm_output::header::{self, Recorded};
 use bdpm_output::memory::{self, MemoryLimit};
 use bdpm_output::raster::Canvas;
 use bdpm_output::{exr, files, say};
@@ -61,13 +62,22 @@ const NOT_COMPARED: [u8; 3] = [0, 0, 0];
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]
 pub struct PredictArgs {
-    /// Scene file (TOML).
-    scene: PathBuf,
+    /// The render to compare with (OUT.exr of `bdpm render`, with its `noise` layer): its
+    /// header names the scene and the settings flags, which need not be repeated (a settings
+    /// flag given again must have the recorded value). Or a scene file (TOML), with the render
+    /// as --measured.
+    #[arg(value_name = "RENDER.exr|SCENE.toml")]
+    input: PathBuf,
     #[command(flatten)]
     overrides: Overrides,
-    /// The render to compare with (EXR with a `noise` layer, from `bdpm render` with the same
-    /// scene, mode and settings).
-    #[arg(long)]
+    /// The render to compare with, when the first argument is the scene file.
+    #[arg(long = "measured", value_name = "RENDER.exr")]
+    measured_arg: Option<PathBuf>,
+    /// The scene file: the first argument, or the one the render's header names.
+    #[arg(skip)]
+    scene: PathBuf,
+    /// The render: --measured, or the first argument.
+    #[arg(skip)]
     measured: PathBuf,
     /// Output EXR path (default: the measured file's stem + `-predict.exr`); the PNG and JSON
     /// go beside it.
@@ -384,10 +394,46 @@ fn default_output(measured: &Path) -> PathBuf {
 /// (the model's V, and the floor with `--headroom`), [`Setup::compare`] (the agreement
 /// figures), [`Setup::write`] (EXR, PNGs, JSON, summary).
 pub(crate) fn run(args: PredictArgs) -> CliResult<()> {
+    let args = resolve(args)?;
     let setup = prepare(&args)?;
     let predicted = setup.predict()?;
     let comparison = setup.compare(&predicted);
     setup.write(&predicted, &comparison)
+}
+
+/// The scene, the render and the settings flags of `args`: from the render's header (scene and
+/// flags, with the explicit flags over them, [`header::over_recorded`]), with `--measured`
+/// the first argument as the scene. A render of a bdpm that kept no record takes the flags
+/// as given, and needs the scene named.
+fn resolve(mut args: PredictArgs) -> CliResult<PredictArgs> {
+    let (scene, measured) = match args.measured_arg.take() {
+        Some(m) => (Some(args.input.clone()), m),
+        None => (None, args.input.clone()),
+    };
+    if scene.is_none() && measured.extension().is_some_and(|e| e == "toml") {
+        return Err(format!(
+            "{}: a scene file needs the render to compare with: --measured RENDER.exr (or give              the render alone: bdpm predict RENDER.exr)",
+            measured.display()
+        ));
+    }
+    let attributes = exr::read_attributes(&measured)?;
+    let recorded = Recorded::from_attributes(&measured, &attributes)?;
+    if let Some(r) = &recorded {
+        args.overrides = header::over_recorded(&measured, &r.overrides, &args.overrides)?;
+    }
+    args.scene = match (scene, recorded) {
+        (Some(s), _) => s,
+        (None, Some(r)) => r.scene,
+        (None, None) => {
+            return Err(format!(
+                "{}: its header names no scene (made by an older bdpm); give it: bdpm predict                  SCENE.toml --measured {} with the render's settings flags",
+                measured.display(),
+                measured.display()
+            ));
+        }
+    };
+    args.measured = measured;
+    Ok(args)
 }
 
 /// A prediction after [`prepare`]: the scene and settings, the measured render and the

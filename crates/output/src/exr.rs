@@ -14,6 +14,33 @@ use glam::DVec3;
 
 use crate::files::{Staged, stage, write_via_temp};
 
+/// The text attributes of the first layer of the EXR at `path` (`bdpm.` prefix removed, as
+/// [`ExrLayer::attributes`]), read from its header alone, without the pixels.
+pub fn read_attributes(path: &Path) -> Result<Vec<(String, String)>, String> {
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| format!("{}: cannot read EXR: {e}", path.display()))?;
+    let header = meta
+        .headers
+        .first()
+        .ok_or_else(|| format!("{}: EXR has no layer", path.display()))?;
+    Ok(text_attributes(&header.own_attributes))
+}
+
+/// The text attributes among `attributes`, keys without the `bdpm.` prefix.
+fn text_attributes(attributes: &LayerAttributes) -> Vec<(String, String)> {
+    attributes
+        .other
+        .iter()
+        .filter_map(|(k, v)| match v {
+            AttributeValue::Text(t) => Some((
+                k.to_string().trim_start_matches("bdpm.").to_string(),
+                t.to_string(),
+            )),
+            _ => None,
+        })
+        .collect()
+}
+
 /// The first layer of an EXR file read back: its size, every channel as f64 (any sample
 /// type) and its text attributes (`bdpm.` prefix removed). The one EXR reader of the driver.
 pub struct ExrLayer {
@@ -48,18 +75,7 @@ impl ExrLayer {
                 (c.name.to_string(), values)
             })
             .collect();
-        let attributes = layer
-            .attributes
-            .other
-            .iter()
-            .filter_map(|(k, v)| match v {
-                AttributeValue::Text(t) => Some((
-                    k.to_string().trim_start_matches("bdpm.").to_string(),
-                    t.to_string(),
-                )),
-                _ => None,
-            })
-            .collect();
+        let attributes = text_attributes(&layer.attributes);
         Ok(ExrLayer {
             width: layer.size.width() as u32,
             height: layer.size.height() as u32,

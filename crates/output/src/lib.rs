@@ -1,7 +1,8 @@
 //! What the `bdpm` commands write and share, in one place for the renderer's CLI and the lab
 //! (study, bench, compare, predict): files and formats (EXR, PNG, atomic writes, output
 //! locks and output sets), the preview and the false-colour maps, the JSON run report, the
-//! accumulation file of partial renders, the per-pixel statistics with the one luminance,
+//! accumulation file of partial renders, the record of how a render was made that its
+//! header keeps (`header`), the per-pixel statistics with the one luminance,
 //! the memory gates' arithmetic, the command-line settings every command takes (and their
 //! flags' names in messages), and the machine's numbers the reports record (`system`, the one
 //! module that reads /proc). Scenes are read by `bdpm-load` (`cli::prepare` calls it with the
@@ -18,6 +19,7 @@ pub mod exr;
 pub mod files;
 mod flags;
 pub mod font;
+pub mod header;
 pub mod memory;
 pub mod preview;
 pub mod raster;

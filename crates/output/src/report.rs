@@ -84,6 +84,13 @@ pub struct PassPlan {
     pub mean_relative_standard_error: Option<f64>,
     /// The accumulation file written beside the EXR, if any.
     pub accumulation_file: Option<String>,
+    /// `--preview-every`: seconds of wall time between previews (OUT.png and OUT.exr
+    /// rewritten with the passes so far during the render).
+    pub preview_every_seconds: Option<f64>,
+    /// Previews written during the render (0 without `--preview-every`).
+    pub previews_written: u32,
+    /// Wall time spent writing them, seconds (included in the render time).
+    pub preview_seconds: f64,
 }
 
 /// Why a render stopped: the JSON report's `plan.stop_reason` and the EXR header's

@@ -2176,6 +2176,11 @@ fn merge_and_resume_messages_name_the_problem() {
         .arg(dir.path("r.exr")));
     assert_one_line_error(
         &out,
-        &["settings differ", "--resolution 16x16", "--resolution 8x8"],
+        // The header's flag against the one given (docs/distributed.md, "Commands").
+        &[
+            "a.accum.exr",
+            "--resolution 8x8 contradicts",
+            "(--resolution 16x16)",
+        ],
     );
 }

@@ -5,6 +5,7 @@
 
 mod cli;
 mod export;
+mod preview;
 mod round4_lab;
 mod round4_light;
 mod round4_settings;
