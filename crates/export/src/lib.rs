@@ -171,7 +171,18 @@ pub fn mitsuba(
                         .attr("y", num(f64::from(p.y)))
                         .attr("z", num(f64::from(p.z))),
                 )
-                .rgb("intensity", light.flux / (4.0 * std::f32::consts::PI)),
+                // In f64, with the digits that bring Φ back exactly (Mitsuba reads them in
+                // single precision, as it reads every number).
+                .child(
+                    named("rgb", "intensity").attr(
+                        "value",
+                        light
+                            .flux
+                            .to_array()
+                            .map(|c| num(f64::from(c) / (4.0 * std::f64::consts::PI)))
+                            .join(", "),
+                    ),
+                ),
         );
         report.emitters += 1;
     }
@@ -228,10 +239,12 @@ fn sensor(scene: &Scene) -> Element {
         .string("pixel_format", "rgb")
         .string("component_format", "float32")
         .child(Element::plugin("rfilter", "box"));
+    // The inputs of bdpm's look-at as given, so that Mitsuba and bdpm's import build the
+    // frame from the same numbers (position + forward, renormalised, would round).
     let lookat = Element::new("lookat")
         .attr("origin", triple(eye))
-        .attr("target", triple(eye + camera.forward()))
-        .attr("up", triple(camera.up()));
+        .attr("target", triple(camera.target()))
+        .attr("up", triple(camera.up_given()));
     Element::plugin("sensor", "perspective")
         .float("fov", f64::from(camera.vfov_degrees()))
         .string("fov_axis", "y")
