@@ -265,7 +265,7 @@ impl Reader<'_, '_> {
         let ext = self.ior(p, "ext_ior", 1.000277)?;
         let node = p.node();
         let ior = int / ext;
-        if !(ior >= IOR_RANGE.0 && ior <= IOR_RANGE.1) {
+        if !(IOR_RANGE.0..=IOR_RANGE.1).contains(&ior) {
             return Err(self.x.err(
                 node,
                 format!(

@@ -135,8 +135,8 @@ fn frame(
         if let [only] = steps.as_slice()
             && only.tag_name().name() == "lookat"
         {
-            let m = transform::matrix(x, t)?; // checks the lookat
-            let _ = m;
+            // Through the matrix first, for its checks (target = origin, up parallel).
+            transform::matrix(x, t)?;
             let (o, target, up) = transform::lookat(x, *only)?;
             return Ok((o.as_vec3(), target.as_vec3(), up.as_vec3()));
         }
@@ -180,7 +180,7 @@ fn film(
         let p = Props::new(c);
         let size = |name: &str, default: u32| -> Result<u32, LoadError> {
             let v = x.float(&p, name, f64::from(default))?;
-            if v >= 1.0 && v <= f64::from(crate::limits::MAX_RESOLUTION) && v.fract() == 0.0 {
+            if (1.0..=f64::from(crate::limits::MAX_RESOLUTION)).contains(&v) && v.fract() == 0.0 {
                 Ok(v as u32)
             } else {
                 Err(x.err(
