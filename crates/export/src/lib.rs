@@ -171,18 +171,10 @@ pub fn mitsuba(
                         .attr("y", num(f64::from(p.y)))
                         .attr("z", num(f64::from(p.z))),
                 )
-                // In f64, with the digits that bring Φ back exactly (Mitsuba reads them in
-                // single precision, as it reads every number).
-                .child(
-                    named("rgb", "intensity").attr(
-                        "value",
-                        light
-                            .flux
-                            .to_array()
-                            .map(|c| num(f64::from(c) / (4.0 * std::f64::consts::PI)))
-                            .join(", "),
-                    ),
-                ),
+                .child(named("rgb", "intensity").attr(
+                    "value",
+                    light.flux.to_array().map(intensity_text).join(", "),
+                )),
         );
         report.emitters += 1;
     }
@@ -209,6 +201,20 @@ pub fn mitsuba(
         bytes: root.document(&header),
     });
     Ok(Export { files, report })
+}
+
+/// A point light's intensity Φ/(4π) for a flux channel Φ, W/sr: the shortest f32 text where
+/// 4π times it, in f64, rounds back to Φ (bdpm's import reads it so), else the f64 digits of
+/// the quotient, which do (Mitsuba reads either in single precision).
+fn intensity_text(flux: f32) -> String {
+    let four_pi = 4.0 * std::f64::consts::PI;
+    let quotient = f64::from(flux) / four_pi;
+    let single = quotient as f32;
+    if (f64::from(single) * four_pi) as f32 == flux {
+        num(f64::from(single))
+    } else {
+        num(quotient)
+    }
 }
 
 /// The `<sensor>`: bdpm's pinhole as Mitsuba's `perspective`. Pixel (i, j) of bdpm covers
