@@ -2,9 +2,9 @@
 //! (bdpm-export, in memory, written to a temporary directory) and imported again renders,
 //! with the TOML file's settings, to the same image bits as the TOML file: the Gaussian
 //! lobe's stand-in comes back as the same kd, gr and Δ, the camera from the look-at inputs
-//! the export writes, the lights from intensities written in double precision. The one
-//! exception is refused: glTF textures, exported as EXR bitmaps, which the import does not
-//! read (docs/scene-format.md, "Import from Mitsuba 3").
+//! the export writes, the lights from intensities written with the digits that bring the
+//! flux back. The one exception is refused: glTF textures, exported as EXR bitmaps, which
+//! the import does not read (docs/scene-format.md, "Import from Mitsuba 3").
 
 use std::path::{Path, PathBuf};
 

@@ -20,7 +20,7 @@ use crate::signal;
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]
 pub(crate) struct RenderArgs {
-    /// Scene file (TOML).
+    /// Scene file (TOML, or a Mitsuba 3 scene ending in .xml).
     scene: PathBuf,
     #[command(flatten)]
     overrides: Overrides,

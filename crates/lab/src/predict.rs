@@ -61,7 +61,7 @@ const NOT_COMPARED: [u8; 3] = [0, 0, 0];
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]
 pub struct PredictArgs {
-    /// Scene file (TOML).
+    /// Scene file (TOML, or a Mitsuba 3 scene ending in .xml).
     scene: PathBuf,
     #[command(flatten)]
     overrides: Overrides,
