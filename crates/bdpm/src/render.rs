@@ -21,7 +21,8 @@ use crate::signal;
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]
 pub(crate) struct RenderArgs {
-    /// Scene file (TOML); with --resume, the one the accumulation file names by default.
+    /// Scene file (TOML, or a Mitsuba 3 scene ending in .xml); with --resume, the one the
+    /// accumulation file names by default.
     #[arg(required_unless_present = "resume")]
     scene: Option<PathBuf>,
     #[command(flatten)]

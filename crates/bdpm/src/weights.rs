@@ -65,7 +65,7 @@ pub(crate) fn about() -> String {
 #[derive(Args, Debug)]
 #[command(group(ArgGroup::new("target").required(true).args(["x0", "pixel"])))]
 pub(crate) struct WeightsArgs {
-    /// Scene file (TOML).
+    /// Scene file (TOML, or a Mitsuba 3 scene ending in .xml).
     scene: PathBuf,
     /// x₀ as a world point X,Y,Z in metres; the camera must see it (within 1 mm + 0.1% of its
     /// distance).

@@ -171,7 +171,10 @@ pub fn mitsuba(
                         .attr("y", num(f64::from(p.y)))
                         .attr("z", num(f64::from(p.z))),
                 )
-                .rgb("intensity", light.flux / (4.0 * std::f32::consts::PI)),
+                .child(named("rgb", "intensity").attr(
+                    "value",
+                    light.flux.to_array().map(intensity_text).join(", "),
+                )),
         );
         report.emitters += 1;
     }
@@ -198,6 +201,20 @@ pub fn mitsuba(
         bytes: root.document(&header),
     });
     Ok(Export { files, report })
+}
+
+/// A point light's intensity Φ/(4π) for a flux channel Φ, W/sr: the shortest f32 text where
+/// 4π times it, in f64, rounds back to Φ (bdpm's import reads it so), else the f64 digits of
+/// the quotient, which do (Mitsuba reads either in single precision).
+fn intensity_text(flux: f32) -> String {
+    let four_pi = 4.0 * std::f64::consts::PI;
+    let quotient = f64::from(flux) / four_pi;
+    let single = quotient as f32;
+    if (f64::from(single) * four_pi) as f32 == flux {
+        num(f64::from(single))
+    } else {
+        num(quotient)
+    }
 }
 
 /// The `<sensor>`: bdpm's pinhole as Mitsuba's `perspective`. Pixel (i, j) of bdpm covers
@@ -228,10 +245,12 @@ fn sensor(scene: &Scene) -> Element {
         .string("pixel_format", "rgb")
         .string("component_format", "float32")
         .child(Element::plugin("rfilter", "box"));
+    // The inputs of bdpm's look-at as given, so that Mitsuba and bdpm's import build the
+    // frame from the same numbers (position + forward, renormalised, would round).
     let lookat = Element::new("lookat")
         .attr("origin", triple(eye))
-        .attr("target", triple(eye + camera.forward()))
-        .attr("up", triple(camera.up()));
+        .attr("target", triple(camera.target()))
+        .attr("up", triple(camera.up_given()));
     Element::plugin("sensor", "perspective")
         .float("fov", f64::from(camera.vfov_degrees()))
         .string("fov_axis", "y")

@@ -26,7 +26,7 @@ use bdpm_output::system::{cpu_model, load_average, peak_resident_memory};
 /// Arguments of this subcommand.
 #[derive(Args, Debug)]
 pub struct BenchArgs {
-    /// Scene file (TOML).
+    /// Scene file (TOML, or a Mitsuba 3 scene ending in .xml).
     scene: PathBuf,
     // The help lists every key an entry may set, from the parser's own list.
     #[arg(long, value_delimiter = ',', help = crate::modes_help("time"))]

@@ -64,7 +64,7 @@ const NOT_COMPARED: [u8; 3] = [0, 0, 0];
 pub struct PredictArgs {
     /// The render to compare with (OUT.exr of `bdpm render`, with its `noise` layer): its
     /// header names the scene and the settings flags, which need not be repeated (a settings
-    /// flag given again must have the recorded value). Or a scene file (TOML), with the render
+    /// flag given again must have the recorded value). Or a scene file (TOML or Mitsuba 3 .xml), with the render
     /// as --measured.
     #[arg(value_name = "RENDER.exr|SCENE.toml")]
     input: PathBuf,
@@ -410,9 +410,9 @@ fn resolve(mut args: PredictArgs) -> CliResult<PredictArgs> {
         Some(m) => (Some(args.input.clone()), m),
         None => (None, args.input.clone()),
     };
-    if scene.is_none() && measured.extension().is_some_and(|e| e == "toml") {
+    if scene.is_none() && measured.extension().is_some_and(|e| e == "toml" || e == "xml") {
         return Err(format!(
-            "{}: a scene file needs the render to compare with: --measured RENDER.exr (or give              the render alone: bdpm predict RENDER.exr)",
+            "{}: a scene file needs the render to compare with: --measured RENDER.exr (or give the render alone: bdpm predict RENDER.exr)",
             measured.display()
         ));
     }
@@ -426,7 +426,7 @@ fn resolve(mut args: PredictArgs) -> CliResult<PredictArgs> {
         (None, Some(r)) => r.scene,
         (None, None) => {
             return Err(format!(
-                "{}: its header names no scene (made by an older bdpm); give it: bdpm predict                  SCENE.toml --measured {} with the render's settings flags",
+                "{}: its header names no scene (made by an older bdpm); give it: bdpm predict SCENE.toml --measured {} with the render's settings flags",
                 measured.display(),
                 measured.display()
             ));

@@ -39,7 +39,7 @@ use crate::reference;
 #[derive(Args, Debug)]
 #[command(mut_arg("mode", |a| a.hide(true)))]
 pub struct StudyArgs {
-    /// Scene file (TOML).
+    /// Scene file (TOML, or a Mitsuba 3 scene ending in .xml).
     scene: PathBuf,
     /// Render settings (--passes, --photons, --spp, --resolution, …) for every mode.
     #[command(flatten)]

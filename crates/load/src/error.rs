@@ -71,6 +71,18 @@ pub enum LoadError {
         /// What is wrong.
         message: String,
     },
+    /// An element of a Mitsuba XML scene is malformed, not supported or not acceptable.
+    #[error("{path}: line {line}: {element}: {message}")]
+    Xml {
+        /// The XML file (the scene or a file it includes).
+        path: PathBuf,
+        /// 1-based line where the element starts.
+        line: u32,
+        /// The element as written, such as `<shape type="ply">` or `<float name="fov">`.
+        element: String,
+        /// What is wrong, and what to do.
+        message: String,
+    },
     /// An OBJ or PLY file named by a shape could not be read or is not acceptable.
     #[error("{scene}: {field}: {path}: {message}")]
     MeshFile {

@@ -57,6 +57,7 @@ mod material_types;
 mod materials;
 mod memory;
 mod mesh_file;
+mod mitsuba;
 mod schema;
 
 use std::path::{Path, PathBuf};
@@ -161,6 +162,9 @@ pub struct LoadReport {
     /// transmission rendered as Lambert, textures a mirror or glass does not apply, …), naming
     /// the glTF file and the material; each line once, however many shapes show the file.
     pub material_warnings: Vec<String>,
+    /// One line per element of a Mitsuba XML scene that was ignored or approximated (naming
+    /// the file, the line and the element, and what was done); empty for a TOML scene.
+    pub import_warnings: Vec<String>,
     /// Whether `[render].radius` was given; otherwise the settings hold the default (`"0.5px"`).
     pub radius_given: bool,
 }
@@ -203,6 +207,7 @@ impl LoadReport {
                 self.other_textures
             ));
         }
+        out.extend_from_slice(&self.import_warnings);
         let shown = self.material_warnings.len().min(MATERIAL_WARNINGS_SHOWN);
         out.extend_from_slice(&self.material_warnings[..shown]);
         if self.material_warnings.len() > shown {
@@ -252,6 +257,9 @@ pub fn load_scene_with(path: &Path, options: &LoadOptions) -> Result<LoadedScene
         source: std::io::Error::other(format!("not UTF-8 text: {e}")),
     })?;
     let base_dir = path.parent().unwrap_or(Path::new(""));
+    if is_xml(path) {
+        return mitsuba::load(&text, base_dir, path, options);
+    }
     load_str_with(&text, base_dir, path, options)
 }
 
@@ -289,6 +297,24 @@ pub fn load_scene_overridden(
             })?;
     }
     Ok(loaded)
+}
+
+/// Whether `path` names a Mitsuba XML scene (extension `.xml`, any case) rather than a TOML
+/// scene file.
+pub fn is_xml(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("xml"))
+}
+
+/// Loads a Mitsuba 3 (or 2) XML scene from its text: `base_dir` resolves the mesh and
+/// included files, `display_path` names the file in messages (docs/scene-format.md, "Import
+/// from Mitsuba 3"). Its settings are bdpm's defaults at the film's resolution.
+pub fn load_mitsuba_str(
+    xml_text: &str,
+    base_dir: &Path,
+    display_path: &Path,
+) -> Result<LoadedScene, LoadError> {
+    mitsuba::load(xml_text, base_dir, display_path, &LoadOptions::default())
 }
 
 /// Loads a scene from TOML text. `base_dir` resolves the relative glTF paths; `display_path`

@@ -10,6 +10,12 @@ use crate::{CameraError, SceneError};
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
     pub(crate) position: Vec3,
+    /// The target `look_at` was given (in the scene's frame, as `position`): kept so that an
+    /// export can hand another renderer, or bdpm's own import, the very inputs of the frame;
+    /// recomputing them from `forward` would round.
+    pub(crate) target: Vec3,
+    /// The approximate up `look_at` was given, for the same reason.
+    up_given: Vec3,
     forward: Vec3,
     right: Vec3,
     up: Vec3,
@@ -47,9 +53,12 @@ impl Camera {
         if width == 0 || height == 0 {
             return Err(SceneError::BadCamera(CameraError::Resolution));
         }
+        let up_given = up;
         let up = right.cross(forward);
         Ok(Camera {
             position: eye,
+            target,
+            up_given,
             forward,
             right,
             up,
@@ -65,6 +74,19 @@ impl Camera {
     #[inline]
     pub fn position(&self) -> Vec3 {
         self.position
+    }
+
+    /// The point `look_at` was given to look at, metres (in the scene's frame, as
+    /// [`Camera::position`]).
+    #[inline]
+    pub fn target(&self) -> Vec3 {
+        self.target
+    }
+
+    /// The approximate up direction `look_at` was given (not the orthonormal [`Camera::up`]).
+    #[inline]
+    pub fn up_given(&self) -> Vec3 {
+        self.up_given
     }
 
     /// Unit viewing direction.
@@ -105,14 +127,19 @@ impl Camera {
 
     /// The same camera with another image size (the field of view stays vertical).
     pub fn with_resolution(&self, width: u32, height: u32) -> Result<Camera, SceneError> {
-        Camera::look_at(
+        let mut camera = Camera::look_at(
             self.position,
             self.position + self.forward,
             self.up,
             self.vfov_degrees,
             width,
             height,
-        )
+        )?;
+        // The frame is rebuilt as it always was (image bits of earlier versions); the inputs
+        // given to the first look_at stay what they were.
+        camera.target = self.target;
+        camera.up_given = self.up_given;
+        Ok(camera)
     }
 
     /// Unit direction of the ray through image point (x, y) in pixels from the top-left corner

@@ -291,6 +291,7 @@ impl Scene {
             l.position -= origin;
         }
         camera.position -= origin;
+        camera.target -= origin;
         let delta: Vec<bool> = materials.iter().map(Material::is_delta).collect();
         Ok(Scene {
             geometry,

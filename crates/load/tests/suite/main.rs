@@ -8,6 +8,7 @@ mod fuzz;
 mod gltf;
 mod gltf_materials;
 mod mesh_files;
+mod mitsuba;
 mod round4;
 mod scenes;
 mod shapes;

@@ -1,0 +1,318 @@
+//! Mitsuba 3 XML scenes (`bdpm render scene.xml`): the inverse of bdpm-export's mapping,
+//! and what else of Mitsuba's format bdpm can render (docs/scene-format.md, "Import from
+//! Mitsuba 3"). Parsed with roxmltree, whose nodes keep their place in the text, so that
+//! every error and warning names the file, the line and the element.
+//!
+//! What maps: `<default>` and `$name`, `<path>`, `<include>`; shapes `obj`, `ply`,
+//! `rectangle`, `cube`, `sphere`, `disk`, `shapegroup`/`instance`; transforms; BSDFs
+//! (see `bsdf`); `point` emitters; a `perspective` sensor with its film size. Everything else
+//! is refused with a one-line error, or ignored with a warning where it changes nothing bdpm
+//! renders (the integrator, the sampler, the film's filter).
+
+mod bsdf;
+mod doc;
+mod sensor;
+mod shape;
+mod transform;
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use bdpm_geometry::{Geometry, TriangleMesh};
+use bdpm_scene::{PointLight, Scene, SceneTextures};
+use bdpm_settings::RenderSettings;
+use roxmltree::{Document, Node};
+
+use self::bsdf::{Bsdf, Named, Reader};
+use self::doc::{Xml, elements};
+use crate::build::{Shapes, geometry_error, scene_error};
+use crate::ctx::Ctx;
+use crate::materials::Materials;
+use crate::memory::Budget;
+use crate::{LoadError, LoadOptions, LoadReport, LoadedScene, files, limits};
+
+/// Deepest chain of `<include>`s.
+const MAX_INCLUDE_DEPTH: usize = 8;
+
+/// The scene as it is read, element by element.
+pub(crate) struct State {
+    search: Vec<PathBuf>,
+    named: Named,
+    groups: HashMap<String, TriangleMesh>,
+    materials: Materials,
+    default_material: Option<u32>,
+    lights: Vec<PointLight>,
+    shapes: Shapes,
+    budget: Budget,
+    sensor: Option<sensor::Sensor>,
+    warnings: Vec<String>,
+    files: Vec<PathBuf>,
+    builtin_triangles: u64,
+}
+
+/// Loads the Mitsuba scene `text`, read from `display_path` in `base_dir`.
+pub(crate) fn load(
+    text: &str,
+    base_dir: &Path,
+    display_path: &Path,
+    options: &LoadOptions,
+) -> Result<LoadedScene, LoadError> {
+    let mut st = State {
+        search: Vec::new(),
+        named: Named::new(),
+        groups: HashMap::new(),
+        materials: Materials::with_capacity(8),
+        default_material: None,
+        lights: Vec::new(),
+        shapes: Shapes::default(),
+        budget: Budget::new(options.memory_limit.clone()),
+        sensor: None,
+        warnings: Vec::new(),
+        files: Vec::new(),
+        builtin_triangles: 0,
+    };
+    st.file(text, display_path, base_dir, &HashMap::new(), 0)?;
+    st.finish(display_path)
+}
+
+/// The document of `text`, or the parser's message with its line and column.
+fn parse<'t>(text: &'t str, path: &Path) -> Result<Document<'t>, LoadError> {
+    let options = roxmltree::ParsingOptions {
+        allow_dtd: false,
+        nodes_limit: 10_000_000,
+    };
+    Document::parse_with_options(text, options).map_err(|e| {
+        let pos = e.pos();
+        LoadError::Syntax {
+            path: path.to_path_buf(),
+            line: pos.row as usize,
+            column: pos.col as usize,
+            message: format!("malformed XML: {e}"),
+        }
+    })
+}
+
+impl State {
+    /// Reads one file (the scene or an included one) into the state.
+    fn file(
+        &mut self,
+        text: &str,
+        path: &Path,
+        dir: &Path,
+        inherited: &HashMap<String, String>,
+        depth: usize,
+    ) -> Result<(), LoadError> {
+        let doc = parse(text, path)?;
+        let root = doc.root_element();
+        let mut defaults = inherited.clone();
+        let plain = HashMap::new();
+        let x = Xml {
+            file: path,
+            defaults: &plain,
+        };
+        if root.tag_name().name() != "scene" {
+            return Err(x.err(root, "the root element must be <scene version=\"3.x.x\">"));
+        }
+        let version = x.need(root, "version")?;
+        if !(version.starts_with("2.") || version.starts_with("3.")) {
+            return Err(x.err(
+                root,
+                format!(
+                    "version \"{version}\": bdpm reads Mitsuba 2 and 3 scenes (2.x.x or 3.x.x)"
+                ),
+            ));
+        }
+        for d in elements(root).filter(|c| c.tag_name().name() == "default") {
+            let name = x.need(d, "name")?;
+            let value = x.need(d, "value")?;
+            // The including file's value (or the command line's, in Mitsuba) wins.
+            defaults.entry(name).or_insert(value);
+        }
+        let x = Xml {
+            file: path,
+            defaults: &defaults,
+        };
+        for c in elements(root) {
+            self.element(&x, dir, c, depth)?;
+        }
+        Ok(())
+    }
+
+    /// One top-level element.
+    fn element(
+        &mut self,
+        x: &Xml<'_>,
+        dir: &Path,
+        c: Node<'_, '_>,
+        depth: usize,
+    ) -> Result<(), LoadError> {
+        match c.tag_name().name() {
+            "default" => {}
+            "path" => {
+                let value = x.need(c, "value")?;
+                self.search.push(dir.join(value));
+            }
+            "include" => self.include(x, dir, c, depth)?,
+            "integrator" => self.warnings.push(x.warn(c, "ignored: bdpm renders with its own method (bidirectional photon mapping, --mode)")),
+            "sensor" if self.sensor.is_some() => self.warnings.push(x.warn(c, "a second sensor is ignored: bdpm renders the first")),
+            "sensor" => self.sensor = Some(sensor::sensor(x, c, &mut self.warnings)?),
+            "emitter" => {
+                let light = sensor::emitter(x, c, &mut self.warnings)?;
+                self.lights.push(light);
+            }
+            "bsdf" => {
+                let Some(id) = x.attr(c, "id")? else {
+                    self.warnings.push(x.warn(c, "a top-level BSDF without id is never used"));
+                    return Ok(());
+                };
+                let (index, bsdf) = self.bsdf(x, c, &id)?;
+                self.named.insert(id, (index, bsdf));
+            }
+            "texture" => self.warnings.push(x.warn(c, "textures are not supported by the import; it is ignored (a BSDF that refers to it is refused)")),
+            "shape" => {
+                if let Some(mesh) = shape::shape(self, x, dir, c)? {
+                    self.shapes.append(&Ctx { file: x.file }, mesh)?;
+                }
+            }
+            other => return Err(x.err(c, format!("<{other}> is not supported (bdpm reads default, path, include, integrator, sensor, emitter, bsdf, texture and shape)"))),
+        }
+        Ok(())
+    }
+
+    /// `<include filename=…>`: the file's elements as if written here.
+    fn include(
+        &mut self,
+        x: &Xml<'_>,
+        dir: &Path,
+        c: Node<'_, '_>,
+        depth: usize,
+    ) -> Result<(), LoadError> {
+        if depth >= MAX_INCLUDE_DEPTH {
+            return Err(x.err(
+                c,
+                format!("more than {MAX_INCLUDE_DEPTH} nested includes (a cycle?)"),
+            ));
+        }
+        let name = x.need(c, "filename")?;
+        let path = self.resolve(dir, &name);
+        let bytes = files::read_regular(&path, limits::MAX_SCENE_FILE_BYTES, "included file")
+            .map_err(|e| x.err(c, format!("{}: {e}", path.display())))?;
+        let text = String::from_utf8(bytes)
+            .map_err(|e| x.err(c, format!("{}: not UTF-8 text: {e}", path.display())))?;
+        let sub_dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
+        self.files.push(path.clone());
+        self.file(&text, &path, &sub_dir, x.defaults, depth + 1)
+    }
+
+    /// A named BSDF, added to the scene's materials under its id.
+    fn bsdf(
+        &mut self,
+        x: &Xml<'_>,
+        node: Node<'_, '_>,
+        name: &str,
+    ) -> Result<(u32, Bsdf), LoadError> {
+        let bsdf = Reader {
+            x,
+            named: &self.named,
+            warnings: &mut self.warnings,
+        }
+        .read(node)?;
+        let model = bsdf::material(x, node, &bsdf)?;
+        Ok((self.materials.add_delta(name.to_string(), model), bsdf))
+    }
+
+    /// The material of a shape: its nested `<bsdf>` or `<ref id=…>`, else Mitsuba's default
+    /// (diffuse of reflectance 0.5).
+    fn shape_material(&mut self, x: &Xml<'_>, node: Node<'_, '_>) -> Result<u32, LoadError> {
+        let Some(b) = elements(node).find(|c| {
+            c.tag_name().name() == "bsdf"
+                || (c.tag_name().name() == "ref" && c.attribute("name").is_none_or(|n| n == "bsdf"))
+        }) else {
+            if let Some(m) = self.default_material {
+                return Ok(m);
+            }
+            let model = bsdf::material(
+                x,
+                node,
+                &Bsdf::Smooth {
+                    kd: glam::DVec3::splat(0.5),
+                    gr: glam::DVec3::ZERO,
+                    delta: None,
+                },
+            )?;
+            let m = self
+                .materials
+                .add_delta("mitsuba:default-diffuse".into(), model);
+            self.default_material = Some(m);
+            return Ok(m);
+        };
+        if b.tag_name().name() == "ref" {
+            let id = x.need(b, "id")?;
+            return match self.named.get(&id) {
+                Some((index, _)) => Ok(*index),
+                None => Err(x.err(b, format!("no <bsdf id=\"{id}\"> before this reference"))),
+            };
+        }
+        let name = format!("line {}", doc::line(b));
+        Ok(self.bsdf(x, b, &name)?.0)
+    }
+
+    fn resolve(&self, dir: &Path, name: &str) -> PathBuf {
+        shape::resolve(dir, &self.search, name)
+    }
+
+    /// The scene, its settings (bdpm's defaults at the film's size) and the report.
+    fn finish(self, path: &Path) -> Result<LoadedScene, LoadError> {
+        let ctx = Ctx { file: path };
+        let sensor = self.sensor.ok_or_else(|| {
+            ctx.bad(
+                "sensor",
+                "the scene has no <sensor type=\"perspective\">; bdpm needs a camera",
+            )
+        })?;
+        let settings = RenderSettings {
+            width: sensor.width,
+            height: sensor.height,
+            ..RenderSettings::default()
+        };
+        settings
+            .validate()
+            .map_err(|e| ctx.bad("sensor.film", e.to_string()))?;
+        let n = self.shapes.mesh.indices.len();
+        let needs = Geometry::planned_bytes(n).total() + Geometry::build_transient_bytes(n);
+        self.budget
+            .check(
+                self.budget.textures() + self.shapes.bytes(),
+                needs,
+                "per-triangle data, BVH and the BVH build",
+            )
+            .map_err(|m| ctx.bad("shape", format!("building the scene's {n} triangles {m}")))?;
+        let Shapes {
+            mesh, texcoords, ..
+        } = self.shapes;
+        let geometry = Geometry::new(mesh).map_err(|e| geometry_error(&ctx, e, 0))?;
+        let report = LoadReport {
+            triangles: geometry.triangle_count(),
+            degenerate_triangles: geometry.degenerate_count(),
+            materials: self.materials.len(),
+            lights: self.lights.len(),
+            gltf_files: self.files,
+            import_warnings: self.warnings,
+            ..LoadReport::default()
+        };
+        let light_count = self.lights.len();
+        let (materials, base_colour) = self.materials.into_parts();
+        let scene = Scene::new(geometry, materials, self.lights, sensor.camera)
+            .and_then(|s| s.with_textures(SceneTextures { base_colour, texcoords }))
+            .map_err(|e| match e {
+                bdpm_scene::SceneError::NoLight if light_count == 0 => ctx.bad("emitter", "the scene has no point emitter; add <emitter type=\"point\"> (area lights are not supported yet)"),
+                other => scene_error(&ctx, other, light_count),
+            })?;
+        Ok(LoadedScene {
+            scene,
+            settings,
+            output: None,
+            report,
+        })
+    }
+}
