@@ -23,6 +23,8 @@ use clap::Subcommand;
 mod bench;
 mod compare;
 mod figure;
+#[cfg(test)]
+mod figure_browser_test;
 mod figure_cli;
 mod figure_page;
 mod figure_sheet;
