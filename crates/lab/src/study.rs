@@ -5,7 +5,9 @@
 //! the first pass, so equal-time comparisons are honest), the RMSE of the running mean against
 //! a reference, and the mean per-pass noise √V. Every error measure is over pixel
 //! **luminance** (Rec. 709 weights). It writes `study.csv`, `study.md`, log-log plots of error
-//! against time and a bar chart of mean √V (PNG and SVG), and a preview PNG per mode.
+//! against time and a bar chart of mean √V (PNG and SVG), a preview PNG per mode, and the
+//! figure of the modes' images against the reference (`figure.png`, `.html`, `.json`, see
+//! `figure`).
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -485,9 +487,11 @@ struct ModeState<'a> {
     points: Vec<PassPoint>,
 }
 
-/// What [`Study::finish`] hands the report: the runs, the previews written and the notes.
+/// What [`Study::finish`] hands the report: the runs, each mode's image for the figure, the
+/// previews written and the notes.
 struct Finished {
     runs: Vec<ModeRun>,
+    images: Vec<crate::figure::Entry>,
     files: Vec<String>,
     notes: Vec<String>,
 }
@@ -783,6 +787,8 @@ struct Study<'a> {
     stem: String,
     /// The output directory.
     dir: PathBuf,
+    /// The reference's mean radiance per pixel (W·m⁻²·sr⁻¹), for the figure.
+    ref_rgb: Vec<glam::DVec3>,
     /// The reference's luminance per pixel, and its image mean.
     ref_lum: Vec<f64>,
     /// The reference's variance per pixel (luminance; zeros without a stderr layer).
@@ -872,6 +878,7 @@ fn prepare(args: &StudyArgs) -> CliResult<Study<'_>> {
         pool,
         stem,
         dir,
+        ref_rgb: reference.mean,
         ref_lum,
         ref_var,
         ref_mean,
@@ -979,6 +986,7 @@ fn study_reference(
         for stem in ["error-vs-time", "sqrt-v"] {
             members.extend(["png", "svg"].map(|e| dir.join(stem).with_extension(e)));
         }
+        members.extend(crate::figure_cli::members(dir));
         let members: Vec<&Path> = members.iter().map(PathBuf::as_path).collect();
         refuse_inputs(&members, &[path], &[])?;
     }
@@ -1174,6 +1182,7 @@ impl Study<'_> {
     /// longer than the time budget).
     fn finish(&self, states: Vec<ModeState<'_>>) -> CliResult<Finished> {
         let mut runs = Vec::new();
+        let mut images = Vec::new();
         let mut files = Vec::new();
         let mut notes = Vec::new();
         for m in states {
@@ -1198,6 +1207,11 @@ impl Study<'_> {
             let preview = self.dir.join(preview_name(&m.name));
             write_png(&preview, &m.film).map_err(|e| format!("{}: {e}", preview.display()))?;
             files.push(preview.display().to_string());
+            images.push(crate::figure::Entry {
+                name: m.name.clone(),
+                rgb: m.film.mean(),
+                seconds: m.points.last().map(|p| p.time),
+            });
             let run = ModeRun {
                 name: m.name,
                 stages: m.stages,
@@ -1230,7 +1244,12 @@ impl Study<'_> {
                 bdpm_output::say_err!("note: {}", n.replace('`', ""));
             }
         }
-        Ok(Finished { runs, files, notes })
+        Ok(Finished {
+            runs,
+            images,
+            files,
+            notes,
+        })
     }
 
     /// The paragraphs after the report's table: the regional choice, then the notes.
@@ -1252,7 +1271,12 @@ impl Study<'_> {
 
     /// Writes the previews, the CSV, the plots and the markdown report.
     fn write(&self, states: Vec<ModeState<'_>>) -> CliResult<()> {
-        let Finished { runs, files, notes } = self.finish(states)?;
+        let Finished {
+            runs,
+            images,
+            files,
+            notes,
+        } = self.finish(states)?;
         let (args, settings, dir) = (self.args, &self.loaded.settings, &self.dir);
         let (stem, w, h) = (&self.stem, settings.width, settings.height);
         let csv_path = dir.join("study.csv");
@@ -1306,6 +1330,7 @@ impl Study<'_> {
             }
         }
         all_files.extend(files);
+        all_files.extend(self.figure(images)?);
         let md = markdown(
             &self.header(),
             &self.refs,
@@ -1316,6 +1341,30 @@ impl Study<'_> {
             &all_files,
         );
         crate::publish(&dir.join("study.md"), &md)
+    }
+
+    /// Writes the figure of the modes' images against the reference (figure.png, .html,
+    /// .json; crops where the error is largest); returns the paths written.
+    fn figure(&self, images: Vec<crate::figure::Entry>) -> CliResult<Vec<String>> {
+        let settings = &self.loaded.settings;
+        let fig = crate::figure::build(crate::figure::Inputs {
+            width: settings.width,
+            height: settings.height,
+            reference: self.ref_rgb.clone(),
+            entries: images,
+            crops: Vec::new(),
+            auto_crops: 2,
+        });
+        let title = format!(
+            "{}: the modes at {} against the reference",
+            self.stem,
+            match self.args.time_budget {
+                Some(b) => format!("{b} s of {} time each", self.args.clock),
+                None => format!("{} passes each", settings.passes),
+            }
+        );
+        let written = crate::figure_cli::write_set(&self.dir, &fig, &title)?;
+        Ok(written.iter().map(|p| p.display().to_string()).collect())
     }
 
     /// The report's heading: scene, settings, command and load average.
