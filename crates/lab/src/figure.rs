@@ -85,6 +85,9 @@ pub(crate) struct Inputs {
     pub(crate) height: u32,
     /// The reference's mean radiance per pixel, W·m⁻²·sr⁻¹.
     pub(crate) reference: Vec<DVec3>,
+    /// The reference's own rel. RMSE (its standard error's, over its mean luminance), when
+    /// known: the numbers under the images include it, and it says how far they can be trusted.
+    pub(crate) reference_error: Option<f64>,
     pub(crate) entries: Vec<Entry>,
     /// Crops given; when empty, `auto_crops` are chosen ([`worst_regions`]).
     pub(crate) crops: Vec<Crop>,
@@ -116,6 +119,8 @@ pub(crate) struct Figure {
     /// The factor every radiance is multiplied by before the sRGB curve, sr·m²·W⁻¹.
     pub(crate) exposure: f64,
     pub(crate) reference: Vec<u8>,
+    /// The reference's own rel. RMSE, when known ([`Inputs::reference_error`]).
+    pub(crate) reference_error: Option<f64>,
     pub(crate) panels: Vec<Panel>,
     pub(crate) crops: Vec<Crop>,
     /// Whether the crops were chosen automatically.
@@ -252,6 +257,15 @@ pub(crate) fn worst_regions(score: &[f64], width: u32, count: usize, side: u32) 
     chosen
 }
 
+/// The own rel. RMSE of a reference with standard errors `stderr` (W·m⁻²·sr⁻¹ per pixel):
+/// √(mean over pixels of the luminance of the standard error, squared) over the mean luminance
+/// of `reference` (an upper bound for coloured pixels, as `study`'s floor).
+pub(crate) fn reference_error(reference: &[DVec3], stderr: &[DVec3]) -> f64 {
+    let var: Vec<f64> = stderr.iter().map(|c| luminance(*c).powi(2)).collect();
+    let lum: Vec<f64> = reference.iter().map(|c| luminance(*c)).collect();
+    mean(&var).sqrt() / mean(&lum)
+}
+
 /// Computes the figure: exposure, tonemapped images, metrics, maps and crops.
 pub(crate) fn build(inputs: Inputs) -> Figure {
     let size = (inputs.width, inputs.height);
@@ -306,6 +320,7 @@ pub(crate) fn build(inputs: Inputs) -> Figure {
         height: inputs.height,
         exposure,
         reference,
+        reference_error: inputs.reference_error,
         panels,
         crops,
         crops_auto,
@@ -340,6 +355,12 @@ mod tests {
             vec![0, 188, 255]
         );
         assert_eq!(exposure(&[DVec3::ZERO]), 1.0);
+        // Standard errors (0.1, 0.3) of grey pixels 1 and 3: √((0.01 + 0.09)/2) / 2.
+        let own = reference_error(
+            &[DVec3::ONE, DVec3::splat(3.0)],
+            &[DVec3::splat(0.1), DVec3::splat(0.3)],
+        );
+        assert!((own - 0.05f64.sqrt() / 2.0).abs() < 1e-12, "{own}");
     }
 
     #[test]

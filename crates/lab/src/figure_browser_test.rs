@@ -113,6 +113,7 @@ fn figure() -> Figure {
         width: w,
         height: h,
         reference,
+        reference_error: None,
         entries: vec![Entry {
             name: "checkers".into(),
             rgb: image,

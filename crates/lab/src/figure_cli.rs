@@ -107,6 +107,10 @@ fn read_inputs(args: &FigureArgs) -> CliResult<Inputs> {
     Ok(Inputs {
         width: w,
         height: h,
+        reference_error: reference
+            .stderr
+            .as_ref()
+            .map(|se| crate::figure::reference_error(&reference.mean, se)),
         reference: reference.mean,
         entries,
         crops: args.crops.clone(),
@@ -135,6 +139,7 @@ fn numbers(fig: &Figure, title: &str) -> String {
         "width": fig.width,
         "height": fig.height,
         "exposure": fig.exposure,
+        "reference_rel_rmse": fig.reference_error,
         "crops": crops,
         "crops_auto": fig.crops_auto,
         "error_scale_top": fig.error_top,
@@ -212,4 +217,127 @@ pub(crate) fn run(args: FigureArgs) -> CliResult<()> {
         bdpm_output::say!("wrote {}", path.display());
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bdpm_output::exr::write_exr_channels;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: FigureArgs,
+    }
+
+    fn args(list: &[&str]) -> FigureArgs {
+        Cli::try_parse_from(std::iter::once("figure").chain(list.iter().copied()))
+            .expect("valid arguments")
+            .args
+    }
+
+    /// Writes a grey `w`×`h` EXR whose pixel i has radiance `f(i)`.
+    fn exr(path: &Path, (w, h): (u32, u32), f: impl Fn(usize) -> f64) {
+        let v: Vec<f64> = (0..(w * h) as usize).map(f).collect();
+        write_exr_channels(path, (w, h), &[("R", &v), ("G", &v), ("B", &v)], &[]).unwrap();
+    }
+
+    #[test]
+    fn figure_writes_its_set_and_reads_the_time_from_the_report() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = |n: &str| dir.path().join(n).display().to_string();
+        exr(Path::new(&p("ref.exr")), (16, 12), |i| {
+            1.0 + (i % 16) as f64
+        });
+        exr(Path::new(&p("a.exr")), (16, 12), |i| {
+            1.0 + (i % 16) as f64 * 1.1
+        });
+        std::fs::write(
+            p("a.json"),
+            r#"{"timing": {"prepare_s": 1.5, "render_s": 8.25}}"#,
+        )
+        .unwrap();
+        let out = p("fig");
+        run(args(&[
+            "--reference",
+            &p("ref.exr"),
+            &p("a.exr"),
+            "-o",
+            &out,
+        ]))
+        .unwrap();
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(p("fig/figure.json")).unwrap()).unwrap();
+        let image = &json["images"][0];
+        assert_eq!(image["name"], "a");
+        assert_eq!(image["seconds"], 9.75);
+        // Luminance differs by 10 % of (x) in column x: rel. RMSE = 0.1 · rms(x) / mean(1 + x).
+        let xs: Vec<f64> = (0..16).map(f64::from).collect();
+        let rms = (xs.iter().map(|x| x * x).sum::<f64>() / 16.0).sqrt();
+        let expected = 0.1 * rms / (1.0 + 7.5);
+        let got = image["rel_rmse"].as_f64().unwrap();
+        // The EXR stores f32: agreement to single precision.
+        assert!((got / expected - 1.0).abs() < 1e-5, "{got} vs {expected}");
+        assert_eq!(json["crops"].as_array().unwrap().len(), 2);
+        let html = std::fs::read_to_string(p("fig/figure.html")).unwrap();
+        assert!(html.contains("data:image/png;base64,") && !html.contains("http"));
+        assert!(
+            std::fs::read(p("fig/figure.png"))
+                .unwrap()
+                .starts_with(b"\x89PNG")
+        );
+    }
+
+    #[test]
+    fn figure_refuses_bad_input_naming_the_file_and_what_is_wrong() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = |n: &str| dir.path().join(n).display().to_string();
+        exr(Path::new(&p("ref.exr")), (16, 12), |_| 1.0);
+        exr(Path::new(&p("small.exr")), (8, 12), |_| 1.0);
+        exr(Path::new(&p("nan.exr")), (16, 12), |i| {
+            if i == 17 { f64::NAN } else { 1.0 }
+        });
+        std::fs::write(p("fake.exr"), "not an EXR").unwrap();
+        let out = p("fig");
+        let fail = |list: &[&str]| run(args(list)).unwrap_err();
+        let e = fail(&["--reference", &p("ref.exr"), &p("small.exr"), "-o", &out]);
+        assert!(
+            e.contains("small.exr") && e.contains("8x12") && e.contains("16x12"),
+            "{e}"
+        );
+        let e = fail(&["--reference", &p("ref.exr"), &p("nan.exr"), "-o", &out]);
+        assert!(e.contains("nan.exr") && e.contains("pixel (1, 1)"), "{e}");
+        let e = fail(&["--reference", &p("fake.exr"), &p("ref.exr"), "-o", &out]);
+        assert!(e.contains("fake.exr"), "{e}");
+        let e = fail(&[
+            "--reference",
+            &p("ref.exr"),
+            &p("ref.exr"),
+            "--crop",
+            "10,0,8,4",
+            "-o",
+            &out,
+        ]);
+        assert!(e.contains("--crop 10,0,8,4") && e.contains("16x12"), "{e}");
+        let e = fail(&[
+            "--reference",
+            &p("ref.exr"),
+            &p("ref.exr"),
+            "--names",
+            "a,b",
+            "-o",
+            &out,
+        ]);
+        assert!(e.contains("--names"), "{e}");
+        let e = fail(&[
+            "--reference",
+            &p("ref.exr"),
+            &p("ref.exr"),
+            "-o",
+            &p("ref.exr"),
+        ]);
+        assert!(e.contains("it is a file"), "{e}");
+        assert!(!Path::new(&out).exists(), "nothing written on refusal");
+    }
 }

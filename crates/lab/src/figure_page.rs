@@ -12,7 +12,7 @@ use base64::Engine as _;
 use serde_json::json;
 
 use crate::figure::{Crop, Figure, error_ticks};
-use crate::figure_sheet::number_lines;
+use crate::figure_sheet::{number_lines, reference_lines};
 use bdpm_output::colormap::ColourMap;
 use bdpm_output::raster::encode_png_rgb8;
 
@@ -57,7 +57,7 @@ fn data(fig: &Figure) -> Result<serde_json::Value, String> {
     let mut images = vec![json!({
         "name": "reference",
         "views": { "c": data_uri(w, h, &fig.reference)? },
-        "numbers": ["the reference"],
+        "numbers": reference_lines(fig),
     })];
     for p in &fig.panels {
         images.push(json!({

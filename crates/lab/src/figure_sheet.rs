@@ -128,6 +128,19 @@ pub(crate) fn number_lines(p: &crate::figure::Panel) -> Vec<String> {
     ]
 }
 
+/// The lines under the reference: its own error, when known, which the numbers of the
+/// images include.
+pub(crate) fn reference_lines(fig: &Figure) -> Vec<String> {
+    match fig.reference_error {
+        Some(e) => vec![
+            format!("own rel. RMSE {e:.4}"),
+            "(from its standard error;".into(),
+            "the numbers beside include it)".into(),
+        ],
+        None => vec!["own error unknown".into()],
+    }
+}
+
 /// Lays the figure out on a canvas and lists the text to draw on it.
 fn layout(fig: &Figure) -> (Canvas, Vec<Text>) {
     let s = upscale(fig.width);
@@ -210,14 +223,17 @@ fn layout(fig: &Figure) -> (Canvas, Vec<Text>) {
             );
             frame(&mut canvas, r, 2, colour(k).rgb().into());
         }
-        if i > 0 {
-            for (l, line) in number_lines(&fig.panels[i - 1]).into_iter().enumerate() {
-                texts.push(Text {
-                    at: (x as i32, (y + LABEL + img_h + 2 + l as u32 * LINE) as i32),
-                    size: 15,
-                    text: line,
-                });
-            }
+        let lines = if i > 0 {
+            number_lines(&fig.panels[i - 1])
+        } else {
+            reference_lines(fig)
+        };
+        for (l, line) in lines.into_iter().enumerate() {
+            texts.push(Text {
+                at: (x as i32, (y + LABEL + img_h + 2 + l as u32 * LINE) as i32),
+                size: 15,
+                text: line,
+            });
         }
     }
     y += LABEL + img_h + NUMBER_LINES * LINE + GAP;

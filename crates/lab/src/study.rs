@@ -1351,6 +1351,7 @@ impl Study<'_> {
             width: settings.width,
             height: settings.height,
             reference: self.ref_rgb.clone(),
+            reference_error: self.refs.floor.map(|f| f / self.ref_mean),
             entries: images,
             crops: Vec::new(),
             auto_crops: 2,
