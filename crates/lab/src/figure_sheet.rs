@@ -141,6 +141,33 @@ pub(crate) fn reference_lines(fig: &Figure) -> Vec<String> {
     }
 }
 
+/// The two lines of the figure's title: the exposure and how the crops were chosen.
+fn title(fig: &Figure) -> Vec<Text> {
+    let title = [
+        format!(
+            "One exposure for all: ×{:.4e} sr·m²/W (the reference's 99th-percentile luminance → 1), sRGB.",
+            fig.exposure
+        ),
+        format!(
+            "Crops {}.",
+            if fig.crops_auto {
+                "where the relative squared error summed over the images is largest"
+            } else {
+                "as given"
+            }
+        ),
+    ];
+    title
+        .into_iter()
+        .enumerate()
+        .map(|(l, text)| Text {
+            at: (MARGIN as i32, (MARGIN + l as u32 * 20) as i32),
+            size: 16,
+            text,
+        })
+        .collect()
+}
+
 /// Lays the figure out on a canvas and lists the text to draw on it.
 fn layout(fig: &Figure) -> (Canvas, Vec<Text>) {
     let s = upscale(fig.width);
@@ -162,29 +189,7 @@ fn layout(fig: &Figure) -> (Canvas, Vec<Text>) {
         height,
         rgb: vec![255; width as usize * height as usize * 3],
     };
-    let title = [
-        format!(
-            "One exposure for all: ×{:.4e} sr·m²/W (the reference's 99th-percentile luminance → 1), sRGB.",
-            fig.exposure
-        ),
-        format!(
-            "Crops {}.",
-            if fig.crops_auto {
-                "where the relative squared error summed over the images is largest"
-            } else {
-                "as given"
-            }
-        ),
-    ];
-    let mut texts: Vec<Text> = title
-        .into_iter()
-        .enumerate()
-        .map(|(l, text)| Text {
-            at: (MARGIN as i32, (MARGIN + l as u32 * 20) as i32),
-            size: 16,
-            text,
-        })
-        .collect();
+    let mut texts = title(fig);
     let x_of = |i: u32| MARGIN + i * (col + GAP);
     let full = Crop {
         x: 0,
