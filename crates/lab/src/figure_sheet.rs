@@ -15,7 +15,7 @@ use bdpm_output::raster::Canvas;
 const MARGIN: u32 = 12;
 const GAP: u32 = 8;
 /// Line heights, pixels: the title, a cell's label, a line of numbers.
-const TITLE: u32 = 48;
+const TITLE: u32 = 68;
 const LABEL: u32 = 22;
 const LINE: u32 = 18;
 /// Lines of numbers under each image.
@@ -23,6 +23,8 @@ const NUMBER_LINES: u32 = 4;
 /// The narrowest and the widest a column may be after integer upscaling, pixels.
 const MIN_COLUMN: u32 = 256;
 const MAX_COLUMN: u32 = 512;
+/// The narrowest sheet, pixels: room for the title's lines beside one or two columns.
+const MIN_WIDTH: u32 = 600;
 
 /// Integer upscaling of the images so that a column is about [`MIN_COLUMN`] wide.
 pub(crate) fn upscale(width: u32) -> u32 {
@@ -144,14 +146,12 @@ pub(crate) fn reference_lines(fig: &Figure) -> Vec<String> {
 /// The two lines of the figure's title: the exposure and how the crops were chosen.
 fn title(fig: &Figure) -> Vec<Text> {
     let title = [
+        format!("One exposure for all: ×{:.4e} sr·m²/W, sRGB", fig.exposure),
+        "(the reference's 99th-percentile luminance → 1).".to_string(),
         format!(
-            "One exposure for all: ×{:.4e} sr·m²/W (the reference's 99th-percentile luminance → 1), sRGB.",
-            fig.exposure
-        ),
-        format!(
-            "Crops {}.",
+            "Crops: {}.",
             if fig.crops_auto {
-                "where the relative squared error summed over the images is largest"
+                "the largest relative squared error summed over the images"
             } else {
                 "as given"
             }
@@ -174,7 +174,7 @@ fn layout(fig: &Figure) -> (Canvas, Vec<Text>) {
     let (col, img_h) = (fig.width * s, fig.height * s);
     let cols = 1 + fig.panels.len() as u32;
     let crop_rows: u32 = fig.crops.iter().map(|c| crop_height(c, col) + GAP).sum();
-    let width = 2 * MARGIN + cols * col + (cols - 1) * GAP;
+    let width = (2 * MARGIN + cols * col + (cols - 1) * GAP).max(MIN_WIDTH);
     let height = MARGIN
         + TITLE
         + LABEL
