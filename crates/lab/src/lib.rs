@@ -1,5 +1,5 @@
 //! The lab of `bdpm`: the commands that measure the renderer rather than render with it
-//! (`study`, `bench`, `compare`, `predict`). Their files, plots, maps and statistics come from
+//! (`study`, `bench`, `compare`, `predict`, `figure`). Their files, plots, maps and statistics come from
 //! `bdpm-output`, as the renderer's do.
 //!
 //! Why a library linked into the one `bdpm` binary behind its default-on cargo feature `lab`,
@@ -22,6 +22,13 @@ use clap::Subcommand;
 
 mod bench;
 mod compare;
+mod figure;
+#[cfg(test)]
+mod figure_browser_test;
+mod figure_cli;
+mod figure_page;
+mod figure_sheet;
+mod metrics;
 mod plot;
 mod predict;
 mod reference;
@@ -29,6 +36,7 @@ mod study;
 
 pub use bench::BenchArgs;
 pub use compare::CompareArgs;
+pub use figure_cli::FigureArgs;
 pub use predict::PredictArgs;
 pub use study::StudyArgs;
 
@@ -48,6 +56,10 @@ pub enum Command {
     /// Compare two renders: bit-identical mean radiance or not, image means, and the fraction
     /// of pixels within k combined standard errors.
     Compare(CompareArgs),
+    /// A comparison figure: the images beside the reference at one exposure, crops, maps of
+    /// relative error and of FLIP, and rel. RMSE, relMSE, FLIP mean and time under each, as
+    /// DIR/figure.png, a self-contained DIR/figure.html flip-book and DIR/figure.json.
+    Figure(FigureArgs),
 }
 
 /// Runs a lab subcommand; the error is one line for the user.
@@ -58,6 +70,7 @@ pub fn run(command: Command) -> Result<ExitCode, String> {
         Command::Study(args) => study::run(args).map(success),
         Command::Bench(args) => bench::run(args).map(success),
         Command::Compare(args) => compare::run(args),
+        Command::Figure(args) => figure_cli::run(args).map(success),
     }
 }
 

@@ -131,6 +131,49 @@ fn log_range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
     lo / 1.15..hi * 1.15
 }
 
+/// The labelled ticks of a log axis over `range`: every decade when the range spans four or
+/// more, else 1, 2 and 5 times each power of ten, else 1…9 times; at least two, so that a
+/// narrow range still has numbers on its axis (its ends, to two significant digits, when no
+/// round value falls inside). Explicit ticks, because plotters' own on a log axis leave a
+/// range within one decade unlabelled and crowd their light lines into bands.
+pub(crate) fn log_ticks(range: &std::ops::Range<f64>) -> Vec<f64> {
+    let (lo, hi) = (range.start, range.end);
+    if !(lo > 0.0 && hi > lo && hi.is_finite()) {
+        return Vec::new();
+    }
+    let (k0, k1) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+    let within = |mantissas: &[f64]| -> Vec<f64> {
+        (k0..=k1)
+            .flat_map(|k| mantissas.iter().map(move |m| m * 10f64.powi(k)))
+            .filter(|v| *v >= lo * (1.0 - 1e-9) && *v <= hi * (1.0 + 1e-9))
+            .collect()
+    };
+    let decades = within(&[1.0]);
+    let ticks = if decades.len() >= 4 {
+        let step = decades.len().div_ceil(10);
+        decades.into_iter().step_by(step).collect()
+    } else {
+        let coarse = within(&[1.0, 2.0, 5.0]);
+        if coarse.len() >= 3 {
+            coarse
+        } else {
+            within(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0])
+        }
+    };
+    if ticks.len() >= 2 {
+        return ticks;
+    }
+    let round2 = |v: f64| {
+        let p = 10f64.powi(v.log10().floor() as i32 - 1);
+        (v / p).round() * p
+    };
+    let mut ends = vec![round2(lo * 1.02), round2(hi / 1.02)];
+    ends.extend(ticks);
+    ends.sort_by(f64::total_cmp);
+    ends.dedup();
+    ends
+}
+
 /// Tick label of a log axis: short, no trailing zeros.
 fn tick(v: f64) -> String {
     let a = v.abs();
@@ -165,7 +208,10 @@ fn draw_loglog<DB: DrawingBackend>(
         .margin(16)
         .x_label_area_size(56)
         .y_label_area_size(84)
-        .build_cartesian_2d(xs.clone().log_scale(), ys.log_scale())
+        .build_cartesian_2d(
+            xs.clone().log_scale().with_key_points(log_ticks(&xs)),
+            ys.clone().log_scale().with_key_points(log_ticks(&ys)),
+        )
         .map_err(err)?;
     chart
         .configure_mesh()
@@ -298,4 +344,34 @@ fn draw_bars<DB: DrawingBackend>(
         }))
         .map_err(err)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn log_ticks_label_every_range() {
+        // Six decades: one tick per decade.
+        assert_eq!(
+            log_ticks(&(0.5..2e5)),
+            vec![1.0, 10.0, 100.0, 1e3, 1e4, 1e5]
+        );
+        // Within two decades: 1, 2, 5 times each power of ten.
+        let t = log_ticks(&(0.015..0.6));
+        assert_eq!(t.len(), 5, "{t:?}");
+        for (a, b) in t.iter().zip([0.02, 0.05, 0.1, 0.2, 0.5]) {
+            assert!((a / b - 1.0).abs() < 1e-12, "{t:?}");
+        }
+        // Within a decade: every digit that falls inside.
+        let t = log_ticks(&(0.031..0.068));
+        assert_eq!(t.len(), 3, "{t:?}");
+        // No round value inside: the ends, to two significant digits.
+        let t = log_ticks(&(0.0312..0.0338));
+        assert_eq!(t.len(), 2, "{t:?}");
+        assert!(t.iter().all(|v| (0.0312..0.0338).contains(v)), "{t:?}");
+        // Thirty decades: at most ten labels.
+        assert!(log_ticks(&(1e-15..1e15)).len() <= 11);
+        assert!(log_ticks(&(0.0..1.0)).is_empty());
+    }
 }

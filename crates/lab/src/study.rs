@@ -5,7 +5,9 @@
 //! the first pass, so equal-time comparisons are honest), the RMSE of the running mean against
 //! a reference, and the mean per-pass noise √V. Every error measure is over pixel
 //! **luminance** (Rec. 709 weights). It writes `study.csv`, `study.md`, log-log plots of error
-//! against time and a bar chart of mean √V (PNG and SVG), and a preview PNG per mode.
+//! against time and a bar chart of mean √V (PNG and SVG), a preview PNG per mode, and the
+//! figure of the modes' images against the reference (`figure.png`, `.html`, `.json`, see
+//! `figure`).
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -30,6 +32,8 @@ use clap::Args;
 use indicatif::ProgressBar;
 
 use crate::reference;
+// The error measures moved to `metrics` (the figure uses them too); their old paths stay.
+pub(crate) use crate::metrics::{mean, rel_epsilon, rel_mean, rel_mse, rmse};
 
 // The field docs are clap's help text, printed in a terminal: `<scene>` there is a
 // placeholder, not an HTML tag.
@@ -80,56 +84,6 @@ pub struct StudyArgs {
     /// Do not draw progress bars.
     #[arg(long)]
     quiet: bool,
-}
-
-/// Root-mean-square difference of two equally long images.
-pub(crate) fn rmse(a: &[f64], b: &[f64]) -> f64 {
-    assert_eq!(a.len(), b.len(), "images differ in size");
-    if a.is_empty() {
-        return 0.0;
-    }
-    let sum: f64 = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum();
-    (sum / a.len() as f64).sqrt()
-}
-
-/// ε of the relative metrics: 0.01 × the squared image-mean luminance of the reference, so
-/// that black pixels neither divide by zero nor dominate (the convention of the rendering
-/// literature's relMSE).
-pub(crate) fn rel_epsilon(reference: &[f64]) -> f64 {
-    0.01 * mean(reference).powi(2)
-}
-
-/// relMSE of `image` against `reference`: the mean over pixels of (I − R)²/(R² + ε), ε from
-/// [`rel_epsilon`]. Dimensionless. The same with per-pixel variances V in place of (I − R)² is
-/// relV ([`rel_mean`]).
-pub(crate) fn rel_mse(image: &[f64], reference: &[f64]) -> f64 {
-    let sq: Vec<f64> = image
-        .iter()
-        .zip(reference)
-        .map(|(i, r)| (i - r).powi(2))
-        .collect();
-    rel_mean(&sq, reference)
-}
-
-/// The mean over pixels of q/(R² + ε) for a per-pixel squared quantity q (W²·m⁻⁴·sr⁻²).
-pub(crate) fn rel_mean(q: &[f64], reference: &[f64]) -> f64 {
-    assert_eq!(q.len(), reference.len(), "images differ in size");
-    let eps = rel_epsilon(reference);
-    mean(
-        &q.iter()
-            .zip(reference)
-            .map(|(q, r)| q / (r * r + eps))
-            .collect::<Vec<_>>(),
-    )
-}
-
-/// Mean of a slice (0 for an empty one).
-pub(crate) fn mean(v: &[f64]) -> f64 {
-    if v.is_empty() {
-        0.0
-    } else {
-        v.iter().sum::<f64>() / v.len() as f64
-    }
 }
 
 /// The value at `t` of the curve through `points` (x ascending, all positive), interpolated
@@ -533,9 +487,11 @@ struct ModeState<'a> {
     points: Vec<PassPoint>,
 }
 
-/// What [`Study::finish`] hands the report: the runs, the previews written and the notes.
+/// What [`Study::finish`] hands the report: the runs, each mode's image for the figure, the
+/// previews written and the notes.
 struct Finished {
     runs: Vec<ModeRun>,
+    images: Vec<crate::figure::Entry>,
     files: Vec<String>,
     notes: Vec<String>,
 }
@@ -831,6 +787,8 @@ struct Study<'a> {
     stem: String,
     /// The output directory.
     dir: PathBuf,
+    /// The reference's mean radiance per pixel (W·m⁻²·sr⁻¹), for the figure.
+    ref_rgb: Vec<glam::DVec3>,
     /// The reference's luminance per pixel, and its image mean.
     ref_lum: Vec<f64>,
     /// The reference's variance per pixel (luminance; zeros without a stderr layer).
@@ -920,6 +878,7 @@ fn prepare(args: &StudyArgs) -> CliResult<Study<'_>> {
         pool,
         stem,
         dir,
+        ref_rgb: reference.mean,
         ref_lum,
         ref_var,
         ref_mean,
@@ -1027,6 +986,7 @@ fn study_reference(
         for stem in ["error-vs-time", "sqrt-v"] {
             members.extend(["png", "svg"].map(|e| dir.join(stem).with_extension(e)));
         }
+        members.extend(crate::figure_cli::members(dir));
         let members: Vec<&Path> = members.iter().map(PathBuf::as_path).collect();
         refuse_inputs(&members, &[path], &[])?;
     }
@@ -1222,6 +1182,7 @@ impl Study<'_> {
     /// longer than the time budget).
     fn finish(&self, states: Vec<ModeState<'_>>) -> CliResult<Finished> {
         let mut runs = Vec::new();
+        let mut images = Vec::new();
         let mut files = Vec::new();
         let mut notes = Vec::new();
         for m in states {
@@ -1246,6 +1207,11 @@ impl Study<'_> {
             let preview = self.dir.join(preview_name(&m.name));
             write_png(&preview, &m.film).map_err(|e| format!("{}: {e}", preview.display()))?;
             files.push(preview.display().to_string());
+            images.push(crate::figure::Entry {
+                name: m.name.clone(),
+                rgb: m.film.mean(),
+                seconds: m.points.last().map(|p| p.time),
+            });
             let run = ModeRun {
                 name: m.name,
                 stages: m.stages,
@@ -1278,7 +1244,12 @@ impl Study<'_> {
                 bdpm_output::say_err!("note: {}", n.replace('`', ""));
             }
         }
-        Ok(Finished { runs, files, notes })
+        Ok(Finished {
+            runs,
+            images,
+            files,
+            notes,
+        })
     }
 
     /// The paragraphs after the report's table: the regional choice, then the notes.
@@ -1300,7 +1271,12 @@ impl Study<'_> {
 
     /// Writes the previews, the CSV, the plots and the markdown report.
     fn write(&self, states: Vec<ModeState<'_>>) -> CliResult<()> {
-        let Finished { runs, files, notes } = self.finish(states)?;
+        let Finished {
+            runs,
+            images,
+            files,
+            notes,
+        } = self.finish(states)?;
         let (args, settings, dir) = (self.args, &self.loaded.settings, &self.dir);
         let (stem, w, h) = (&self.stem, settings.width, settings.height);
         let csv_path = dir.join("study.csv");
@@ -1354,6 +1330,7 @@ impl Study<'_> {
             }
         }
         all_files.extend(files);
+        all_files.extend(self.figure(images)?);
         let md = markdown(
             &self.header(),
             &self.refs,
@@ -1364,6 +1341,31 @@ impl Study<'_> {
             &all_files,
         );
         crate::publish(&dir.join("study.md"), &md)
+    }
+
+    /// Writes the figure of the modes' images against the reference (figure.png, .html,
+    /// .json; crops where the error is largest); returns the paths written.
+    fn figure(&self, images: Vec<crate::figure::Entry>) -> CliResult<Vec<String>> {
+        let settings = &self.loaded.settings;
+        let fig = crate::figure::build(crate::figure::Inputs {
+            width: settings.width,
+            height: settings.height,
+            reference: self.ref_rgb.clone(),
+            reference_error: self.refs.floor.map(|f| f / self.ref_mean),
+            entries: images,
+            crops: Vec::new(),
+            auto_crops: 2,
+        });
+        let title = format!(
+            "{}: the modes at {} against the reference",
+            self.stem,
+            match self.args.time_budget {
+                Some(b) => format!("{b} s of {} time each", self.args.clock),
+                None => format!("{} passes each", settings.passes),
+            }
+        );
+        let written = crate::figure_cli::write_set(&self.dir, &fig, &title)?;
+        Ok(written.iter().map(|p| p.display().to_string()).collect())
     }
 
     /// The report's heading: scene, settings, command and load average.
