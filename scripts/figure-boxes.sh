@@ -6,7 +6,8 @@
 # Mitsuba's image as one more column when given.
 #   scripts/figure-boxes.sh [-o DIR] [--budget S] [--reference-budget S] [--resolution WxH]
 #                           [--mitsuba-lambert FILE.exr] [--mitsuba-glossy FILE.exr] [--mitsuba]
-# --mitsuba renders the Lambert box's Mitsuba image itself, with Mitsuba 3's `path` tracer for
+# --mitsuba renders the Lambert box's Mitsuba image itself, with Mitsuba 3's light tracer (`ptracer`,
+# its better integrator for a point light in a closed box) for
 # the same budget (scripts/mitsuba-equal-time.py); not the glossy box's, whose Gaussian lobe
 # Mitsuba can only approximate (docs/scene-format.md, "Export to Mitsuba 3").
 # Defaults: -o out/figure-boxes, 10 s per image, 180 s for the Lambert reference (4× that
@@ -38,7 +39,7 @@ for box in lambert glossy; do
   mkdir -p "$d"
   if [ "$box" = lambert ] && [ -n "$render_mitsuba" ] && [ -z "$mitsuba_lambert" ]; then
     python3 scripts/mitsuba-equal-time.py scenes/cornell-lambert.toml --seconds "$budget" \
-      --resolution "${res%%x*}" --bdpm "$bdpm" -o "$d/mitsuba.exr"
+      --integrator ptracer --resolution "${res%%x*}" --bdpm "$bdpm" -o "$d/mitsuba.exr"
     mitsuba_lambert=$d/mitsuba.exr
   fi
   # The glossy box's light-tracing reference converges slower (its sharp lobes): 4× the time.

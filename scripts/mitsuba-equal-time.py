@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Renders a bdpm scene with Mitsuba 3's `path` tracer for a time budget, for an equal-time
+"""Renders a bdpm scene with Mitsuba 3's `path` or `ptracer` integrator for a time budget, for an equal-time
 figure (scripts/figure-boxes.sh): exports the scene (`bdpm export --to mitsuba`), renders it in
 rounds of --spp samples per pixel with fresh seeds until the budget is spent (the first round
 always), and writes the mean of the rounds as OUT.exr (R, G, B) with OUT.json beside it in the
@@ -8,6 +8,7 @@ time}}), which `bdpm figure` reads as the image's time.
 
   scripts/mitsuba-equal-time.py SCENE.toml -o OUT.exr [--seconds 10] [--resolution 128]
                                 [--spp 4] [--variant llvm_ad_rgb] [--threads 2] [--bdpm PATH]
+                                [--integrator path|ptracer]
 """
 import argparse
 import json
@@ -35,6 +36,7 @@ def main():
     ap.add_argument("--variant", default="llvm_ad_rgb")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--bdpm", default="target/release/bdpm")
+    ap.add_argument("--integrator", choices=["path", "ptracer"], default="path")
     args = ap.parse_args()
     if not (args.seconds > 0 and args.spp >= 1 and args.resolution >= 1):
         fail("--seconds must be positive, --spp and --resolution at least 1")
@@ -55,7 +57,7 @@ def main():
     dr.set_thread_count(args.threads)
     t0 = time.time()
     scene = mi.load_file(os.path.join(export, "scene.xml"), spp=args.spp)
-    integ = mi.load_dict({"type": "path", "max_depth": -1})
+    integ = mi.load_dict({"type": args.integrator, "max_depth": -1})
     # Loading is the preparation; the first round, which compiles the LLVM kernels, counts
     # as render time. The budget is of render time, as bdpm's --time-budget is.
     prepare_s = time.time() - t0
@@ -72,7 +74,7 @@ def main():
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     with OpenEXR.File(header, ch) as f:
         f.write(args.out)
-    report = {"renderer": f"Mitsuba {mi.__version__} ({args.variant}), path, max_depth -1",
+    report = {"renderer": f"Mitsuba {mi.__version__} ({args.variant}), {args.integrator}, max_depth -1",
               "spp": rounds * args.spp, "rounds": rounds,
               "timing": {"prepare_s": prepare_s, "render_s": render_s}}
     with open(os.path.splitext(args.out)[0] + ".json", "w") as f:
