@@ -410,7 +410,11 @@ fn resolve(mut args: PredictArgs) -> CliResult<PredictArgs> {
         Some(m) => (Some(args.input.clone()), m),
         None => (None, args.input.clone()),
     };
-    if scene.is_none() && measured.extension().is_some_and(|e| e == "toml" || e == "xml") {
+    if scene.is_none()
+        && measured
+            .extension()
+            .is_some_and(|e| e == "toml" || e == "xml")
+    {
         return Err(format!(
             "{}: a scene file needs the render to compare with: --measured RENDER.exr (or give the render alone: bdpm predict RENDER.exr)",
             measured.display()
