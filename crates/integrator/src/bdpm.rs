@@ -9,6 +9,7 @@ use bdpm_scene::{Shading, WeightVertex};
 use glam::Vec3;
 
 use crate::correction::CandidateSums;
+use crate::direct::emitted_and_area;
 use crate::estimates::{Techniques, WeightStats};
 use crate::inputs::Arrival;
 use crate::mix::{DeltaChain, FirstVertex, Mix};
@@ -203,7 +204,10 @@ impl<'a> Mix<'a> {
         let dir = cam.ray_direction(job.x, job.y);
         let (sh0, u, beta) = self.camera_x0(dir, &mut job.rng);
         let direct = sh0.as_ref().map_or(Vec3::ZERO, |sh| {
-            let l0 = scene.direct(sh, u);
+            let mut l0 = scene.direct(sh, u);
+            if scene.has_emission() {
+                l0 += emitted_and_area(scene, sh, u, job.rng.uniform3());
+            }
             beta.map_or(l0, |b| b * l0)
         });
         slot.out.techniques.direct = match plan.direct_extra(job.k) {
@@ -333,6 +337,22 @@ impl<'a> Mix<'a> {
                 pilot.add(f64::from(luminance(s.weight * c)), w, true);
             }
         }
+        if scene.has_emission() {
+            let area = scene.direct_area_sample(&sh1, wo1, rng.uniform3(), false);
+            if let Some((c, wi)) = area {
+                // Light→x₁→x₀ from an area light: its own weight, as the photon side gives
+                // the same path (crate::inputs, Arrival::Area).
+                let one = self.path_pair(x0, &x1, (v, dist2), Arrival::Area(wi), pair);
+                let w = self
+                    .fixed_w1
+                    .unwrap_or_else(|| self.w1(&one, weigher, stats));
+                direct_raw += c;
+                direct_weighted += c * w as f32;
+                if self.pilot {
+                    pilot.add(f64::from(luminance(s.weight * c)), w, true);
+                }
+            }
+        }
         Some(Second {
             sh1,
             x1,
@@ -371,7 +391,10 @@ impl<'a> Mix<'a> {
         let walk = scene.walk_to_non_delta(origin, v, Transport::Radiance, || rng.uniform())?;
         let sh1 = walk.sh;
         map.restart_query_within(query, sh1.p, r);
-        let direct_raw = scene.direct(&sh1, walk.wo);
+        let mut direct_raw = scene.direct(&sh1, walk.wo);
+        if scene.has_emission() {
+            direct_raw += scene.direct_area(&sh1, walk.wo, rng.uniform3(), false);
+        }
         let weight = e * walk.beta;
         if self.pilot && direct_raw != Vec3::ZERO {
             pilot.add(f64::from(luminance(weight * direct_raw)), w, true);
