@@ -34,3 +34,76 @@ fn every_mode_matches_the_emissive_furnace() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// The same sphere with a Gaussian lobe (kd 0.25, gr 0.5, Δ = 12°): its directional albedo
+/// µ(ωₒ) varies with the angle, so radiance is no longer one constant but lies between
+/// Le/(1 − min µ) and Le/(1 − max µ); the exact answer is not closed-form, so every mode
+/// must agree with `path` (an independent estimator: no merge, MIS at every vertex) pixel
+/// by pixel, and `path` must lie within those bounds.
+#[test]
+fn every_mode_agrees_with_path_in_the_lobe_furnace() {
+    let text = std::fs::read_to_string(bdpm_suite::scene_path("emissive-furnace.toml"))
+        .expect("the scene file");
+    let text = text.replace("kd = 0.5\n", "kd = 0.25\ngr = 0.5\ndelta = 12\n");
+    let (mut scene, mut settings) = crate::specular::load(&text);
+    scene.set_resolution(16, 16).expect("valid resolution");
+    (settings.width, settings.height) = (16, 16);
+    settings.sampler = bdpm_integrator::RenderSettings::default().sampler;
+    let reference = render(&scene, &with_mode(&settings, "path", 96, 4, 1));
+    // µ(ωₒ) = kd + gr·µ_G(cos θₒ) over the directions, from the BDF's own albedo.
+    let bdf = scene.bdf(0);
+    let albedo = |z: f32| {
+        let wo = glam::Vec3::new((1.0 - z * z).sqrt(), 0.0, z);
+        f64::from(bdf.albedo(wo).x)
+    };
+    let mus: Vec<f64> = (1..=100).map(|i| albedo(i as f32 / 100.0)).collect();
+    let (lo, hi) = mus
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(a, b), &m| (a.min(m), b.max(m)));
+    let mean: f64 = reference.mean().iter().map(|v| v.x).sum::<f64>() / 256.0;
+    eprintln!("path mean {mean}, bounds [{}, {}]", 1.0 / (1.0 - lo), 1.0 / (1.0 - hi));
+    assert!(mean >= 1.0 / (1.0 - lo) && mean <= 1.0 / (1.0 - hi), "{mean}");
+    let mut failures = Vec::new();
+    for mode in all_modes().into_iter().filter(|&m| m != "path") {
+        let mut s = with_mode(&settings, mode, 16, 4, 20_000);
+        s.radius = Some(0.05);
+        s.threshold_radius = 0.9;
+        let film = render(&scene, &s);
+        let (within, diff, se) = bdpm_suite::films_agree(&film, &reference, 4.0);
+        eprintln!("{mode:>16}: within {within:.4}, mean {diff:+.4} ± {se:.4}");
+        if !(within >= 0.98 && diff.abs() < (4.0 * se).max(0.005) && se < 0.005) {
+            failures.push(format!("{mode}: within {within}, mean {diff:+} ± {se}"));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// scenes/cornell-box.toml (Mitsuba's Cornell box, its area light) with a point light added
+/// beside the area light, so photons and direct light share one distribution over both kinds:
+/// every mode agrees with `path` pixel by pixel and in the image mean.
+#[test]
+fn point_and_area_lights_together_agree_with_path() {
+    let text = std::fs::read_to_string(bdpm_suite::scene_path("cornell-box.toml"))
+        .expect("the scene file");
+    let text = text.replace(
+        "[material.white]",
+        "[[light]]\nposition = [0.4, 0.5, 0.3]\nflux = [2.0, 2.0, 2.0]\n\n[material.white]",
+    );
+    let (mut scene, mut settings) = crate::specular::load(&text);
+    scene.set_resolution(20, 20).expect("valid resolution");
+    (settings.width, settings.height) = (20, 20);
+    settings.sampler = bdpm_integrator::RenderSettings::default().sampler;
+    settings.radius = Some(0.01);
+    let reference = render(&scene, &with_mode(&settings, "path", 128, 8, 1));
+    let mut failures = Vec::new();
+    for mode in ["light", "bdd0", "bdd1", "optimal-path", "balance", "camis"] {
+        let s = with_mode(&settings, mode, 24, 4, 50_000);
+        let film = render(&scene, &s);
+        let (within, diff, se) = bdpm_suite::films_agree(&film, &reference, 4.0);
+        eprintln!("{mode:>16}: within {within:.4}, mean {diff:+.4} ± {se:.4}");
+        if !(within >= 0.98 && diff.abs() < (4.0 * se).max(0.01) && se < 0.01) {
+            failures.push(format!("{mode}: within {within}, mean {diff:+} ± {se}"));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}

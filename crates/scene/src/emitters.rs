@@ -310,16 +310,19 @@ impl Scene {
 }
 
 /// The power heuristic p_a²/(p_a² + p_b²) of a sample drawn with density `a` against the
-/// other strategy's density `b` for the same direction (1 where `b` is 0).
+/// other strategy's density `b` for the same direction (1 where `b` is 0), written with the
+/// ratio of the smaller to the larger so that it neither overflows nor underflows.
 #[inline]
 pub fn power_heuristic(a: f32, b: f32) -> f32 {
-    let (a2, b2) = (a * a, b * b);
-    if a2 + b2 > 0.0 && (a2 + b2).is_finite() {
-        a2 / (a2 + b2)
-    } else if b > a {
-        0.0
+    if a == b {
+        return if a > 0.0 { 0.5 } else { 1.0 };
+    }
+    if a > b {
+        let r = b / a;
+        1.0 / (1.0 + r * r)
     } else {
-        1.0
+        let r = a / b;
+        r * r / (1.0 + r * r)
     }
 }
 
@@ -329,4 +332,188 @@ pub fn cosine_hemisphere(u: [f32; 2]) -> Vec3 {
     let d = bdpm_core::sampling::concentric_disk(u);
     let z = (1.0 - d.length_squared()).max(0.0).sqrt();
     Vec3::new(d.x, d.y, z)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Camera, PointLight};
+    use bdpm_bdf::Bdf;
+    use bdpm_core::{Domain, Rng};
+    use bdpm_geometry::TriangleMesh;
+
+    /// A floor (material 0, Lambert 0.5, 4 m × 4 m at y = 0 facing +y) under two emitters
+    /// facing down: material 1 (a × b = 0.4 m × 0.2 m at height 1, Le = (1, 2, 3)) and
+    /// material 2 (two-sided, 0.2 m × 0.2 m at x = 1, height 0.5, Le = 5), plus a point light
+    /// of flux `point` unless it is zero.
+    fn scene(point: f32) -> Scene {
+        let mut mesh = TriangleMesh::default();
+        mesh.push_rect(Vec3::ZERO, Vec3::Z * 2.0, Vec3::X * 2.0, 0);
+        mesh.push_rect(Vec3::Y, Vec3::X * 0.2, Vec3::Z * 0.1, 1);
+        mesh.push_rect(Vec3::new(1.0, 0.5, 0.0), Vec3::X * 0.1, Vec3::Z * 0.1, 2);
+        let lambert = |k: f32| Bdf::lambert(Vec3::splat(k)).unwrap();
+        let materials = vec![
+            Material::new("floor", lambert(0.5)),
+            Material::new("lamp", lambert(0.0)).with_emission(Vec3::new(1.0, 2.0, 3.0), false),
+            Material::new("panel", lambert(0.0)).with_emission(Vec3::splat(5.0), true),
+        ];
+        let lights = if point > 0.0 {
+            vec![PointLight {
+                position: Vec3::new(-1.0, 1.0, 0.0),
+                flux: Vec3::splat(point),
+            }]
+        } else {
+            Vec::new()
+        };
+        let camera = Camera::look_at(Vec3::new(0.0, 1.0, -3.0), Vec3::ZERO, Vec3::Y, 40.0, 8, 8);
+        Scene::new(Geometry::new(mesh).unwrap(), materials, lights, camera.unwrap()).unwrap()
+    }
+
+    #[test]
+    fn the_light_distribution_is_proportional_to_flux() {
+        let s = scene(2.0);
+        assert_eq!(s.emitters().len(), 4);
+        // Lamp: π·Le·A, one side, per triangle of half the 0.08 m²; panel: both sides.
+        let lamp = luminance(Vec3::new(1.0, 2.0, 3.0)) * PI * 0.04;
+        let panel = 5.0 * PI * 0.02 * 2.0;
+        let point = 2.0;
+        let total = point + 2.0 * lamp + 2.0 * panel;
+        let want = [point, lamp, lamp, panel, panel].map(|f| f / total);
+        for (i, w) in want.iter().enumerate() {
+            let p = s.light_probability(i);
+            assert!((p - w).abs() < 1e-6, "light {i}: {p} against {w}");
+        }
+        // pick_light returns each index with its probability (the CDF's steps).
+        let mut counts = [0u32; 5];
+        let n = 100_000;
+        for k in 0..n {
+            let (i, p) = s.pick_light((k as f32 + 0.5) / n as f32);
+            assert_eq!(p, s.light_probability(i));
+            counts[i] += 1;
+        }
+        for (i, w) in want.iter().enumerate() {
+            let got = counts[i] as f32 / n as f32;
+            assert!((got - w).abs() < 2e-5, "light {i}: {got} against {w}");
+        }
+        // The emitters alone, for direct light: the same shares without the point light.
+        for (i, w) in [lamp, lamp, panel, panel].iter().enumerate() {
+            let want = w / (total - point);
+            assert!((s.emitters.probability(i) - want).abs() < 1e-6);
+        }
+        let flux = s.total_flux();
+        assert!((luminance(flux) - total).abs() < 1e-4 * total, "{flux}");
+    }
+
+    /// E[1/p_ω] over light samples is the solid angle the emitters cover from the shading
+    /// point (counting each point an emitter lights once), here the lamp alone seen from
+    /// under its centre: Ω = 4·asin(ab/√((a² + 4h²)(b² + 4h²))). Also each sample's density
+    /// is the one `emitter_pdf` gives for its point.
+    #[test]
+    fn area_sampling_density_integrates_to_the_solid_angle() {
+        let s = scene(0.0);
+        let from = Vec3::new(0.0, 0.0, 0.0);
+        let (a, b, h) = (0.4f64, 0.2, 1.0);
+        let exact = 4.0 * (a * b / ((a * a + 4.0 * h * h) * (b * b + 4.0 * h * h)).sqrt()).asin();
+        let mut rng = Rng::new(3, Domain::Other, [0; 3]);
+        let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+        let n = 200_000;
+        for _ in 0..n {
+            let e = s.sample_emitter(rng.uniform(), rng.uniform2()).unwrap();
+            let lamp = s.geometry.material(e.prim) == 1;
+            let to = e.p - from;
+            let d2 = to.length_squared();
+            let pdf = e.pdf_area * d2 / e.n.dot(to / d2.sqrt()).abs();
+            let own = s.emitter_pdf(from, e.prim, e.p);
+            assert!((own - pdf).abs() <= 1e-5 * pdf, "{own} against {pdf}");
+            let x = if lamp { 1.0 / pdf as f64 } else { 0.0 };
+            sum += x;
+            sum2 += x * x;
+        }
+        let mean = sum / n as f64;
+        let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
+        assert!((mean - exact).abs() < 4.0 * se, "{mean} ± {se} against {exact}");
+    }
+
+    /// The direct light of the area lights at a floor point, by light sampling, against a
+    /// midpoint quadrature of ∫ f·Le·cos θ·cos θₑ/d² dA over both emitters (400 × 400 cells
+    /// each; the panel's both sides, the floor sees its lower one).
+    #[test]
+    fn direct_area_light_matches_quadrature() {
+        let s = scene(0.0);
+        let p = Vec3::new(0.3, 0.0, 0.2);
+        let hit = s.geometry.intersect(p + Vec3::Y, -Vec3::Y, 2.0).unwrap();
+        let wo = Vec3::new(0.0, 1.0, -1.0).normalize();
+        let sh = s.shade(&hit, wo);
+        let quad = |c: Vec3, u: Vec3, v: Vec3, le: f64| {
+            let k = 400;
+            let area = (4.0 * u.length() * v.length()) as f64;
+            let mut sum = 0.0f64;
+            for i in 0..k {
+                for j in 0..k {
+                    let x = c + u * (2.0 * (i as f32 + 0.5) / k as f32 - 1.0)
+                        + v * (2.0 * (j as f32 + 0.5) / k as f32 - 1.0);
+                    let to = (x - sh.p).as_dvec3();
+                    let d2 = to.length_squared();
+                    let cos = to.y / d2.sqrt();
+                    sum += cos * cos / d2;
+                }
+            }
+            0.5 / std::f64::consts::PI * le * sum * area / (k * k) as f64
+        };
+        let lamp = quad(Vec3::Y, Vec3::X * 0.2, Vec3::Z * 0.1, 1.0);
+        let panel = quad(Vec3::new(1.0, 0.5, 0.0), Vec3::X * 0.1, Vec3::Z * 0.1, 5.0);
+        let exact = lamp + panel;
+        let mut rng = Rng::new(5, Domain::Other, [0; 3]);
+        let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+        let n = 200_000;
+        for _ in 0..n {
+            let x = s.direct_area(&sh, wo, rng.uniform3(), false).x as f64;
+            sum += x;
+            sum2 += x * x;
+        }
+        let mean = sum / n as f64;
+        let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
+        assert!((mean - exact).abs() < 4.0 * se, "{mean} ± {se} against {exact}");
+        assert!(se < 0.01 * exact, "the test could not fail: {se} against {exact}");
+    }
+
+    /// Photons leave the panel from both sides with cosine-distributed directions: E[cos θ]
+    /// = 2/3 about the side's normal, half of them on each side, flux Φ/p.
+    #[test]
+    fn emitted_photons_are_cosine_distributed_on_the_emitting_sides() {
+        let s = scene(0.0);
+        let panel = 2;
+        let p = 0.25;
+        let mut rng = Rng::new(9, Domain::Other, [0; 3]);
+        let n = 100_000;
+        let (mut up, mut cos_sum, mut cos2) = (0u32, 0.0f64, 0.0f64);
+        let normal = s.geometry.normal(s.emitters()[panel].prim);
+        for _ in 0..n {
+            let e = s
+                .emit_from_emitter(panel, p, rng.uniform2(), rng.uniform2())
+                .unwrap();
+            let c = e.direction.dot(normal) as f64;
+            up += (c > 0.0) as u32;
+            cos_sum += c.abs();
+            cos2 += c * c;
+            let want = s.emitters()[panel].flux() / p;
+            assert!((e.flux - want).abs().max_element() < 1e-5 * want.max_element());
+        }
+        let mean = cos_sum / n as f64;
+        let se = ((cos2 / n as f64 - mean * mean) / n as f64).sqrt();
+        assert!((mean - 2.0 / 3.0).abs() < 4.0 * se, "{mean} ± {se}");
+        let share = up as f64 / n as f64;
+        assert!((share - 0.5).abs() < 4.0 * (0.25 / n as f64).sqrt(), "{share}");
+        // The one-sided lamp emits downwards only.
+        let lamp = s.emit_from_emitter(0, p, [0.3, 0.6], [0.9, 0.2]).unwrap();
+        assert!(lamp.direction.y < 0.0);
+    }
+
+    #[test]
+    fn power_heuristic_splits_one() {
+        for (a, b) in [(1.0f32, 2.0), (0.0, 3.0), (5.0, 0.0), (1e30, 1e30)] {
+            let sum = power_heuristic(a, b) + power_heuristic(b, a);
+            assert!((sum - 1.0).abs() < 1e-6, "{a} {b}: {sum}");
+        }
+    }
 }
