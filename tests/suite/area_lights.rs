@@ -61,8 +61,15 @@ fn every_mode_agrees_with_path_in_the_lobe_furnace() {
         .iter()
         .fold((f64::MAX, f64::MIN), |(a, b), &m| (a.min(m), b.max(m)));
     let mean: f64 = reference.mean().iter().map(|v| v.x).sum::<f64>() / 256.0;
-    eprintln!("path mean {mean}, bounds [{}, {}]", 1.0 / (1.0 - lo), 1.0 / (1.0 - hi));
-    assert!(mean >= 1.0 / (1.0 - lo) && mean <= 1.0 / (1.0 - hi), "{mean}");
+    eprintln!(
+        "path mean {mean}, bounds [{}, {}]",
+        1.0 / (1.0 - lo),
+        1.0 / (1.0 - hi)
+    );
+    assert!(
+        mean >= 1.0 / (1.0 - lo) && mean <= 1.0 / (1.0 - hi),
+        "{mean}"
+    );
     let mut failures = Vec::new();
     for mode in all_modes().into_iter().filter(|&m| m != "path") {
         let mut s = with_mode(&settings, mode, 16, 4, 20_000);
@@ -94,7 +101,7 @@ fn point_and_area_lights_together_agree_with_path() {
     (settings.width, settings.height) = (20, 20);
     settings.sampler = bdpm_integrator::RenderSettings::default().sampler;
     settings.radius = Some(0.01);
-    let reference = render(&scene, &with_mode(&settings, "path", 128, 8, 1));
+    let reference = render(&scene, &with_mode(&settings, "path", 512, 8, 1));
     let mut failures = Vec::new();
     for mode in ["light", "bdd0", "bdd1", "optimal-path", "balance", "camis"] {
         let s = with_mode(&settings, mode, 24, 4, 50_000);

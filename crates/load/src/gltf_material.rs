@@ -390,13 +390,19 @@ mod tests {
             ..plain()
         };
         assert_eq!(emission(&lit, &mut notes), Ok((lit.emission, true)));
-        assert!(notes[0].contains("emissiveTexture is not applied"), "{notes:?}");
+        assert!(
+            notes[0].contains("emissiveTexture is not applied"),
+            "{notes:?}"
+        );
         let bad = Factors {
             emission: Vec3::new(1.0, -1.0, 0.0),
             ..plain()
         };
         let e = emission(&bad, &mut notes).unwrap_err();
-        assert!(e.contains("emissiveFactor") && e.contains("non-negative"), "{e}");
+        assert!(
+            e.contains("emissiveFactor") && e.contains("non-negative"),
+            "{e}"
+        );
         // No emission, no note, whatever the texture.
         let mut none = Vec::new();
         let dark = Factors {

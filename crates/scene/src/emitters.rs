@@ -366,7 +366,13 @@ mod tests {
             Vec::new()
         };
         let camera = Camera::look_at(Vec3::new(0.0, 1.0, -3.0), Vec3::ZERO, Vec3::Y, 40.0, 8, 8);
-        Scene::new(Geometry::new(mesh).unwrap(), materials, lights, camera.unwrap()).unwrap()
+        Scene::new(
+            Geometry::new(mesh).unwrap(),
+            materials,
+            lights,
+            camera.unwrap(),
+        )
+        .unwrap()
     }
 
     #[test]
@@ -431,7 +437,10 @@ mod tests {
         }
         let mean = sum / n as f64;
         let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
-        assert!((mean - exact).abs() < 4.0 * se, "{mean} ± {se} against {exact}");
+        assert!(
+            (mean - exact).abs() < 4.0 * se,
+            "{mean} ± {se} against {exact}"
+        );
     }
 
     /// The direct light of the area lights at a floor point, by light sampling, against a
@@ -450,7 +459,8 @@ mod tests {
             let mut sum = 0.0f64;
             for i in 0..k {
                 for j in 0..k {
-                    let x = c + u * (2.0 * (i as f32 + 0.5) / k as f32 - 1.0)
+                    let x = c
+                        + u * (2.0 * (i as f32 + 0.5) / k as f32 - 1.0)
                         + v * (2.0 * (j as f32 + 0.5) / k as f32 - 1.0);
                     let to = (x - sh.p).as_dvec3();
                     let d2 = to.length_squared();
@@ -473,8 +483,14 @@ mod tests {
         }
         let mean = sum / n as f64;
         let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
-        assert!((mean - exact).abs() < 4.0 * se, "{mean} ± {se} against {exact}");
-        assert!(se < 0.01 * exact, "the test could not fail: {se} against {exact}");
+        assert!(
+            (mean - exact).abs() < 4.0 * se,
+            "{mean} ± {se} against {exact}"
+        );
+        assert!(
+            se < 0.01 * exact,
+            "the test could not fail: {se} against {exact}"
+        );
     }
 
     /// Photons leave the panel from both sides with cosine-distributed directions: E[cos θ]
@@ -503,7 +519,10 @@ mod tests {
         let se = ((cos2 / n as f64 - mean * mean) / n as f64).sqrt();
         assert!((mean - 2.0 / 3.0).abs() < 4.0 * se, "{mean} ± {se}");
         let share = up as f64 / n as f64;
-        assert!((share - 0.5).abs() < 4.0 * (0.25 / n as f64).sqrt(), "{share}");
+        assert!(
+            (share - 0.5).abs() < 4.0 * (0.25 / n as f64).sqrt(),
+            "{share}"
+        );
         // The one-sided lamp emits downwards only.
         let lamp = s.emit_from_emitter(0, p, [0.3, 0.6], [0.9, 0.2]).unwrap();
         assert!(lamp.direction.y < 0.0);

@@ -524,11 +524,23 @@ fn emission_is_read_and_checked() {
     let m = &s.scene.materials()[0];
     assert_eq!(m.emission, glam::Vec3::new(1.0, 2.0, 3.0));
     assert!(m.two_sided_emission);
-    let msg = error_of(&with("kd = [0.6, 0.1, 0.1]", "kd = 0.5\nemission = [1.0, -1.0, 0.0]"));
-    assert!(msg.contains("material.red.emission") && msg.contains("green"), "{msg}");
-    let msg = error_of(&with("kd = [0.6, 0.1, 0.1]", "kd = 0.5\ntwo_sided_emission = 1"));
+    let msg = error_of(&with(
+        "kd = [0.6, 0.1, 0.1]",
+        "kd = 0.5\nemission = [1.0, -1.0, 0.0]",
+    ));
+    assert!(
+        msg.contains("material.red.emission") && msg.contains("green"),
+        "{msg}"
+    );
+    let msg = error_of(&with(
+        "kd = [0.6, 0.1, 0.1]",
+        "kd = 0.5\ntwo_sided_emission = 1",
+    ));
     // serde's own message: the line and column of the key, and the type expected.
-    assert!(msg.contains("line 17") && msg.contains("expected a boolean"), "{msg}");
+    assert!(
+        msg.contains("line 17") && msg.contains("expected a boolean"),
+        "{msg}"
+    );
     // No light and no emission: the message says both ways to light the scene.
     let dark = GOOD.replacen("[[light]]\nposition = [0.0, 0.5, 0.0]\nflux = 1.0\n", "", 1);
     let msg = error_of(&dark);
