@@ -338,14 +338,8 @@ impl<'a> Mix<'a> {
             }
         }
         if scene.has_emission() {
-            let area = scene.direct_area_sample(&sh1, wo1, rng.uniform3(), false);
-            if let Some((c, wi)) = area {
-                // Light→x₁→x₀ from an area light: its own weight, as the photon side gives
-                // the same path (crate::inputs, Arrival::Area).
-                let one = self.path_pair(x0, &x1, (v, dist2), Arrival::Area(wi), pair);
-                let w = self
-                    .fixed_w1
-                    .unwrap_or_else(|| self.w1(&one, weigher, stats));
+            let at = (&sh1, &x1, v, dist2);
+            if let Some((c, w)) = self.area_at_x1(x0, at, pair, rng, (weigher, stats)) {
                 direct_raw += c;
                 direct_weighted += c * w as f32;
                 if self.pilot {
@@ -364,6 +358,28 @@ impl<'a> Mix<'a> {
             direct_raw,
             direct_weighted,
         })
+    }
+
+    /// The one-bounce paths light→x₁→x₀ from the area lights: one light sample at x₁ (seen
+    /// from x₀ along `v`, |x₁ − x₀|² = `dist2`), its raw value and its value weighted by w₁ of
+    /// the path (`Arrival::Area`, as the photon side gives the same path): (value, w₁),
+    /// None where the sample brings nothing.
+    fn area_at_x1(
+        &self,
+        x0: &FirstVertex<'_>,
+        (sh1, x1, v, dist2): (&Shading, &WeightVertex, Vec3, f32),
+        pair: Pair,
+        rng: &mut Rng,
+        (weigher, stats): (&Weigher, &mut WeightStats),
+    ) -> Option<(Vec3, f64)> {
+        let (c, wi) = self
+            .scene
+            .direct_area_sample(sh1, -v, rng.uniform3(), false)?;
+        let w = self.fixed_w1.unwrap_or_else(|| {
+            let one = self.path_pair(x0, x1, (v, dist2), Arrival::Area(wi), pair);
+            self.w1(&one, weigher, stats)
+        });
+        Some((c, w))
     }
 
     /// BDD=1 through the delta vertices the direction `v` sampled at x₀ (with weight `e`,
