@@ -616,7 +616,9 @@ impl Scene {
 
     /// The BDF at `sh` for world directions `wo` and `wi`: zero unless both are on the side of
     /// the geometric normal that `sh` faces (no light through surfaces).
-    #[inline]
+    // Always inlined: with the area lights' call site beside the point lights', LLVM stopped
+    // inlining it into `direct`, which cost point-light scenes 0.5 % of a pass's instructions.
+    #[inline(always)]
     pub fn eval(&self, sh: &Shading, wo: Vec3, wi: Vec3) -> Vec3 {
         if sh.ng.dot(wi) <= 0.0 || sh.ng.dot(wo) <= 0.0 {
             return Vec3::ZERO;
