@@ -4,6 +4,7 @@
 //! One test binary per package (the files are its modules), so CI links one executable
 //! per package instead of one per file.
 
+mod area_lights;
 mod cache;
 mod cornell;
 mod determinism;

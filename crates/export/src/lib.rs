@@ -306,7 +306,11 @@ fn add_shapes(
         if !group.smooth {
             shape = shape.boolean("face_normals", true);
         }
-        root = root.child(shape.child(Element::new("ref").attr("id", bsdf::id(group.material))));
+        shape = shape.child(Element::new("ref").attr("id", bsdf::id(group.material)));
+        if material.emits() {
+            shape = shape.child(area_emitter(material, report));
+        }
+        root = root.child(shape);
         let comment = format!("bdpm material '{}'", material.name);
         files.push(ExportFile {
             path: name,
@@ -317,6 +321,22 @@ fn add_shapes(
     }
     report.left_out_triangles = scene.geometry().triangle_count() - report.triangles;
     Ok(root)
+}
+
+/// The `<emitter type="area">` of an emitting material's shape: Mitsuba's area emitter
+/// sends its radiance from the front side (the triangles' winding normals, which the PLY
+/// keeps), as bdpm's one-sided emission does; a two-sided emitter is exported one-sided with
+/// a warning.
+fn area_emitter(material: &bdpm_scene::Material, report: &mut ExportReport) -> Element {
+    if material.two_sided_emission {
+        report.warnings.push(format!(
+            "material '{}' emits from both sides; Mitsuba's area emitter emits from the front \
+             side only (exported one-sided)",
+            material.name
+        ));
+    }
+    report.emitters += 1;
+    Element::plugin("emitter", "area").rgb("radiance", material.emission)
 }
 
 /// A material name as a short file-name part: ASCII letters, digits, `-` and `_` kept,

@@ -161,12 +161,21 @@ fn every_scene_exports_and_its_xml_has_the_scenes_parts() {
         let groups: HashSet<(u32, bool)> = tris.iter().map(|t| (t.0, t.2.is_some())).collect();
         let name = path.display();
         assert_eq!(emitters.len(), loaded.scene.lights().len(), "{name}");
+        // Emitting materials' shapes carry an area emitter of their radiance.
+        let emits = |m: u32| loaded.scene.materials()[m as usize].emits();
+        let emitting_groups = groups.iter().filter(|g| emits(g.0)).count();
+        let area: Vec<&Node> = shapes.iter().flat_map(|s| s.all("emitter")).collect();
+        assert_eq!(area.len(), emitting_groups, "{name}");
+        for e in &area {
+            assert_eq!(e.kind(), Some("area"), "{name}");
+            assert!(e.value("rgb", "radiance").is_some(), "{name}");
+        }
         assert_eq!(bsdfs.len(), materials.len(), "{name}");
         assert_eq!(shapes.len(), groups.len(), "{name}");
         let r = &export.report;
         assert_eq!(
             (r.shapes, r.bsdfs, r.emitters),
-            (shapes.len(), bsdfs.len(), emitters.len())
+            (shapes.len(), bsdfs.len(), emitters.len() + area.len())
         );
         assert_eq!(r.triangles, tris.len(), "{name}");
         // Every file the XML names is part of the export, and every shape's BSDF exists.

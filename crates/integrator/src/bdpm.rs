@@ -9,6 +9,7 @@ use bdpm_scene::{Shading, WeightVertex};
 use glam::Vec3;
 
 use crate::correction::CandidateSums;
+use crate::direct::emitted_and_area;
 use crate::estimates::{Techniques, WeightStats};
 use crate::inputs::Arrival;
 use crate::mix::{DeltaChain, FirstVertex, Mix};
@@ -203,7 +204,10 @@ impl<'a> Mix<'a> {
         let dir = cam.ray_direction(job.x, job.y);
         let (sh0, u, beta) = self.camera_x0(dir, &mut job.rng);
         let direct = sh0.as_ref().map_or(Vec3::ZERO, |sh| {
-            let l0 = scene.direct(sh, u);
+            let mut l0 = scene.direct(sh, u);
+            if scene.has_emission() {
+                l0 += emitted_and_area(scene, sh, u, job.rng.uniform3());
+            }
             beta.map_or(l0, |b| b * l0)
         });
         slot.out.techniques.direct = match plan.direct_extra(job.k) {
@@ -333,6 +337,16 @@ impl<'a> Mix<'a> {
                 pilot.add(f64::from(luminance(s.weight * c)), w, true);
             }
         }
+        if scene.has_emission() {
+            let at = (&sh1, &x1, v, dist2);
+            if let Some((c, w)) = self.area_at_x1(x0, at, pair, rng, (weigher, stats)) {
+                direct_raw += c;
+                direct_weighted += c * w as f32;
+                if self.pilot {
+                    pilot.add(f64::from(luminance(s.weight * c)), w, true);
+                }
+            }
+        }
         Some(Second {
             sh1,
             x1,
@@ -344,6 +358,28 @@ impl<'a> Mix<'a> {
             direct_raw,
             direct_weighted,
         })
+    }
+
+    /// The one-bounce paths light→x₁→x₀ from the area lights: one light sample at x₁ (seen
+    /// from x₀ along `v`, |x₁ − x₀|² = `dist2`), its raw value and its value weighted by w₁ of
+    /// the path (`Arrival::Area`, as the photon side gives the same path): (value, w₁),
+    /// None where the sample brings nothing.
+    fn area_at_x1(
+        &self,
+        x0: &FirstVertex<'_>,
+        (sh1, x1, v, dist2): (&Shading, &WeightVertex, Vec3, f32),
+        pair: Pair,
+        rng: &mut Rng,
+        (weigher, stats): (&Weigher, &mut WeightStats),
+    ) -> Option<(Vec3, f64)> {
+        let (c, wi) = self
+            .scene
+            .direct_area_sample(sh1, -v, rng.uniform3(), false)?;
+        let w = self.fixed_w1.unwrap_or_else(|| {
+            let one = self.path_pair(x0, x1, (v, dist2), Arrival::Area(wi), pair);
+            self.w1(&one, weigher, stats)
+        });
+        Some((c, w))
     }
 
     /// BDD=1 through the delta vertices the direction `v` sampled at x₀ (with weight `e`,
@@ -371,7 +407,10 @@ impl<'a> Mix<'a> {
         let walk = scene.walk_to_non_delta(origin, v, Transport::Radiance, || rng.uniform())?;
         let sh1 = walk.sh;
         map.restart_query_within(query, sh1.p, r);
-        let direct_raw = scene.direct(&sh1, walk.wo);
+        let mut direct_raw = scene.direct(&sh1, walk.wo);
+        if scene.has_emission() {
+            direct_raw += scene.direct_area(&sh1, walk.wo, rng.uniform3(), false);
+        }
         let weight = e * walk.beta;
         if self.pilot && direct_raw != Vec3::ZERO {
             pilot.add(f64::from(luminance(weight * direct_raw)), w, true);

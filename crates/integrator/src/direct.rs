@@ -27,7 +27,7 @@
 
 use bdpm_bdf::{Transport, luminance};
 use bdpm_geometry::Rng;
-use bdpm_scene::Scene;
+use bdpm_scene::{Scene, Shading};
 use bdpm_settings::RenderSettings;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -65,15 +65,32 @@ impl DirectExtra {
 /// meets, seen along that ray and through the mirrors and glass before it (their throughput
 /// included; `uniform` chooses their branches, [`Scene::walk_to_non_delta`]), W·m⁻²·sr⁻¹: a
 /// primary ray and shadow rays (0 if it meets nothing).
-pub(crate) fn direct_through(scene: &Scene, x: f32, y: f32, uniform: impl FnMut() -> f32) -> Vec3 {
+pub(crate) fn direct_through(
+    scene: &Scene,
+    x: f32,
+    y: f32,
+    mut uniform: impl FnMut() -> f32,
+) -> Vec3 {
     let cam = scene.camera();
     let dir = cam.ray_direction(x, y);
     scene
-        .walk_to_non_delta(cam.position(), dir, Transport::Radiance, uniform)
+        .walk_to_non_delta(cam.position(), dir, Transport::Radiance, &mut uniform)
         .map_or(Vec3::ZERO, |w| {
-            let l0 = scene.direct(&w.sh, w.wo);
+            let mut l0 = scene.direct(&w.sh, w.wo);
+            if scene.has_emission() {
+                let u = [uniform(), uniform(), uniform()];
+                l0 += emitted_and_area(scene, &w.sh, w.wo, u);
+            }
             if w.vertices == 0 { l0 } else { w.beta * l0 }
         })
+}
+
+/// What area lights add to L₀ at a camera path's x₀ (`sh`, seen along `wo`), W·m⁻²·sr⁻¹: the
+/// radiance x₀ emits itself and one light sample of the emitters (light sampling alone: the
+/// estimators that call this weigh no BDF ray against it; docs/method-notes.md, "Area
+/// lights").
+pub(crate) fn emitted_and_area(scene: &Scene, sh: &Shading, wo: Vec3, u: [f32; 3]) -> Vec3 {
+    scene.emitted(sh.prim, wo) + scene.direct_area(sh, wo, u, false)
 }
 
 /// The four fixed points of a pixel where L₀ is probed (offsets in the pixel, [0, 1)²).

@@ -14,7 +14,7 @@ use bdpm_bdf::{luminance, survival_at};
 use bdpm_cache::{CacheSlot, RadianceCache};
 use bdpm_geometry::Frame;
 use bdpm_mis::{Pair, PathKind, X0Inputs, X1Inputs, acceptance_probability};
-use bdpm_photon::{PathVertex, Photon, PhotonMap};
+use bdpm_photon::{AREA_LIGHT, PathVertex, Photon, PhotonMap};
 use bdpm_scene::WeightVertex;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -30,6 +30,12 @@ pub(crate) enum Arrival<'m> {
     /// computed from the light's position (a photon's stored direction at its first vertex is
     /// the emitted ray's, which the camera side does not have).
     Light(usize),
+    /// Straight from a point of an area light, arriving at x₁ along the unit direction
+    /// (pointing away from x₁): the camera side's light sample, or a photon's recorded
+    /// direction at its first vertex. `camis`'s light-end factor is not read for these paths
+    /// (their emission density would need the point on the light, which a photon does not
+    /// keep): it is 0 on both sides alike, so the weights stay a partition.
+    Area(Vec3),
     /// Scattered at the light-path vertex `vertices[from]` (x₂; the vertices stored path by
     /// path, as [`PhotonMap::vertices`] holds them) and arriving at x₁ along `incoming` (unit,
     /// pointing away from x₁): a merge path …→x₂→x₁→x₀.
@@ -159,6 +165,15 @@ impl<'a> Mix<'a> {
                     pair.path.emission_density = self.emission_density(light, x1);
                 }
             }
+            Arrival::Area(incoming) => {
+                pair.path.kind = PathKind::OneBounce;
+                if self.needs.densities {
+                    let (pc, pl) = self.densities(x0, x1, v, dist2, incoming);
+                    pair.path.camera_density = pc;
+                    pair.path.light_density = pl;
+                    pair.path.emission_density = 0.0;
+                }
+            }
             Arrival::Vertex {
                 vertices,
                 from,
@@ -269,7 +284,9 @@ impl<'a> Mix<'a> {
             }
             _ => self.pair(x0, &y, v, f0),
         };
-        let arrival = if prev.depth == 0 {
+        let arrival = if prev.depth == 0 && prev.light == AREA_LIGHT {
+            Arrival::Area(prev.incoming)
+        } else if prev.depth == 0 {
             Arrival::Light(prev.light as usize)
         } else {
             // Light paths are stored vertex after vertex: x₂ is the vertex before y_p.
@@ -363,6 +380,10 @@ impl<'a> Mix<'a> {
             beta *= acceptance_probability(p as f64, area);
             if beta <= cutoff {
                 return beta;
+            }
+            if y.depth == 0 && y.light == AREA_LIGHT {
+                // As Arrival::Area: no light-end factor for area lights.
+                return 0.0;
             }
             if y.depth == 0 {
                 let emission = self.emission_density(y.light as usize, &y.at);

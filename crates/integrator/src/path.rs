@@ -1,4 +1,5 @@
-//! The unidirectional reference: path tracing with next-event estimation to point lights.
+//! The unidirectional reference: path tracing with next-event estimation to point lights
+//! (exact) and area lights (one light sample per vertex, MIS with BDF sampling).
 use bdpm_bdf::Transport;
 use bdpm_geometry::Rng;
 use bdpm_scene::Scene;
@@ -39,12 +40,20 @@ pub(crate) fn trace_path_with_first(
     let mut beta = Vec3::ONE;
     // The radiance scaling of the refractions so far (Π 1/η²), which the roulette leaves out.
     let mut eta_scale = 1.0f32;
+    let emission = scene.has_emission();
+    // Where the last non-delta vertex sampled the BDF (its position and the direction's
+    // density, sr⁻¹): an emitter hit after it is weighted against its light sample. None for
+    // the camera ray and after delta vertices, which no light sample can reach.
+    let mut bdf_from: Option<(Vec3, f32)> = None;
     for depth in 0..MAX_DEPTH {
         let Some(hit) = scene.geometry().intersect(origin, dir, f32::INFINITY) else {
             break;
         };
         let wo = -dir;
         let sh = scene.shade(&hit, wo);
+        if emission {
+            radiance += beta * emitted_along(scene, bdf_from.take(), &hit, wo);
+        }
         if scene.is_delta(sh.material) {
             // No direct light at a mirror or glass (a point light is never on its delta):
             // follow its step; the sampler's numbers wait for the first non-delta vertex.
@@ -61,6 +70,9 @@ pub(crate) fn trace_path_with_first(
             continue;
         }
         radiance += beta * scene.direct(&sh, wo);
+        if emission {
+            radiance += beta * scene.direct_area(&sh, wo, rng.uniform3(), true);
+        }
         let wo_local = sh.frame.to_local(wo);
         if wo_local.z <= 0.0 {
             break;
@@ -74,6 +86,7 @@ pub(crate) fn trace_path_with_first(
         if sh.ng.dot(wi) <= 0.0 {
             break;
         }
+        bdf_from = Some((sh.p, s.pdf));
         beta *= s.weight;
         if !survives(&mut beta, eta_scale, depth, roulette_depth, rng) {
             break;
@@ -82,6 +95,21 @@ pub(crate) fn trace_path_with_first(
         dir = wi;
     }
     radiance
+}
+
+/// The radiance an emitter at `hit` sends back along the ray (towards `wo`): all of it seen
+/// from the camera or through delta vertices (`from` None), else weighted against the light
+/// sample taken at the vertex `from` = (position, the BDF sample's density) the ray left.
+pub(crate) fn emitted_along(
+    scene: &Scene,
+    from: Option<(Vec3, f32)>,
+    hit: &bdpm_geometry::Hit,
+    wo: Vec3,
+) -> Vec3 {
+    match from {
+        None => scene.emitted(hit.prim, wo),
+        Some((p, pdf)) => scene.emitted_mis(p, pdf, hit.prim, hit.p),
+    }
 }
 
 /// Russian roulette after scattering `depth` (from 0): from `roulette_depth` scatterings on,

@@ -473,7 +473,8 @@ pub(crate) fn scene_error(ctx: &Ctx<'_>, e: SceneError, light_count: usize) -> L
     match e {
         SceneError::NoLight if light_count == 0 => ctx.bad(
             "light",
-            "the scene has no light; add a [[light]] with position and flux",
+            "the scene has no light; add a [[light]] with position and flux, or a material \
+             with emission on some shape",
         ),
         SceneError::NoLight => ctx.bad(
             "light",
@@ -481,6 +482,9 @@ pub(crate) fn scene_error(ctx: &Ctx<'_>, e: SceneError, light_count: usize) -> L
         ),
         SceneError::BadLight { index } => ctx.bad(format!("light[{index}]"), e.to_string()),
         SceneError::BadCamera(why) => ctx.bad("camera", why.to_string()),
+        SceneError::BadEmission { material } => {
+            ctx.bad(format!("material[{material}].emission"), e.to_string())
+        }
         SceneError::MissingMaterial { .. } | SceneError::BadTextures { .. } => {
             ctx.bad("shape", e.to_string())
         }
@@ -531,7 +535,12 @@ fn materials(
     for (name, def) in defs {
         let prefix = format!("material.{name}");
         let model = crate::material_types::model(ctx, &prefix, def)?;
-        out.add_named(Material::new(name.clone(), model));
+        let emission = match def.emission {
+            Some(t) => ctx.channels(&format!("{prefix}.emission"), t, 0.0, None)?,
+            None => glam::Vec3::ZERO,
+        };
+        let two_sided = def.two_sided_emission.unwrap_or(false);
+        out.add_named(Material::new(name.clone(), model).with_emission(emission, two_sided));
     }
     Ok(out)
 }

@@ -46,6 +46,13 @@ pub(crate) struct Factors {
     pub(crate) metallic_roughness_texture: bool,
     /// Whether it has a `transmissionTexture`.
     pub(crate) transmission_texture: bool,
+    /// `emissiveFactor` × `KHR_materials_emissive_strength.emissiveStrength` (1 without the
+    /// extension): the emitted radiance, W·m⁻²·sr⁻¹ per channel.
+    pub(crate) emission: Vec3,
+    /// Whether it has an `emissiveTexture` (not applied: the emission is uniform).
+    pub(crate) emissive_texture: bool,
+    /// `doubleSided`: emission then leaves both sides.
+    pub(crate) double_sided: bool,
 }
 
 /// The KHR_materials_volume factors the mapping reads.
@@ -82,6 +89,12 @@ impl Factors {
             base_colour_texture: pbr.base_color_texture.is_some(),
             metallic_roughness_texture: pbr.metallic_roughness_texture.is_some(),
             transmission_texture: transmission.is_some_and(|t| t.transmission_texture.is_some()),
+            emission: Vec3::from_array(m.emissive_factor.0)
+                * ext
+                    .and_then(|e| e.emissive_strength.as_ref())
+                    .map_or(1.0, |s| s.emissive_strength.0),
+            emissive_texture: m.emissive_texture.is_some(),
+            double_sided: m.double_sided,
         }
     }
 }
@@ -108,7 +121,7 @@ pub(crate) enum Made {
 
 /// Maps material `index` (named `name`) of the glTF file `json`, written `written` in the
 /// scene file: adds it to `materials` if it is a mirror or a dielectric, counts it and its
-/// notes in `tally`. An error is one line naming the material, the field and what is wrong.
+/// notes in `tally`; also gives its emission (Le, two-sided) for the caller to set. An error is one line naming the material, the field and what is wrong.
 pub(crate) fn make(
     json: &gltf::json::Root,
     index: usize,
@@ -116,20 +129,22 @@ pub(crate) fn make(
     written: &Path,
     materials: &mut Materials,
     tally: &mut Tally,
-) -> Result<Made, String> {
+) -> Result<(Made, (Vec3, bool)), String> {
     let what = format!("material {index} ('{name}')");
     let material = json
         .materials
         .get(index)
         .ok_or_else(|| format!("material {index} does not exist"))?;
-    let mapping = map(&Factors::read(material)).map_err(|e| format!("{what}: {e}"))?;
+    let factors = Factors::read(material);
+    let mut mapping = map(&factors).map_err(|e| format!("{what}: {e}"))?;
+    let emission = emission(&factors, &mut mapping.notes).map_err(|e| format!("{what}: {e}"))?;
     for note in mapping.notes {
         let line = format!("glTF {}: {what}: {note}", written.display());
         if !tally.warnings.contains(&line) {
             tally.warnings.push(line);
         }
     }
-    Ok(match mapping.model {
+    let made = match mapping.model {
         Model::Lambert(kd) => Made::Lambert(kd),
         Model::Delta(model) => {
             if matches!(model, bdpm_bdf::Material::Mirror(_)) {
@@ -139,7 +154,27 @@ pub(crate) fn make(
             }
             Made::Delta(materials.add_delta(name.to_string(), model))
         }
-    })
+    };
+    Ok((made, emission))
+}
+
+/// A glTF material's emission: (Le, two-sided) from its factors, with a note when its
+/// `emissiveTexture` is left out; an error names a factor that is negative or not finite.
+fn emission(f: &Factors, notes: &mut Vec<String>) -> Result<(Vec3, bool), String> {
+    let e = f.emission;
+    if !(e.is_finite() && e.min_element() >= 0.0) {
+        return Err(format!(
+            "emissiveFactor × emissiveStrength = {e} must be finite and non-negative"
+        ));
+    }
+    if f.emissive_texture && e.max_element() > 0.0 {
+        notes.push(
+            "emissiveTexture is not applied: the emission is emissiveFactor × emissiveStrength, \
+             uniform over the surface"
+                .to_string(),
+        );
+    }
+    Ok((e, f.double_sided))
 }
 
 /// The model a glTF material becomes.
@@ -339,7 +374,43 @@ mod tests {
             base_colour_texture: false,
             metallic_roughness_texture: false,
             transmission_texture: false,
+            emission: Vec3::ZERO,
+            emissive_texture: false,
+            double_sided: false,
         }
+    }
+
+    #[test]
+    fn emission_is_checked_and_an_emissive_texture_noted() {
+        let mut notes = Vec::new();
+        let lit = Factors {
+            emission: Vec3::new(2.0, 1.0, 0.0),
+            emissive_texture: true,
+            double_sided: true,
+            ..plain()
+        };
+        assert_eq!(emission(&lit, &mut notes), Ok((lit.emission, true)));
+        assert!(
+            notes[0].contains("emissiveTexture is not applied"),
+            "{notes:?}"
+        );
+        let bad = Factors {
+            emission: Vec3::new(1.0, -1.0, 0.0),
+            ..plain()
+        };
+        let e = emission(&bad, &mut notes).unwrap_err();
+        assert!(
+            e.contains("emissiveFactor") && e.contains("non-negative"),
+            "{e}"
+        );
+        // No emission, no note, whatever the texture.
+        let mut none = Vec::new();
+        let dark = Factors {
+            emissive_texture: true,
+            ..plain()
+        };
+        assert_eq!(emission(&dark, &mut none), Ok((Vec3::ZERO, false)));
+        assert!(none.is_empty());
     }
 
     fn solid() -> Option<Volume> {

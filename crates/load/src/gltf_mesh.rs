@@ -428,9 +428,11 @@ fn primitive_material(
         };
         let (json, tally) = (seen.json, &mut seen.part.mapped);
         let made = make(json, index, &name, origin.written, materials, tally);
-        let kd = match made.map_err(|m| origin.err(m))? {
+        let (made, (emission, two_sided)) = made.map_err(|m| origin.err(m))?;
+        let kd = match made {
             Made::Lambert(kd) => kd,
             Made::Delta(m) => {
+                materials.set_emission(m, emission, two_sided);
                 let _ = seen.materials.insert(index, (m, None));
                 return Ok((m, None));
             }
@@ -438,6 +440,7 @@ fn primitive_material(
         let m = materials
             .add_lambert(name, kd)
             .map_err(|e| origin.err(format!("material {index}: {e}")))?;
+        materials.set_emission(m, emission, two_sided);
         match pbr.base_color_texture() {
             Some(info) => {
                 let texture = base_colour_texture(origin, index, &info.texture(), buffers, seen)?;

@@ -75,6 +75,14 @@ impl Materials {
         self.list.len() as u32 - 1
     }
 
+    /// Gives material `m` the emitted radiance `emission` (W·m⁻²·sr⁻¹ per channel), from
+    /// both sides of its triangles if `two_sided`.
+    pub(crate) fn set_emission(&mut self, m: u32, emission: Vec3, two_sided: bool) {
+        let material = &mut self.list[m as usize];
+        material.emission = emission;
+        material.two_sided_emission = two_sided;
+    }
+
     /// Gives material `m` a base-colour texture.
     pub(crate) fn set_texture(&mut self, m: u32, texture: Arc<Texture>) {
         let m = m as usize;

@@ -49,7 +49,7 @@ pub(crate) struct LightDef {
 
 /// One `[material.NAME]`: `type` is `"smooth"` (the default: `kd`, `gr`, `delta`),
 /// `"mirror"` (`reflectance`, `eta` and `k`) or `"dielectric"` (`ior`, `reflect_tint`,
-/// `transmit_tint`).
+/// `transmit_tint`); any type may add `emission` and `two_sided_emission`.
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct MaterialDef {
@@ -64,6 +64,10 @@ pub(crate) struct MaterialDef {
     pub(crate) ior: Option<f64>,
     pub(crate) reflect_tint: Option<Triple>,
     pub(crate) transmit_tint: Option<Triple>,
+    /// Emitted radiance Le, W·m⁻²·sr⁻¹ (any type of material may emit).
+    pub(crate) emission: Option<Triple>,
+    /// Emission from both sides of the triangles.
+    pub(crate) two_sided_emission: Option<bool>,
 }
 
 impl MaterialDef {

@@ -73,7 +73,7 @@ mod scene;
 mod trace;
 
 pub use map::{Photon, PhotonMap, PhotonQuery};
-pub use scene::{PhotonScene, Scatter};
+pub use scene::{AREA_LIGHT, AreaEmission, PhotonScene, Scatter};
 pub use trace::{
     MAX_DEPTH, PathVertex, PhotonArrival, TraceOptions, trace_photons, trace_photons_until,
 };

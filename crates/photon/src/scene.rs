@@ -20,8 +20,31 @@ pub trait PhotonScene: Sync {
     /// luminance). A probability ≤ 0 (or NaN) means no photon is emitted.
     fn pick_light(&self, u: f32) -> (usize, f32);
 
-    /// Light `index` (a point light: position, m; flux, W per channel).
+    /// Light `index` (a point light: position, m; flux, W per channel). Asked only for the
+    /// indices [`Self::is_area_light`] says are not area lights.
     fn light(&self, index: usize) -> PointLight;
+
+    /// True iff light `index` (as [`Self::pick_light`] returns it) is an area light, whose
+    /// photons leave from [`Self::emit_area`]. The default: none is (point lights only).
+    fn is_area_light(&self, index: usize) -> bool {
+        let _ = index;
+        false
+    }
+
+    /// A photon from area light `index`, chosen with probability `probability`: a point on it
+    /// from the uniform numbers `u_point` and a direction from `u_dir` (bdpm's scene: uniform
+    /// by area, cosine-distributed on the emitting side). `None` if nothing is emitted. The
+    /// default emits nothing.
+    fn emit_area(
+        &self,
+        index: usize,
+        probability: f32,
+        u_point: [f32; 2],
+        u_dir: [f32; 2],
+    ) -> Option<AreaEmission> {
+        let _ = (index, probability, u_point, u_dir);
+        None
+    }
 
     /// The first surface hit by the ray from `origin` along the unit direction `dir` (no
     /// distance limit), shaded to face back along the ray (towards −`dir`).
@@ -61,6 +84,23 @@ pub trait PhotonScene: Sync {
         self.visible_light_mask(sh)
     }
 }
+
+/// A photon leaving an area light ([`PhotonScene::emit_area`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AreaEmission {
+    /// Ray origin, off the emitting surface on the side of `direction`, m.
+    pub origin: Vec3,
+    /// Unit direction of the emitted ray.
+    pub direction: Vec3,
+    /// Flux over the probability of this sample's light, point and direction as the
+    /// estimator of the emitted flux needs it: Φ/p(light) when point and direction follow
+    /// the emitted radiance, W per channel (the tracer divides by N_F).
+    pub flux: Vec3,
+}
+
+/// The light index a [`PathVertex`](crate::PathVertex) records for a path that an area light
+/// emitted (its own index may exceed `u16`; the weights need only know it is an area light).
+pub const AREA_LIGHT: u16 = u16::MAX;
 
 /// The BDF sample drawn at an arrival (before the roulette decision). At a delta vertex
 /// ([`PhotonScene::is_delta`]) `f` and `pdf` are 0 and `weight` is the delta step's.

@@ -3,7 +3,7 @@
 use bdpm_core::sampling::uniform_sphere;
 use bdpm_core::{Domain, Rng, Shading, WeightVertex};
 
-use crate::scene::{PhotonScene, Scatter};
+use crate::scene::{AREA_LIGHT, PhotonScene, Scatter};
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -24,7 +24,7 @@ pub struct PathVertex {
     /// Unit direction from this vertex back towards where the light came from (the previous
     /// vertex, or the light for depth 0).
     pub incoming: Vec3,
-    /// Index of the light that emitted this path.
+    /// Index of the point light that emitted this path, or [`AREA_LIGHT`] for an area light.
     pub light: u16,
     /// Number of scatterings before this arrival: 0 = reached directly from the light.
     pub depth: u16,
@@ -84,25 +84,42 @@ pub(crate) struct Emission {
     pub(crate) light_probability: f32,
     /// Ray origin (the light's position), m.
     pub(crate) origin: Vec3,
-    /// Unit direction, uniform on the sphere (density 1/(4π) sr⁻¹).
+    /// Unit direction: uniform on the sphere from a point light (density 1/(4π) sr⁻¹), as
+    /// the scene's [`PhotonScene::emit_area`] chose from an area light.
     pub(crate) direction: Vec3,
     /// Power Φ_l / (p_l · N_F), W per channel.
     pub(crate) power: Vec3,
+    /// Emitted by an area light ([`PhotonScene::is_area_light`]).
+    pub(crate) area: bool,
 }
 
 /// Emits one photon of a pass of `photons` (N_F) photons: `u_light` picks a light with
 /// probability [`PhotonScene::pick_light`] (bdpm's scene: proportional to flux luminance),
-/// `u_dir` an isotropic direction. Returns `None` only if the picked light has zero
-/// probability (cannot happen for `u_light` in [0, 1)) or `photons` is 0.
+/// `u_dir` an isotropic direction from a point light. An area light also asks `u_point` for
+/// two more numbers (so point-light paths draw exactly what they drew before area lights).
+/// Returns `None` only if the picked light has zero probability (cannot happen for
+/// `u_light` in [0, 1)), it emits nothing or `photons` is 0.
 pub(crate) fn emit<S: PhotonScene + ?Sized>(
     scene: &S,
     u_light: f32,
     u_dir: [f32; 2],
+    u_point: impl FnOnce() -> [f32; 2],
     photons: u64,
 ) -> Option<Emission> {
     let (light, p) = scene.pick_light(u_light);
     if p.is_nan() || p <= 0.0 || photons == 0 {
         return None;
+    }
+    if scene.is_area_light(light) {
+        let a = scene.emit_area(light, p, u_point(), u_dir)?;
+        return Some(Emission {
+            light,
+            light_probability: p,
+            origin: a.origin,
+            direction: a.direction,
+            power: a.flux / photons as f32,
+            area: true,
+        });
     }
     let l = scene.light(light);
     Some(Emission {
@@ -111,6 +128,7 @@ pub(crate) fn emit<S: PhotonScene + ?Sized>(
         origin: l.position,
         direction: uniform_sphere(u_dir),
         power: l.flux / (p * photons as f32),
+        area: false,
     })
 }
 
@@ -225,11 +243,16 @@ fn trace_one<S: PhotonScene + ?Sized>(
     );
     let u_light = rng.uniform();
     let u_dir = rng.uniform2();
-    let Some(e) = emit(scene, u_light, u_dir, options.photons) else {
+    let Some(e) = emit(scene, u_light, u_dir, || rng.uniform2(), options.photons) else {
         return;
     };
-    // Lights beyond u16 cannot be named in a vertex; scenes have a handful.
-    let light = e.light.min(usize::from(u16::MAX)) as u16;
+    // Lights beyond u16 cannot be named in a vertex; scenes have a handful of point lights,
+    // and an area light's path records only that it is one.
+    let light = if e.area {
+        AREA_LIGHT
+    } else {
+        e.light.min(usize::from(u16::MAX - 1)) as u16
+    };
     let max_depth = options.max_depth.min(u32::from(u16::MAX));
     let mut origin = e.origin;
     let mut dir = e.direction;
@@ -267,7 +290,7 @@ fn trace_one<S: PhotonScene + ?Sized>(
         // weights read light visibility: a path's last vertex would waste its shadow rays (and
         // a delta vertex is nobody's y_p the weights read).
         if options.light_visibility && continued && !delta {
-            vertex.at.lights = if depth == 0 {
+            vertex.at.lights = if depth == 0 && !e.area {
                 scene.visible_light_mask_reached(&sh, e.light)
             } else {
                 scene.visible_light_mask(&sh)

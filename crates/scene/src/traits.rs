@@ -4,7 +4,7 @@
 
 use bdpm_bdf::{Transport, luminance, survival_at};
 use bdpm_cache::CacheSurfaces;
-use bdpm_photon::{PhotonScene, Scatter};
+use bdpm_photon::{AreaEmission, PhotonScene, Scatter};
 use glam::Vec3;
 
 use crate::{PointLight, Scene, Shading};
@@ -20,6 +20,26 @@ impl PhotonScene for Scene {
     #[inline]
     fn light(&self, index: usize) -> PointLight {
         self.lights()[index]
+    }
+
+    #[inline]
+    fn is_area_light(&self, index: usize) -> bool {
+        index >= self.lights().len()
+    }
+
+    fn emit_area(
+        &self,
+        index: usize,
+        probability: f32,
+        u_point: [f32; 2],
+        u_dir: [f32; 2],
+    ) -> Option<AreaEmission> {
+        let e = self.emit_from_emitter(index - self.lights().len(), probability, u_point, u_dir)?;
+        Some(AreaEmission {
+            origin: e.origin,
+            direction: e.direction,
+            flux: e.flux,
+        })
     }
 
     #[inline]

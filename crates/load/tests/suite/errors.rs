@@ -507,3 +507,42 @@ fn material_types_refuse_what_they_do_not_read() {
         assert!(msg.contains(expected), "{text}: {msg}");
     }
 }
+
+#[test]
+fn emission_is_read_and_checked() {
+    // The light replaced by an emitting box: the scene loads without any [[light]].
+    let lit = GOOD
+        .replacen("[[light]]\nposition = [0.0, 0.5, 0.0]\nflux = 1.0\n", "", 1)
+        .replacen(
+            "kd = [0.6, 0.1, 0.1]",
+            "kd = [0.6, 0.1, 0.1]\nemission = [1.0, 2.0, 3.0]\ntwo_sided_emission = true",
+            1,
+        );
+    let s = load_scene_str(&lit, Path::new("scenes"), Path::new("scenes/bad.toml")).expect("valid");
+    assert!(s.scene.lights().is_empty());
+    assert_eq!(s.scene.emitters().len(), 12);
+    let m = &s.scene.materials()[0];
+    assert_eq!(m.emission, glam::Vec3::new(1.0, 2.0, 3.0));
+    assert!(m.two_sided_emission);
+    let msg = error_of(&with(
+        "kd = [0.6, 0.1, 0.1]",
+        "kd = 0.5\nemission = [1.0, -1.0, 0.0]",
+    ));
+    assert!(
+        msg.contains("material.red.emission") && msg.contains("green"),
+        "{msg}"
+    );
+    let msg = error_of(&with(
+        "kd = [0.6, 0.1, 0.1]",
+        "kd = 0.5\ntwo_sided_emission = 1",
+    ));
+    // serde's own message: the line and column of the key, and the type expected.
+    assert!(
+        msg.contains("line 17") && msg.contains("expected a boolean"),
+        "{msg}"
+    );
+    // No light and no emission: the message says both ways to light the scene.
+    let dark = GOOD.replacen("[[light]]\nposition = [0.0, 0.5, 0.0]\nflux = 1.0\n", "", 1);
+    let msg = error_of(&dark);
+    assert!(msg.contains("emission"), "{msg}");
+}

@@ -1,0 +1,545 @@
+//! Area lights: triangles whose material emits a radiance Le (W·m⁻²·sr⁻¹ per channel),
+//! cosine emission on the front side of the triangle (the side its winding normal points
+//! to) or on both sides. What the scene keeps of them ([`Emitters`]), how a shading point
+//! samples one for its direct light ([`Scene::sample_emitter`], [`Scene::direct_area`]),
+//! the density of that sample in solid angle ([`Scene::emitter_pdf`]), which a BDF sample
+//! that hits an emitter needs for its MIS weight, and photon emission from them
+//! ([`Scene::emit_from_emitter`]).
+//!
+//! A point is sampled uniformly by area on a triangle chosen in proportion to its emitted
+//! power. Spherical-triangle (solid-angle) sampling would have less variance close to a
+//! large emitter; it is left for later because it costs trigonometry per sample and its
+//! density is needed again for every BDF hit, while area sampling is exact for the small
+//! emitters the scenes have and its density is one division.
+
+use std::f32::consts::PI;
+
+use bdpm_bdf::luminance;
+use bdpm_core::sampling::uniform_triangle;
+use bdpm_geometry::{Frame, Geometry};
+use glam::Vec3;
+
+use crate::{Material, PointLight, Scene, Shading};
+
+/// One emitting triangle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Emitter {
+    /// Index of the triangle in the geometry.
+    pub prim: u32,
+    /// Emitted radiance Le, W·m⁻²·sr⁻¹ per channel (constant over the triangle).
+    pub radiance: Vec3,
+    /// Emits on both sides, not only on the side of the winding normal.
+    pub two_sided: bool,
+    /// Area of the triangle, m².
+    pub area: f32,
+}
+
+impl Emitter {
+    /// Emitted flux Φ = π·Le·A per emitting side, W per channel.
+    pub fn flux(&self) -> Vec3 {
+        let sides = if self.two_sided { 2.0 } else { 1.0 };
+        self.radiance * (PI * self.area * sides)
+    }
+}
+
+/// The emitting triangles of a scene and the distribution that light sampling picks them
+/// from (by flux luminance; a binary search, O(log n) per pick). Empty for a scene without
+/// emission, which then holds no per-triangle table.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Emitters {
+    pub(crate) list: Vec<Emitter>,
+    /// Cumulative flux luminance of `list`, normalised to end at 1.
+    cdf: Vec<f32>,
+    /// Per triangle: its index in `list`, or `u32::MAX`; empty without emitters.
+    of_prim: Vec<u32>,
+}
+
+impl Emitters {
+    /// The emitters among `geometry`'s triangles whose material emits.
+    pub(crate) fn new(geometry: &Geometry, materials: &[Material]) -> Emitters {
+        if !materials.iter().any(Material::emits) {
+            return Emitters::default();
+        }
+        let n = geometry.triangle_count();
+        let mut of_prim = vec![u32::MAX; n];
+        let mut list = Vec::new();
+        for prim in 0..n as u32 {
+            let m = &materials[geometry.material(prim) as usize];
+            let area = geometry.area(prim);
+            if m.emits() && area > 0.0 {
+                of_prim[prim as usize] = list.len() as u32;
+                list.push(Emitter {
+                    prim,
+                    radiance: m.emission,
+                    two_sided: m.two_sided_emission,
+                    area,
+                });
+            }
+        }
+        let mut acc = 0.0f64;
+        let mut cdf: Vec<f32> = Vec::with_capacity(list.len());
+        let fluxes: Vec<f64> = list.iter().map(|e| luminance(e.flux()) as f64).collect();
+        let total: f64 = fluxes.iter().sum();
+        for f in &fluxes {
+            acc += f;
+            cdf.push((acc / total) as f32);
+        }
+        Emitters { list, cdf, of_prim }
+    }
+
+    /// Picks an emitter by flux luminance for `u` in [0, 1): (index, probability).
+    pub(crate) fn pick(&self, u: f32) -> (usize, f32) {
+        let i = self
+            .cdf
+            .partition_point(|&c| c <= u)
+            .min(self.list.len() - 1);
+        (i, self.probability(i))
+    }
+
+    /// Probability with which [`Self::pick`] returns emitter `i`.
+    pub(crate) fn probability(&self, i: usize) -> f32 {
+        let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
+        self.cdf[i] - lo
+    }
+
+    /// Total flux luminance, W.
+    pub(crate) fn total_flux(&self) -> Vec3 {
+        self.list.iter().map(Emitter::flux).sum()
+    }
+}
+
+/// A point sampled on an emitter for the direct light at a shading point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EmitterSample {
+    /// Position on the emitter, m.
+    pub p: Vec3,
+    /// Unit winding normal of the emitter's triangle.
+    pub n: Vec3,
+    /// The emitter's triangle.
+    pub prim: u32,
+    /// Density of the point in area measure, the emitter's choice included, m⁻².
+    pub pdf_area: f32,
+}
+
+/// A photon leaving an emitter ([`Scene::emit_from_emitter`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EmitterPhoton {
+    /// Ray origin, pushed off the emitter to the side of `direction`, m.
+    pub origin: Vec3,
+    /// Unit direction, cosine-distributed about the emitting side's normal.
+    pub direction: Vec3,
+    /// Flux the photon stands for before the division by N_F: Le·π·A·sides / p(emitter),
+    /// W per channel.
+    pub flux: Vec3,
+}
+
+impl Scene {
+    /// The emitting triangles (empty without emission).
+    #[inline]
+    pub fn emitters(&self) -> &[Emitter] {
+        &self.emitters.list
+    }
+
+    /// True iff some triangle emits: without, every path runs as in a point-light scene.
+    #[inline]
+    pub fn has_emission(&self) -> bool {
+        !self.emitters.list.is_empty()
+    }
+
+    /// Radiance emitted by triangle `prim` towards the unit world direction `wo` (pointing
+    /// away from it), W·m⁻²·sr⁻¹: Le on an emitting side, else 0.
+    #[inline]
+    pub fn emitted(&self, prim: u32, wo: Vec3) -> Vec3 {
+        if !self.has_emission() {
+            return Vec3::ZERO;
+        }
+        let Some(e) = self.emitter_of(prim) else {
+            return Vec3::ZERO;
+        };
+        if e.two_sided || self.geometry.normal(prim).dot(wo) > 0.0 {
+            e.radiance
+        } else {
+            Vec3::ZERO
+        }
+    }
+
+    /// The emitter on triangle `prim`, if it emits.
+    fn emitter_of(&self, prim: u32) -> Option<&Emitter> {
+        let i = *self.emitters.of_prim.get(prim as usize)?;
+        self.emitters.list.get(i as usize)
+    }
+
+    /// Solid-angle density (sr⁻¹) with which [`Self::sample_emitter`] from `from` yields the
+    /// point `p` of triangle `prim`: p(emitter)/A · d²/|cos θ_e|. 0 where `prim` emits
+    /// nothing towards `from`.
+    pub fn emitter_pdf(&self, from: Vec3, prim: u32, p: Vec3) -> f32 {
+        let Some(e) = self.emitter_of(prim) else {
+            return 0.0;
+        };
+        let i = self.emitters.of_prim[prim as usize] as usize;
+        let to = from - p;
+        let d2 = to.length_squared();
+        let cos = self.geometry.normal(prim).dot(to) / d2.sqrt();
+        if d2 <= 0.0 || cos == 0.0 || (!e.two_sided && cos < 0.0) {
+            return 0.0;
+        }
+        self.emitters.probability(i) / e.area * d2 / cos.abs()
+    }
+
+    /// A point on an emitter: the emitter picked by flux with `u_pick`, the point uniform on
+    /// its triangle by `u_point`. `None` without emitters.
+    pub fn sample_emitter(&self, u_pick: f32, u_point: [f32; 2]) -> Option<EmitterSample> {
+        if !self.has_emission() {
+            return None;
+        }
+        let (i, p) = self.emitters.pick(u_pick);
+        let e = &self.emitters.list[i];
+        let [a, b, c] = self.geometry.vertices(e.prim);
+        let (b1, b2) = uniform_triangle(u_point);
+        Some(EmitterSample {
+            p: a * (1.0 - b1 - b2) + b * b1 + c * b2,
+            n: self.geometry.normal(e.prim),
+            prim: e.prim,
+            pdf_area: p / e.area,
+        })
+    }
+
+    /// Direct light from the area lights leaving `sh` towards `wo` by one light sample
+    /// (numbers `u`), W·m⁻²·sr⁻¹: f·Le·cos/p_ω with its shadow ray. With `mis`, weighted
+    /// by the power heuristic against sampling the BDF at `sh` (whose hits on emitters then
+    /// take [`Self::emitted_mis`]); without, the whole of it. 0 without emitters.
+    #[inline]
+    pub fn direct_area(&self, sh: &Shading, wo: Vec3, u: [f32; 3], mis: bool) -> Vec3 {
+        self.direct_area_sample(sh, wo, u, mis)
+            .map_or(Vec3::ZERO, |(c, _)| c)
+    }
+
+    /// [`Self::direct_area`] with the unit direction from `sh` to the sampled point: `None`
+    /// where the sample contributes nothing.
+    pub fn direct_area_sample(
+        &self,
+        sh: &Shading,
+        wo: Vec3,
+        u: [f32; 3],
+        mis: bool,
+    ) -> Option<(Vec3, Vec3)> {
+        let s = self.sample_emitter(u[0], [u[1], u[2]])?;
+        let to = s.p - sh.p;
+        let d2 = to.length_squared();
+        if d2 <= 0.0 {
+            return None;
+        }
+        let wi = to / d2.sqrt();
+        let le = self.emitted(s.prim, -wi);
+        let cos_e = s.n.dot(wi).abs();
+        if le == Vec3::ZERO || cos_e <= 0.0 || sh.ng.dot(wi) <= 0.0 {
+            return None;
+        }
+        let f = self.eval(sh, wo, wi);
+        let cos = sh.frame.n.dot(wi);
+        if f == Vec3::ZERO || cos <= 0.0 {
+            return None;
+        }
+        // The light's end pushed off its triangle towards sh, so the emitter itself does not
+        // block the segment.
+        let side = if s.n.dot(wi) < 0.0 { 1.0 } else { -1.0 };
+        let end = s.p + s.n * (side * self.geometry.spawn_offset(s.prim));
+        // Through the point lights' shadow test, so that the ray kernel keeps one call site in
+        // this crate and stays inlined there (a second site cost point-light scenes about 1 % of
+        // a pass's instructions).
+        let at = PointLight {
+            position: end,
+            flux: Vec3::ZERO,
+        };
+        if !self.light_visible(sh, &at) {
+            return None;
+        }
+        let pdf = s.pdf_area * d2 / cos_e;
+        let weight = if mis {
+            let bdf = self.bdf_at(sh);
+            power_heuristic(pdf, bdf.pdf(sh.frame.to_local(wo), sh.frame.to_local(wi)))
+        } else {
+            1.0
+        };
+        let c = f * le * (cos * weight / pdf);
+        c.is_finite().then_some((c, wi))
+    }
+
+    /// Radiance emitted by the triangle of a BDF sample's hit (`prim`, at `p`) back towards
+    /// the vertex `from` it was sampled at with solid-angle density `pdf_bdf` (sr⁻¹), weighted
+    /// by the power heuristic against [`Self::direct_area`]'s light sample there.
+    pub fn emitted_mis(&self, from: Vec3, pdf_bdf: f32, prim: u32, p: Vec3) -> Vec3 {
+        let wo = (from - p).normalize_or_zero();
+        let le = self.emitted(prim, wo);
+        if le == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        le * power_heuristic(pdf_bdf, self.emitter_pdf(from, prim, p))
+    }
+
+    /// A photon from the area lights: emitter `index` (chosen with probability
+    /// `probability` by the caller's light distribution), a point uniform on it (`u_point`),
+    /// a side (`u_dir[0]` for a two-sided one) and a cosine-distributed direction.
+    pub fn emit_from_emitter(
+        &self,
+        index: usize,
+        probability: f32,
+        u_point: [f32; 2],
+        u_dir: [f32; 2],
+    ) -> Option<EmitterPhoton> {
+        let e = self.emitters.list.get(index)?;
+        if probability <= 0.0 || probability.is_nan() {
+            return None;
+        }
+        let [a, b, c] = self.geometry.vertices(e.prim);
+        let (b1, b2) = uniform_triangle(u_point);
+        let p = a * (1.0 - b1 - b2) + b * b1 + c * b2;
+        let mut n = self.geometry.normal(e.prim);
+        let mut u = u_dir;
+        if e.two_sided {
+            // The first number chooses the side and is reused, rescaled, for the direction.
+            if u[0] < 0.5 {
+                u[0] *= 2.0;
+            } else {
+                n = -n;
+                u[0] = u[0] * 2.0 - 1.0;
+            }
+        }
+        let local = cosine_hemisphere(u);
+        let direction = Frame::from_normal(n).to_world(local);
+        let origin = p + n * self.geometry.spawn_offset(e.prim);
+        Some(EmitterPhoton {
+            origin,
+            direction,
+            flux: e.flux() / probability,
+        })
+    }
+}
+
+/// The power heuristic p_a²/(p_a² + p_b²) of a sample drawn with density `a` against the
+/// other strategy's density `b` for the same direction (1 where `b` is 0), written with the
+/// ratio of the smaller to the larger so that it neither overflows nor underflows.
+#[inline]
+pub fn power_heuristic(a: f32, b: f32) -> f32 {
+    if a == b {
+        return if a > 0.0 { 0.5 } else { 1.0 };
+    }
+    if a > b {
+        let r = b / a;
+        1.0 / (1.0 + r * r)
+    } else {
+        let r = a / b;
+        r * r / (1.0 + r * r)
+    }
+}
+
+/// A cosine-distributed direction about +z (density cos θ/π sr⁻¹), from the concentric disk.
+#[inline]
+pub fn cosine_hemisphere(u: [f32; 2]) -> Vec3 {
+    let d = bdpm_core::sampling::concentric_disk(u);
+    let z = (1.0 - d.length_squared()).max(0.0).sqrt();
+    Vec3::new(d.x, d.y, z)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Camera;
+    use bdpm_bdf::Bdf;
+    use bdpm_core::{Domain, Rng};
+    use bdpm_geometry::TriangleMesh;
+
+    /// A floor (material 0, Lambert 0.5, 4 m × 4 m at y = 0 facing +y) under two emitters
+    /// facing down: material 1 (a × b = 0.4 m × 0.2 m at height 1, Le = (1, 2, 3)) and
+    /// material 2 (two-sided, 0.2 m × 0.2 m at x = 1, height 0.5, Le = 5), plus a point light
+    /// of flux `point` unless it is zero.
+    fn scene(point: f32) -> Scene {
+        let mut mesh = TriangleMesh::default();
+        mesh.push_rect(Vec3::ZERO, Vec3::Z * 2.0, Vec3::X * 2.0, 0);
+        mesh.push_rect(Vec3::Y, Vec3::X * 0.2, Vec3::Z * 0.1, 1);
+        mesh.push_rect(Vec3::new(1.0, 0.5, 0.0), Vec3::X * 0.1, Vec3::Z * 0.1, 2);
+        let lambert = |k: f32| Bdf::lambert(Vec3::splat(k)).unwrap();
+        let materials = vec![
+            Material::new("floor", lambert(0.5)),
+            Material::new("lamp", lambert(0.0)).with_emission(Vec3::new(1.0, 2.0, 3.0), false),
+            Material::new("panel", lambert(0.0)).with_emission(Vec3::splat(5.0), true),
+        ];
+        let lights = if point > 0.0 {
+            vec![PointLight {
+                position: Vec3::new(-1.0, 1.0, 0.0),
+                flux: Vec3::splat(point),
+            }]
+        } else {
+            Vec::new()
+        };
+        let camera = Camera::look_at(Vec3::new(0.0, 1.0, -3.0), Vec3::ZERO, Vec3::Y, 40.0, 8, 8);
+        Scene::new(
+            Geometry::new(mesh).unwrap(),
+            materials,
+            lights,
+            camera.unwrap(),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn the_light_distribution_is_proportional_to_flux() {
+        let s = scene(2.0);
+        assert_eq!(s.emitters().len(), 4);
+        // Lamp: π·Le·A, one side, per triangle of half the 0.08 m²; panel: both sides.
+        let lamp = luminance(Vec3::new(1.0, 2.0, 3.0)) * PI * 0.04;
+        let panel = 5.0 * PI * 0.02 * 2.0;
+        let point = 2.0;
+        let total = point + 2.0 * lamp + 2.0 * panel;
+        let want = [point, lamp, lamp, panel, panel].map(|f| f / total);
+        for (i, w) in want.iter().enumerate() {
+            let p = s.light_probability(i);
+            assert!((p - w).abs() < 1e-6, "light {i}: {p} against {w}");
+        }
+        // pick_light returns each index with its probability (the CDF's steps).
+        let mut counts = [0u32; 5];
+        let n = 100_000;
+        for k in 0..n {
+            let (i, p) = s.pick_light((k as f32 + 0.5) / n as f32);
+            assert_eq!(p, s.light_probability(i));
+            counts[i] += 1;
+        }
+        for (i, w) in want.iter().enumerate() {
+            let got = counts[i] as f32 / n as f32;
+            assert!((got - w).abs() < 2e-5, "light {i}: {got} against {w}");
+        }
+        // The emitters alone, for direct light: the same shares without the point light.
+        for (i, w) in [lamp, lamp, panel, panel].iter().enumerate() {
+            let want = w / (total - point);
+            assert!((s.emitters.probability(i) - want).abs() < 1e-6);
+        }
+        let flux = s.total_flux();
+        assert!((luminance(flux) - total).abs() < 1e-4 * total, "{flux}");
+    }
+
+    /// E[1/p_ω] over light samples is the solid angle the emitters cover from the shading
+    /// point (counting each point an emitter lights once), here the lamp alone seen from
+    /// under its centre: Ω = 4·asin(ab/√((a² + 4h²)(b² + 4h²))). Also each sample's density
+    /// is the one `emitter_pdf` gives for its point.
+    #[test]
+    fn area_sampling_density_integrates_to_the_solid_angle() {
+        let s = scene(0.0);
+        let from = Vec3::new(0.0, 0.0, 0.0);
+        let (a, b, h) = (0.4f64, 0.2, 1.0);
+        let exact = 4.0 * (a * b / ((a * a + 4.0 * h * h) * (b * b + 4.0 * h * h)).sqrt()).asin();
+        let mut rng = Rng::new(3, Domain::Other, [0; 3]);
+        let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+        let n = 200_000;
+        for _ in 0..n {
+            let e = s.sample_emitter(rng.uniform(), rng.uniform2()).unwrap();
+            let lamp = s.geometry.material(e.prim) == 1;
+            let to = e.p - from;
+            let d2 = to.length_squared();
+            let pdf = e.pdf_area * d2 / e.n.dot(to / d2.sqrt()).abs();
+            let own = s.emitter_pdf(from, e.prim, e.p);
+            assert!((own - pdf).abs() <= 1e-5 * pdf, "{own} against {pdf}");
+            let x = if lamp { 1.0 / pdf as f64 } else { 0.0 };
+            sum += x;
+            sum2 += x * x;
+        }
+        let mean = sum / n as f64;
+        let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
+        assert!(
+            (mean - exact).abs() < 4.0 * se,
+            "{mean} ± {se} against {exact}"
+        );
+    }
+
+    /// The direct light of the area lights at a floor point, by light sampling, against a
+    /// midpoint quadrature of ∫ f·Le·cos θ·cos θₑ/d² dA over both emitters (400 × 400 cells
+    /// each; the panel's both sides, the floor sees its lower one).
+    #[test]
+    fn direct_area_light_matches_quadrature() {
+        let s = scene(0.0);
+        let p = Vec3::new(0.3, 0.0, 0.2);
+        let hit = s.geometry.intersect(p + Vec3::Y, -Vec3::Y, 2.0).unwrap();
+        let wo = Vec3::new(0.0, 1.0, -1.0).normalize();
+        let sh = s.shade(&hit, wo);
+        let quad = |c: Vec3, u: Vec3, v: Vec3, le: f64| {
+            let k = 400;
+            let area = (4.0 * u.length() * v.length()) as f64;
+            let mut sum = 0.0f64;
+            for i in 0..k {
+                for j in 0..k {
+                    let x = c
+                        + u * (2.0 * (i as f32 + 0.5) / k as f32 - 1.0)
+                        + v * (2.0 * (j as f32 + 0.5) / k as f32 - 1.0);
+                    let to = (x - sh.p).as_dvec3();
+                    let d2 = to.length_squared();
+                    let cos = to.y / d2.sqrt();
+                    sum += cos * cos / d2;
+                }
+            }
+            0.5 / std::f64::consts::PI * le * sum * area / (k * k) as f64
+        };
+        let lamp = quad(Vec3::Y, Vec3::X * 0.2, Vec3::Z * 0.1, 1.0);
+        let panel = quad(Vec3::new(1.0, 0.5, 0.0), Vec3::X * 0.1, Vec3::Z * 0.1, 5.0);
+        let exact = lamp + panel;
+        let mut rng = Rng::new(5, Domain::Other, [0; 3]);
+        let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+        let n = 200_000;
+        for _ in 0..n {
+            let x = s.direct_area(&sh, wo, rng.uniform3(), false).x as f64;
+            sum += x;
+            sum2 += x * x;
+        }
+        let mean = sum / n as f64;
+        let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
+        assert!(
+            (mean - exact).abs() < 4.0 * se,
+            "{mean} ± {se} against {exact}"
+        );
+        assert!(
+            se < 0.01 * exact,
+            "the test could not fail: {se} against {exact}"
+        );
+    }
+
+    /// Photons leave the panel from both sides with cosine-distributed directions: E[cos θ]
+    /// = 2/3 about the side's normal, half of them on each side, flux Φ/p.
+    #[test]
+    fn emitted_photons_are_cosine_distributed_on_the_emitting_sides() {
+        let s = scene(0.0);
+        let panel = 2;
+        let p = 0.25;
+        let mut rng = Rng::new(9, Domain::Other, [0; 3]);
+        let n = 100_000;
+        let (mut up, mut cos_sum, mut cos2) = (0u32, 0.0f64, 0.0f64);
+        let normal = s.geometry.normal(s.emitters()[panel].prim);
+        for _ in 0..n {
+            let e = s
+                .emit_from_emitter(panel, p, rng.uniform2(), rng.uniform2())
+                .unwrap();
+            let c = e.direction.dot(normal) as f64;
+            up += (c > 0.0) as u32;
+            cos_sum += c.abs();
+            cos2 += c * c;
+            let want = s.emitters()[panel].flux() / p;
+            assert!((e.flux - want).abs().max_element() < 1e-5 * want.max_element());
+        }
+        let mean = cos_sum / n as f64;
+        let se = ((cos2 / n as f64 - mean * mean) / n as f64).sqrt();
+        assert!((mean - 2.0 / 3.0).abs() < 4.0 * se, "{mean} ± {se}");
+        let share = up as f64 / n as f64;
+        assert!(
+            (share - 0.5).abs() < 4.0 * (0.25 / n as f64).sqrt(),
+            "{share}"
+        );
+        // The one-sided lamp emits downwards only.
+        let lamp = s.emit_from_emitter(0, p, [0.3, 0.6], [0.9, 0.2]).unwrap();
+        assert!(lamp.direction.y < 0.0);
+    }
+
+    #[test]
+    fn power_heuristic_splits_one() {
+        for (a, b) in [(1.0f32, 2.0), (0.0, 3.0), (5.0, 0.0), (1e30, 1e30)] {
+            let sum = power_heuristic(a, b) + power_heuristic(b, a);
+            assert!((sum - 1.0).abs() < 1e-6, "{a} {b}: {sum}");
+        }
+    }
+}

@@ -1,0 +1,175 @@
+//! Area lights (issue 46): the emissive furnace's exact answer in every mode, and a lobe
+//! furnace where every mode must agree with `path`.
+
+use bdpm_suite::{load, render, with_mode};
+
+/// Every mode of the mode table plus the two references.
+fn all_modes() -> Vec<&'static str> {
+    let mut modes = vec!["path", "light"];
+    modes.extend(bdpm_mis::Heuristic::ALL_NAMES.iter().copied());
+    modes
+}
+
+/// The closed sphere whose inside emits Le = 1 and reflects with Lambert albedo 0.5 has
+/// radiance Le/(1 − a) = 2 everywhere: every mode's image mean within 1 % (the mean's own
+/// standard error far below that, so the test can fail) and ≥ 99 % of pixels within 4 SE.
+#[test]
+fn every_mode_matches_the_emissive_furnace() {
+    let (scene, settings) = load("emissive-furnace.toml", 16, 16);
+    let exact = vec![2.0f64; 16 * 16];
+    let mut failures = Vec::new();
+    for mode in all_modes() {
+        // `path` is cheap per pass and heavy-tailed per pixel: more passes.
+        let passes = if mode == "path" { 64 } else { 16 };
+        let mut s = with_mode(&settings, mode, passes, 4, 20_000);
+        s.radius = Some(0.05);
+        s.threshold_radius = 0.9;
+        let film = render(&scene, &s);
+        let a = bdpm_suite::agreement(&film, &exact, 4.0);
+        eprintln!("{mode:>16}: {a:?}");
+        let ok = a.mean_relative_error.abs() < 0.01 && a.within >= 0.99;
+        if !ok || a.mean_relative_se > 0.003 || film.dropped() != 0 {
+            failures.push((mode, a));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// The same sphere with a Gaussian lobe (kd 0.25, gr 0.5, Δ = 12°): its directional albedo
+/// µ(ωₒ) varies with the angle, so radiance is no longer one constant but lies between
+/// Le/(1 − min µ) and Le/(1 − max µ); the exact answer is not closed-form, so every mode
+/// must agree with `path` (an independent estimator: no merge, MIS at every vertex) pixel
+/// by pixel, and `path` must lie within those bounds.
+#[test]
+fn every_mode_agrees_with_path_in_the_lobe_furnace() {
+    let text = std::fs::read_to_string(bdpm_suite::scene_path("emissive-furnace.toml"))
+        .expect("the scene file");
+    let text = text.replace("kd = 0.5\n", "kd = 0.25\ngr = 0.5\ndelta = 12\n");
+    let (mut scene, mut settings) = crate::specular::load(&text);
+    scene.set_resolution(16, 16).expect("valid resolution");
+    (settings.width, settings.height) = (16, 16);
+    settings.sampler = bdpm_integrator::RenderSettings::default().sampler;
+    let reference = render(&scene, &with_mode(&settings, "path", 96, 4, 1));
+    // µ(ωₒ) = kd + gr·µ_G(cos θₒ) over the directions, from the BDF's own albedo.
+    let bdf = scene.bdf(0);
+    let albedo = |z: f32| {
+        let wo = glam::Vec3::new((1.0 - z * z).sqrt(), 0.0, z);
+        f64::from(bdf.albedo(wo).x)
+    };
+    let mus: Vec<f64> = (1..=100).map(|i| albedo(i as f32 / 100.0)).collect();
+    let (lo, hi) = mus
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(a, b), &m| (a.min(m), b.max(m)));
+    let mean: f64 = reference.mean().iter().map(|v| v.x).sum::<f64>() / 256.0;
+    eprintln!(
+        "path mean {mean}, bounds [{}, {}]",
+        1.0 / (1.0 - lo),
+        1.0 / (1.0 - hi)
+    );
+    assert!(
+        mean >= 1.0 / (1.0 - lo) && mean <= 1.0 / (1.0 - hi),
+        "{mean}"
+    );
+    let mut failures = Vec::new();
+    for mode in all_modes().into_iter().filter(|&m| m != "path") {
+        let mut s = with_mode(&settings, mode, 16, 4, 20_000);
+        s.radius = Some(0.05);
+        s.threshold_radius = 0.9;
+        let film = render(&scene, &s);
+        let (within, diff, se) = bdpm_suite::films_agree(&film, &reference, 4.0);
+        eprintln!("{mode:>16}: within {within:.4}, mean {diff:+.4} ± {se:.4}");
+        if !(within >= 0.98 && diff.abs() < (4.0 * se).max(0.005) && se < 0.005) {
+            failures.push(format!("{mode}: within {within}, mean {diff:+} ± {se}"));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// scenes/cornell-box.toml (Mitsuba's Cornell box, its area light) with a point light added
+/// beside the area light, so photons and direct light share one distribution over both kinds:
+/// every mode agrees with `path` pixel by pixel and in the image mean.
+#[test]
+fn point_and_area_lights_together_agree_with_path() {
+    let text = std::fs::read_to_string(bdpm_suite::scene_path("cornell-box.toml"))
+        .expect("the scene file");
+    let text = text.replace(
+        "[material.white]",
+        "[[light]]\nposition = [0.4, 0.5, 0.3]\nflux = [2.0, 2.0, 2.0]\n\n[material.white]",
+    );
+    let (mut scene, mut settings) = crate::specular::load(&text);
+    scene.set_resolution(20, 20).expect("valid resolution");
+    (settings.width, settings.height) = (20, 20);
+    settings.sampler = bdpm_integrator::RenderSettings::default().sampler;
+    settings.radius = Some(0.01);
+    let reference = render(&scene, &with_mode(&settings, "path", 512, 8, 1));
+    let mut failures = Vec::new();
+    for mode in ["light", "bdd0", "bdd1", "optimal-path", "balance", "camis"] {
+        let s = with_mode(&settings, mode, 24, 4, 50_000);
+        let film = render(&scene, &s);
+        let (within, diff, se) = bdpm_suite::films_agree(&film, &reference, 4.0);
+        eprintln!("{mode:>16}: within {within:.4}, mean {diff:+.4} ± {se:.4}");
+        if !(within >= 0.98 && diff.abs() < (4.0 * se).max(0.01) && se < 0.01) {
+            failures.push(format!("{mode}: within {within}, mean {diff:+} ± {se}"));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// A room whose wall z = 0 is a perfect mirror, lit by a small two-sided area light, against
+/// the room twice as long with the mirrored light added (as the point-light test in
+/// `specular`): seen in the mirror (Le through a delta vertex), lit through it (area light →
+/// mirror → x₀, which only the merge at x₀ samples in the mix) and lit directly.
+#[test]
+fn an_area_light_seen_in_and_lighting_through_a_mirror() {
+    use crate::specular::{load, quad, room};
+    let render_table = "[render]\nresolution = [24, 24]\nseed = 3\nradius = 0.004\n\n";
+    let camera = "[camera]\nposition = [0.5, 0.5, 0.9]\nlook_at = [0.5, 0.45, 0.0]\n\
+                  up = [0.0, 1.0, 0.0]\nvfov = 70\n\n";
+    let materials = "[material.walls]\nkd = 0.5\n\n[material.mirror]\ntype = \"mirror\"\n\n\
+                     [material.lamp]\nkd = 0.0\nemission = 20.0\ntwo_sided_emission = true\n\n";
+    let lamp = |z: f64| {
+        let (x0, x1, y) = (0.25, 0.35, 0.8);
+        quad(
+            "lamp",
+            [
+                [x0, y, z - 0.05],
+                [x1, y, z - 0.05],
+                [x1, y, z + 0.05],
+                [x0, y, z + 0.05],
+            ],
+        )
+    };
+    let mirrored = format!(
+        "{render_table}{camera}{materials}{}{}",
+        lamp(0.55),
+        room(0.0, 1.0, "mirror")
+    );
+    let unfolded = format!(
+        "{render_table}{camera}{materials}{}{}{}",
+        lamp(0.55),
+        lamp(-0.55),
+        room(-1.0, 1.0, "walls")
+    );
+    let (scene_m, settings) = load(&mirrored);
+    let (scene_u, _) = load(&unfolded);
+    let mut failures = Vec::new();
+    // Not `light`: its light tracing cannot reach the camera through the mirror, so it misses
+    // the indirect light seen in it (as with point lights, docs/results.md).
+    for mode in ["path", "bdd0", "bdd1", "balance", "optimal"] {
+        let passes = if mode == "path" { 256 } else { 64 };
+        let s = with_mode(&settings, mode, passes, 4, 60_000);
+        let (a, b) = (render(&scene_m, &s), render(&scene_u, &s));
+        let (within, diff, se) = bdpm_suite::films_agree(&a, &b, 4.0);
+        eprintln!("{mode:>8}: within {within:.4}, mean {diff:+.4} ± {se:.4}");
+        assert_eq!(a.dropped() + b.dropped(), 0, "{mode}");
+        // `path` lights the walls through the mirror only when a BDF sample hits the small
+        // lamp there (no light sample reaches through a mirror): rare, large values, a
+        // heavy-tailed estimate whose typical render lies below its expectation in 8 % of the
+        // pixels (docs/results.md, "Area lights"), so `path` is held to the image mean here.
+        let pixels_ok = mode == "path" || within >= 0.98;
+        if !(pixels_ok && diff.abs() < (4.0 * se).max(0.005) && se < 0.015) {
+            failures.push(format!("{mode}: within {within}, mean {diff:+} ± {se}"));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
