@@ -305,7 +305,7 @@ impl State {
         let scene = Scene::new(geometry, materials, self.lights, sensor.camera)
             .and_then(|s| s.with_textures(SceneTextures { base_colour, texcoords }))
             .map_err(|e| match e {
-                bdpm_scene::SceneError::NoLight if light_count == 0 => ctx.bad("emitter", "the scene has no point emitter; add <emitter type=\"point\"> (area lights are not supported yet)"),
+                bdpm_scene::SceneError::NoLight if light_count == 0 => ctx.bad("emitter", "the scene has no point emitter; add <emitter type=\"point\"> (area emitters are not imported yet)"),
                 other => scene_error(&ctx, other, light_count),
             })?;
         Ok(LoadedScene {

@@ -216,7 +216,7 @@ pub(crate) fn emitter(
     match kind.as_str() {
         "point" => {}
         "area" => return Err(refuse_area(x, node)),
-        other => return Err(x.err(node, format!("emitter type \"{other}\" is not supported: bdpm has isotropic point lights only (use <emitter type=\"point\">)"))),
+        other => return Err(x.err(node, format!("emitter type \"{other}\" is not supported: bdpm imports isotropic point lights only (use <emitter type=\"point\">)"))),
     }
     let p = Props::new(node);
     let position = match p.get("position") {
@@ -250,5 +250,5 @@ pub(crate) fn emitter(
 
 /// The refusal of an area emitter.
 pub(crate) fn refuse_area(x: &Xml<'_>, node: Node<'_, '_>) -> LoadError {
-    x.err(node, "area lights are not supported yet (issue 46): bdpm renders point lights only; replace the emitter by <emitter type=\"point\"> lights")
+    x.err(node, "area emitters are not imported yet (issue 46): bdpm renders area lights from its own scene format (a material's `emission`, docs/scene-format.md) but reads only point lights from Mitsuba XML; write the scene in TOML or replace the emitter by <emitter type=\"point\"> lights")
 }

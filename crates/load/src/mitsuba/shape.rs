@@ -32,7 +32,7 @@ pub(crate) fn shape(
             Some("area") => sensor::refuse_area(x, e),
             _ => x.err(
                 e,
-                "an emitter attached to a shape is not supported: bdpm has point lights only",
+                "an emitter attached to a shape is not supported: bdpm imports point lights only",
             ),
         });
     }
