@@ -11,6 +11,7 @@ time}}), which `bdpm figure` reads as the image's time.
                                 [--integrator path|ptracer]
 """
 import argparse
+import importlib.util
 import json
 import os
 import subprocess
@@ -19,6 +20,15 @@ import tempfile
 import time
 
 import numpy as np
+
+# Mitsuba's set-up (variant, threads, libLLVM) is mitsuba-specular.py's, shared as in
+# mitsuba-check.py.
+_spec = importlib.util.spec_from_file_location(
+    "mitsuba_specular", os.path.join(os.path.dirname(os.path.abspath(__file__)),
+                                     "mitsuba-specular.py"))
+_ms = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(_ms)
+setup_mitsuba = _ms.setup_mitsuba
 
 
 def fail(msg):
@@ -46,15 +56,8 @@ def main():
                          capture_output=True, text=True)
     if res.returncode != 0:
         fail(f"bdpm export failed: {res.stderr.strip()}")
-    if args.variant.startswith("llvm") and "DRJIT_LIBLLVM_PATH" not in os.environ:
-        cand = "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"
-        if os.path.exists(cand):
-            os.environ["DRJIT_LIBLLVM_PATH"] = cand
-    import drjit as dr
-    import mitsuba as mi
+    mi, _ = setup_mitsuba(args)
     import OpenEXR
-    mi.set_variant(args.variant)
-    dr.set_thread_count(args.threads)
     t0 = time.time()
     scene = mi.load_file(os.path.join(export, "scene.xml"), spp=args.spp)
     integ = mi.load_dict({"type": args.integrator, "max_depth": -1})

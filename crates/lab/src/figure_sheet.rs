@@ -191,12 +191,7 @@ fn layout(fig: &Figure) -> (Canvas, Vec<Text>) {
     };
     let mut texts = title(fig);
     let x_of = |i: u32| MARGIN + i * (col + GAP);
-    let full = Crop {
-        x: 0,
-        y: 0,
-        w: fig.width,
-        h: fig.height,
-    };
+    let full = whole(fig);
     let images: Vec<(&str, &[u8])> = std::iter::once(("reference", fig.reference.as_slice()))
         .chain(
             fig.panels
@@ -266,12 +261,7 @@ fn maps(fig: &Figure, canvas: &mut Canvas, texts: &mut Vec<Text>, mut y: u32) {
     let s = upscale(fig.width);
     let (col, img_h) = (fig.width * s, fig.height * s);
     let x_of = |i: u32| MARGIN + i * (col + GAP);
-    let full = Crop {
-        x: 0,
-        y: 0,
-        w: fig.width,
-        h: fig.height,
-    };
+    let full = whole(fig);
     let top = fig.error_top;
     let error_colour = move |t: f64| ColourMap::Viridis.colour(t);
     let magma = |t: f64| {
@@ -339,4 +329,14 @@ pub(crate) fn encode(fig: &Figure) -> Result<Vec<u8>, String> {
         root.present().map_err(|e| err(&e))?;
     }
     canvas.encode_png()
+}
+
+/// The crop that is the whole image.
+fn whole(fig: &Figure) -> Crop {
+    Crop {
+        x: 0,
+        y: 0,
+        w: fig.width,
+        h: fig.height,
+    }
 }

@@ -36,12 +36,7 @@ pub const BYTES_PER_PIXEL_PASS: u64 = 48;
 /// ([`BYTES_PER_PIXEL_PASS`] per pixel per listed pass), from its header alone, so that a
 /// merge or resume too large for the memory is refused before it reads.
 pub fn held_bytes(path: &Path) -> Result<u64, String> {
-    let meta = exr::meta::MetaData::read_from_file(path, false)
-        .map_err(|e| format!("{}: cannot read EXR: {e}", path.display()))?;
-    let header = meta
-        .headers
-        .first()
-        .ok_or_else(|| format!("{}: EXR has no layer", path.display()))?;
+    let header = crate::exr::first_header(path)?;
     let passes = header
         .own_attributes
         .other

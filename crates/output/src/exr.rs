@@ -17,13 +17,18 @@ use crate::files::{Staged, stage, write_via_temp};
 /// The text attributes of the first layer of the EXR at `path` (`bdpm.` prefix removed, as
 /// [`ExrLayer::attributes`]), read from its header alone, without the pixels.
 pub fn read_attributes(path: &Path) -> Result<Vec<(String, String)>, String> {
+    Ok(text_attributes(&first_header(path)?.own_attributes))
+}
+
+/// The header of the first layer of the EXR at `path`, read without the pixels; errors name
+/// the file.
+pub(crate) fn first_header(path: &Path) -> Result<exr::meta::header::Header, String> {
     let meta = exr::meta::MetaData::read_from_file(path, false)
         .map_err(|e| format!("{}: cannot read EXR: {e}", path.display()))?;
-    let header = meta
-        .headers
-        .first()
-        .ok_or_else(|| format!("{}: EXR has no layer", path.display()))?;
-    Ok(text_attributes(&header.own_attributes))
+    meta.headers
+        .into_iter()
+        .next()
+        .ok_or_else(|| format!("{}: EXR has no layer", path.display()))
 }
 
 /// The text attributes among `attributes`, keys without the `bdpm.` prefix.

@@ -1,7 +1,7 @@
 //! Tests of the `bdpm` binary as a user runs it: the files `render` and `weights` write and
 //! what they contain, one-line errors (exit code 1, never a panic) for bad input, and an
 //! interrupted render that keeps its work.
-use crate::{bdpm, scene};
+use crate::{TINY, bdpm, scene};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
@@ -769,16 +769,7 @@ fn render_then_predict(
 /// A quiet render of the Cornell scene with the arguments `args` to `out`, its standard
 /// output and error piped.
 fn spawn_render(args: &[&[&str]], out: &Path) -> std::process::Child {
-    bdpm()
-        .arg("render")
-        .arg(scene("preprint/cornell-lambert.toml"))
-        .args(args.concat())
-        .args(["--quiet", "-o"])
-        .arg(out)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start bdpm")
+    crate::spawn_render(&scene("preprint/cornell-lambert.toml"), &args.concat(), out)
 }
 
 /// A render of the Cornell box that runs until interrupted (one thread, 100000 passes).
@@ -1239,7 +1230,7 @@ fn small_render(out: &Path, extra: &[&str]) -> Output {
     let out = run(bdpm()
         .arg("render")
         .arg(scene("preprint/cornell-lambert.toml"))
-        .args(["--resolution", "16x16", "--photons", "2000", "--spp", "1"])
+        .args(TINY)
         .args(["--mode", "optimal", "--quiet"])
         .args(extra)
         .arg("-o")
@@ -1410,7 +1401,7 @@ fn interrupted_render_resumes_after_the_passes_it_holds() {
     for wait in [1.5, 6.0] {
         let (code, _) = interrupted_render(
             wait,
-            &["--resolution", "16x16", "--photons", "2000", "--spp", "1"],
+            &TINY,
             &[
                 "--mode",
                 "optimal",
@@ -1693,7 +1684,7 @@ fn output_sets_refuse_inputs_other_sets_and_bad_members_before_any_work() {
         run(bdpm()
             .arg("render")
             .arg(scene("preprint/cornell-lambert.toml"))
-            .args(["--resolution", "16x16", "--photons", "2000", "--spp", "1"])
+            .args(TINY)
             .args(flags)
             .args(extra)
             .args(["--quiet", "-o"])
@@ -1717,16 +1708,8 @@ fn output_sets_refuse_inputs_other_sets_and_bad_members_before_any_work() {
     let out = run(bdpm()
         .arg("predict")
         .arg(scene("preprint/cornell-lambert.toml"))
-        .args([
-            "--resolution",
-            "16x16",
-            "--photons",
-            "2000",
-            "--spp",
-            "1",
-            "--mode",
-            "optimal",
-        ])
+        .args(TINY)
+        .args(["--mode", "optimal"])
         .arg("--measured")
         .arg(dir.path("a.exr"))
         .arg("-o")

@@ -25,6 +25,30 @@ fn scene(name: &str) -> std::path::PathBuf {
         .join(name)
 }
 
+/// The smallest render that still runs every stage: 16×16 pixels, 2,000 photons a pass, one
+/// camera sample per pixel.
+const TINY: [&str; 6] = ["--resolution", "16x16", "--photons", "2000", "--spp", "1"];
+
+/// `bdpm render SCENE ARGS --quiet -o OUT`, its standard output and error piped, started and
+/// not waited for.
+fn spawn_render(
+    scene: &std::path::Path,
+    args: &[&str],
+    out: &std::path::Path,
+) -> std::process::Child {
+    use std::process::Stdio;
+    bdpm()
+        .arg("render")
+        .arg(scene)
+        .args(args)
+        .args(["--quiet", "-o"])
+        .arg(out)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start bdpm")
+}
+
 /// A fresh directory under the system temp dir, named after `tag`, removed when dropped.
 fn temp_dir(tag: &str) -> tempfile::TempDir {
     tempfile::Builder::new()

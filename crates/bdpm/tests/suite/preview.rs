@@ -4,10 +4,10 @@
 //! what the render recorded, and refuse a flag that contradicts it.
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output, Stdio};
+use std::process::{Child, Command, Output};
 use std::time::{Duration, Instant};
 
-use crate::{bdpm, scene, temp_dir};
+use crate::{TINY, bdpm, scene, temp_dir};
 
 /// The image settings of the watched renders: small, fast passes, one thread, and many more
 /// passes than any test waits for.
@@ -115,16 +115,7 @@ fn assert_one_line_error(out: &Output, needles: &[&str]) {
 
 /// The Lambert box rendered with `args` to `out`, piped, not waited for.
 fn spawn_render(args: &[&str], out: &Path) -> Child {
-    bdpm()
-        .arg("render")
-        .arg(scene("preprint/cornell-lambert.toml"))
-        .args(args)
-        .args(["--quiet", "-o"])
-        .arg(out)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start bdpm")
+    crate::spawn_render(&scene("preprint/cornell-lambert.toml"), args, out)
 }
 
 /// Waits (at most 120 s) until `path` exists, failing with the render's stderr if it ends
@@ -296,18 +287,10 @@ fn small(out: &Path, settings: &[&str], more: &[&str]) {
     assert_success(&out);
 }
 
-const SMALL: [&str; 10] = [
-    "--resolution",
-    "16x16",
-    "--photons",
-    "2000",
-    "--spp",
-    "1",
-    "--mode",
-    "optimal",
-    "--seed",
-    "5",
-];
+/// The small render of these tests: [`TINY`] in `optimal` mode with seed 5.
+fn small_settings() -> Vec<&'static str> {
+    [&TINY[..], &["--mode", "optimal", "--seed", "5"]].concat()
+}
 
 /// `render --resume` and `merge` need neither the scene nor the flags again: their results
 /// have the bits of one render of all the passes; a resume with a flag that contradicts the
@@ -316,8 +299,12 @@ const SMALL: [&str; 10] = [
 fn resume_and_merge_take_the_recorded_settings() {
     let dir = temp_dir("headers-resume");
     let path = |name: &str| dir.path().join(name);
-    small(&path("full.exr"), &SMALL, &["--passes", "4"]);
-    small(&path("a.exr"), &SMALL, &["--passes", "2", "--accumulate"]);
+    small(&path("full.exr"), &small_settings(), &["--passes", "4"]);
+    small(
+        &path("a.exr"),
+        &small_settings(),
+        &["--passes", "2", "--accumulate"],
+    );
     let out = run(bdpm()
         .args(["render", "--quiet", "--passes", "2", "--resume"])
         .arg(path("a.accum.exr"))
@@ -329,12 +316,12 @@ fn resume_and_merge_take_the_recorded_settings() {
 
     small(
         &path("p0.exr"),
-        &SMALL,
+        &small_settings(),
         &["--first-pass", "0", "--passes", "3"],
     );
     small(
         &path("p1.exr"),
-        &SMALL,
+        &small_settings(),
         &["--first-pass", "3", "--passes", "1"],
     );
     let out = run(bdpm()

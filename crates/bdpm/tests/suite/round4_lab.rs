@@ -173,16 +173,9 @@ fn study_and_bench_above_the_memory_limit_are_refused_before_any_work() {
 }
 
 /// The study's own reference render, at the settings of the small studies below.
-const SMALL: [&str; 8] = [
-    "--resolution",
-    "16x16",
-    "--photons",
-    "2000",
-    "--spp",
-    "1",
-    "--threads",
-    "2",
-];
+fn small() -> Vec<&'static str> {
+    [&crate::TINY[..], &["--threads", "2"]].concat()
+}
 
 /// With a time budget that a mode's preparation alone exceeds, the mode still has a pass and
 /// is reported (a CSV row, a table row and a note); before, it had none and vanished from the
@@ -195,7 +188,7 @@ fn a_time_budget_shorter_than_a_preparation_does_not_drop_the_mode() {
         .current_dir(dir)
         .arg("study")
         .arg(scene("cornell-lambert.toml"))
-        .args(SMALL)
+        .args(small())
         .args(["--modes", "bdd0,optimal-path", "--time-budget", "0.000001"])
         .args(["--reference-passes", "2", "--quiet", "-o", "s"]));
     assert_success(&out);
@@ -227,7 +220,7 @@ fn entries_that_would_write_one_preview_are_refused() {
             .current_dir(dir)
             .arg("study")
             .arg(scene("cornell-lambert.toml"))
-            .args(SMALL)
+            .args(small())
             .args(["--modes", "balance:radius= 0.01,balance:radius=+0.01"])
             .args(["--passes", "2", "--quiet", "-o", "s"]),
         60,
@@ -256,7 +249,7 @@ fn the_study_writes_a_directory_that_holds_its_reference() {
             .current_dir(dir)
             .arg("study")
             .arg(scene("cornell-lambert.toml"))
-            .args(SMALL)
+            .args(small())
             .args(["--modes", "bdd0", "--passes", "2", "--quiet", "-o", "taken"]),
         60,
     );
@@ -268,7 +261,7 @@ fn the_study_writes_a_directory_that_holds_its_reference() {
         .current_dir(dir)
         .arg("study")
         .arg(scene("cornell-lambert.toml"))
-        .args(SMALL)
+        .args(small())
         .args(["--modes", "bdd0,balance", "--passes", "2", "-o", "s"]));
     assert_success(&out);
     let stderr = text(&out.stderr);
@@ -305,7 +298,7 @@ fn compare_gives_no_error_for_identical_files() {
     assert_success(&run(bdpm()
         .arg("render")
         .arg(scene("cornell-lambert.toml"))
-        .args(SMALL)
+        .args(small())
         .args(["--mode", "balance", "--passes", "3", "--quiet", "-o"])
         .arg(&a)));
     let b = dir.join("b.exr");
@@ -425,7 +418,7 @@ fn a_merge_is_estimated_without_the_photon_map_it_does_not_trace() {
     assert_success(&run(bdpm()
         .arg("render")
         .arg(scene("cornell-lambert.toml"))
-        .args(SMALL)
+        .args(small())
         .args([
             "--mode",
             "balance",

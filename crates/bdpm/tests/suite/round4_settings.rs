@@ -4,7 +4,7 @@
 //! or a `--modes` entry, and one interrupt during a long preparation that stops it at once.
 use crate::bdpm;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
 fn text(bytes: &[u8]) -> String {
@@ -263,16 +263,7 @@ fn interrupt_preparation(
     out: &Path,
     wait: Duration,
 ) -> (Option<i32>, Duration, String) {
-    let mut child = bdpm()
-        .arg("render")
-        .arg(scene)
-        .args(args)
-        .args(["--quiet", "-o"])
-        .arg(out)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start bdpm");
+    let mut child = crate::spawn_render(scene, args, out);
     std::thread::sleep(wait);
     let status = Command::new("kill")
         .args(["-INT", &child.id().to_string()])
