@@ -8,7 +8,7 @@ time}}), which `bdpm figure` reads as the image's time.
 
   scripts/mitsuba-equal-time.py SCENE.toml -o OUT.exr [--seconds 10] [--resolution 128]
                                 [--spp 4] [--variant llvm_ad_rgb] [--threads 2] [--bdpm PATH]
-                                [--integrator path|ptracer]
+                                [--integrator path|ptracer] [--seed S]
 """
 import argparse
 import importlib.util
@@ -47,6 +47,8 @@ def main():
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--bdpm", default="target/release/bdpm")
     ap.add_argument("--integrator", choices=["path", "ptracer"], default="path")
+    ap.add_argument("--seed", type=int, default=0,
+                    help="independent runs for different seeds (0: the seeds of earlier runs)")
     args = ap.parse_args()
     if not (args.seconds > 0 and args.spp >= 1 and args.resolution >= 1):
         fail("--seconds must be positive, --spp and --resolution at least 1")
@@ -67,7 +69,8 @@ def main():
     t1 = time.time()
     total, rounds = None, 0
     while rounds == 0 or time.time() - t1 < args.seconds:
-        img = np.array(mi.render(scene, integrator=integ, spp=args.spp, seed=7919 * rounds + 3),
+        seed = (1000003 * args.seed + 7919 * rounds + 3) % 2**32
+        img = np.array(mi.render(scene, integrator=integ, spp=args.spp, seed=seed),
                        dtype=np.float64)[:, :, :3]
         total = img if total is None else total + img
         rounds += 1

@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# Equal wall time on an area-lit scene against Mitsuba 3 (issue 46, "Must show"): renders the
+# scene, in turn and REPEATS times (seeds 1..REPEATS), with bdpm's defaults (the file's
+# settings), the file's settings in `balance` and `camis`, bdpm's `path`, and Mitsuba 3's
+# `path` and `ptracer` (scripts/mitsuba-equal-time.py: the scene through `bdpm export`), each
+# for SECONDS of render time at 2 threads, and compares each image with a long Mitsuba `path`
+# reference (`bdpm compare`: rel. RMSE and relMSE over every pixel and channel). Prints one line
+# per render and the medians per configuration; run it alone on the machine (timings).
+#   scripts/area-equal-time.sh [-o DIR] [--scene S.toml] [--seconds "20 60"] [--repeats N]
+#                              [--resolution PX] [--reference REF.exr] [--reference-seconds S]
+# Defaults: out/area-equal-time, scenes/cornell-box.toml, 20 s, 2 repeats, 256 px, a
+# reference rendered first for 1200 s (Mitsuba `path`, unbiased: no merge radius in it).
+set -euo pipefail
+abs() { case "$1" in /*) printf %s "$1" ;; *) printf %s "$PWD/$1" ;; esac; }
+out=out/area-equal-time scene=scenes/cornell-box.toml budgets=20 repeats=2 res=256 ref= ref_s=1200
+while [ $# -gt 0 ]; do
+  case "$1" in
+    -o) out=$(abs "$2"); shift 2 ;;
+    --scene) scene=$2; shift 2 ;;
+    --seconds) budgets=$2; shift 2 ;;
+    --repeats) repeats=$2; shift 2 ;;
+    --resolution) res=$2; shift 2 ;;
+    --reference) ref=$(abs "$2"); shift 2 ;;
+    --reference-seconds) ref_s=$2; shift 2 ;;
+    *) echo "area-equal-time.sh: unknown argument '$1' (see the comment at the top)" >&2; exit 2 ;;
+  esac
+done
+case "${BDPM:-}" in */*) BDPM=$(abs "$BDPM") ;; esac
+cd "$(dirname "$0")/.."
+bdpm=${BDPM:-target/release/bdpm}
+mkdir -p "$out"
+if [ -z "$ref" ]; then
+  ref=$out/reference.exr
+  [ -f "$ref" ] || python3 scripts/mitsuba-equal-time.py "$scene" --seconds "$ref_s" \
+    --integrator path --resolution "$res" --spp 16 --seed 1000 --bdpm "$bdpm" -o "$ref"
+fi
+score() { # IMAGE → "rel.RMSE relMSE" against the reference
+  "$bdpm" compare "$1" "$ref" | grep "as reference" |
+    sed -E 's/.*rel\. RMSE ([0-9.]+)%, relMSE ([0-9.e+-]+).*/\1 \2/'
+}
+for budget in $budgets; do
+  log=$out/runs-$budget.txt
+  : > "$log"
+  for seed in $(seq 1 "$repeats"); do
+    for config in defaults balance camis path mitsuba-path mitsuba-ptracer; do
+      img=$out/$config-$budget-$seed.exr
+      timed=(--time-budget "$budget" --threads 2 --seed "$seed" --passes 1000000
+        --resolution "${res}x$res" --quiet -o "$img")
+      case $config in
+        defaults) "$bdpm" render "$scene" "${timed[@]}" 2> /dev/null ;;
+        balance | camis | path)
+          "$bdpm" render "$scene" --mode "$config" "${timed[@]}" 2> /dev/null ;;
+        mitsuba-*) python3 scripts/mitsuba-equal-time.py "$scene" --seconds "$budget" \
+          --integrator "${config#mitsuba-}" --resolution "$res" --seed "$seed" --bdpm "$bdpm" \
+          -o "$img" > /dev/null ;;
+      esac
+      wall=$(python3 -c "import json, sys; t = json.load(open(sys.argv[1]))['timing'];
+print('%.1f' % (t['prepare_s'] + t['render_s']))" "${img%.exr}.json")
+      echo "$config $budget $seed $(score "$img") $wall" | tee -a "$log"
+    done
+  done
+  python3 - "$log" <<'PY'
+import statistics, sys
+rows = [l.split() for l in open(sys.argv[1]) if l.strip()]
+by = {}
+for c, b, s, rmse, rel, wall in rows:
+    by.setdefault(c, []).append((float(rmse), float(rel), float(wall)))
+best = min(statistics.median(r[0] for r in v) for c, v in by.items() if c.startswith("mitsuba"))
+print(f"budget {rows[0][1]} s, medians of {len(rows) // len(by)} runs; rel. RMSE in %:")
+for c, v in by.items():
+    m = statistics.median(r[0] for r in v)
+    print(f"  {c:16s} rel. RMSE {m:.3f}  relMSE {statistics.median(r[1] for r in v):.3e}"
+          f"  wall {statistics.median(r[2] for r in v):.1f} s  {m / best:.2f}x Mitsuba's best")
+PY
+done
