@@ -370,6 +370,11 @@ fn bad_input_is_a_one_line_error_naming_file_line_and_element() {
             "nested in the <shape>",
         ),
         (
+            r#"<shape type="shapegroup" id="g"><shape type="cube"><emitter type="area"/></shape></shape>"#,
+            "<emitter type=\"area\">",
+            "in a shapegroup",
+        ),
+        (
             r#"<shape type="instance"><emitter type="area"/></shape>"#,
             "<emitter type=\"area\">",
             "instances cannot replicate emitters",
