@@ -25,8 +25,15 @@ Needs (not project dependencies): `pip install mitsuba numpy OpenEXR`; the llvm 
 libLLVM (DRJIT_LIBLLVM_PATH, e.g. /usr/lib/x86_64-linux-gnu/libLLVM-19.so, set automatically
 when that file exists), else `--variant scalar_rgb`.
 
+A Mitsuba XML scene (SCENE.xml) is checked the other way round: bdpm renders its import of
+the file (`bdpm render SCENE.xml`, docs/scene-format.md "Import from Mitsuba 3"), Mitsuba the
+file itself, at --resolution (the film's width and height set in a copy, OUT/mitsuba.xml, whose
+mesh files Mitsuba finds beside the original) with a `box` pixel filter in place of the file's
+(bdpm's pixels are boxes; the import warns about any other filter) and the integrator chosen
+here, so that the check measures the import, not the filter or the depth limit.
+
 Usage:
-  scripts/mitsuba-check.py SCENE.toml [--integrator ptracer|path] [--spp N] [--runs K]
+  scripts/mitsuba-check.py SCENE.toml|SCENE.xml [--integrator ptracer|path] [--spp N] [--runs K]
       [--mode M] [--resolution 128] [--passes 16] [--bdpm-spp 4] [--photons N] [--seed 1]
       [--out DIR] [--bdpm BIN] [--threads 2] [--variant llvm_ad_rgb]
 
@@ -80,10 +87,34 @@ def write_exr(path, mean, se):
         f.write(path)
 
 
-def render_mitsuba(mi, xml, integrator, spp, runs):
-    """`runs` independent Mitsuba renders of the exported scene: (runs, H, W, 3), the scene
-    and seconds."""
-    scene = mi.load_file(xml, spp=spp)
+def film_copy(xml, out, res):
+    """A copy of Mitsuba scene `xml` in `out` whose film is res[0] x res[1] pixels with a box
+    filter; Mitsuba looks for its files in the original's directory. Returns its path."""
+    import xml.etree.ElementTree as ET
+    tree = ET.parse(xml)
+    films = tree.getroot().findall("./sensor/film")
+    if not films:
+        fail(f"{xml}: no <sensor><film> to render at {res[0]}x{res[1]}")
+    for film in films:
+        for name, value in (("width", res[0]), ("height", res[1])):
+            el = film.find(f"./integer[@name='{name}']")
+            if el is None:
+                el = ET.SubElement(film, "integer", {"name": name})
+            el.set("value", str(value))
+        for f in film.findall("./rfilter"):
+            film.remove(f)
+        ET.SubElement(film, "rfilter", {"type": "box"})
+    path = os.path.join(out, "mitsuba.xml")
+    tree.write(path)
+    return path
+
+
+def render_mitsuba(mi, xml, integrator, spp, runs, search=None):
+    """`runs` independent Mitsuba renders of the scene file `xml` (its files looked up in
+    `search` too): (runs, H, W, 3), the scene and seconds."""
+    if search:
+        mi.file_resolver().prepend(search)
+    scene = mi.load_file(xml)
     integ = {"type": integrator, "max_depth": -1}
     if integrator == "ptracer":
         integ["samples_per_pass"] = spp
@@ -120,16 +151,21 @@ def main():
     out = args.out or os.path.join("out", "mitsuba-check", name)
     os.makedirs(out, exist_ok=True)
     res = (args.resolution, args.resolution)
-    export = os.path.join(out, "export")
-    run([args.bdpm, "export", args.scene, "--to", "mitsuba", "-o", export, "--resolution",
-         f"{res[0]}x{res[1]}", "--quiet"])
-    with open(os.path.join(export, "export.json")) as f:
-        report = json.load(f)
-    for w in report["warnings"]:
-        print(f"export warning: {w}")
+    if args.scene.endswith(".xml"):
+        # Mitsuba's own file: no export; bdpm reads it through its import.
+        report = {"warnings": [], "imported": args.scene}
+        xml, search = film_copy(args.scene, out, res), os.path.dirname(os.path.abspath(args.scene))
+    else:
+        export = os.path.join(out, "export")
+        run([args.bdpm, "export", args.scene, "--to", "mitsuba", "-o", export, "--resolution",
+             f"{res[0]}x{res[1]}", "--quiet"])
+        with open(os.path.join(export, "export.json")) as f:
+            report = json.load(f)
+        for w in report["warnings"]:
+            print(f"export warning: {w}")
+        xml, search = os.path.join(export, "scene.xml"), None
     mi, dr = ms.setup_mitsuba(args)
-    runs, msc, t_m = render_mitsuba(mi, os.path.join(export, "scene.xml"), args.integrator,
-                                    args.spp, args.runs)
+    runs, msc, t_m = render_mitsuba(mi, xml, args.integrator, args.spp, args.runs, search)
     mask = (ms.delta_mask(mi, dr, msc, res) if args.integrator == "ptracer"
             else np.ones(res[::-1], dtype=bool))
     # bdpm_render reads these names from its args.

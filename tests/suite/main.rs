@@ -13,6 +13,7 @@ mod furnace;
 mod gltf_glass;
 mod light_leak;
 mod mesh_files;
+mod mitsuba_import;
 mod mitsuba_round_trip;
 mod new_scenes;
 mod noise_model;

@@ -83,6 +83,24 @@ impl Materials {
         material.two_sided_emission = two_sided;
     }
 
+    /// Adds a copy of material `m` (with its texture) that emits radiance `emission`
+    /// (W·m⁻²·sr⁻¹ per channel) from the front side of its triangles; returns its index.
+    pub(crate) fn add_emitting_copy(&mut self, m: u32, emission: Vec3) -> u32 {
+        let original = &self.list[m as usize];
+        let copy = original.clone().with_emission(emission, false);
+        let copy = Material {
+            name: format!("{} (emitting)", original.name),
+            ..copy
+        };
+        self.list.push(copy);
+        let index = self.list.len() as u32 - 1;
+        if let Some(Some(t)) = self.textures.get(m as usize) {
+            let t = Arc::clone(t);
+            self.set_texture(index, t);
+        }
+        index
+    }
+
     /// Gives material `m` a base-colour texture.
     pub(crate) fn set_texture(&mut self, m: u32, texture: Arc<Texture>) {
         let m = m as usize;

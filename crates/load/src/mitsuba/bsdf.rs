@@ -9,7 +9,7 @@ use bdpm_bdf::{Bdf, Dielectric, Material, Mirror};
 use glam::DVec3;
 use roxmltree::Node;
 
-use super::doc::{Props, Xml, elements};
+use super::doc::{Props, Xml, elements, property};
 use crate::LoadError;
 use crate::limits::{DELTA_MAX_DEGREES, DELTA_MIN_DEGREES};
 use crate::material_types::IOR_RANGE;
@@ -217,20 +217,15 @@ impl Reader<'_, '_> {
 
     /// An index of refraction: a number or one of Mitsuba's names.
     fn ior(&mut self, p: &Props<'_, '_>, name: &str, default: f64) -> Result<f64, LoadError> {
-        let Some(n) = p.get(name) else {
-            return Ok(default);
-        };
         let x = self.x;
-        match n.tag_name().name() {
-            "float" | "integer" => x
-                .number(n, "value")?
-                .ok_or_else(|| x.err(n, "missing attribute value")),
+        property(p, name, default, |n| match n.tag_name().name() {
+            "float" | "integer" => x.scalar(n),
             "string" => {
                 let s = x.need(n, "value")?;
                 IOR_NAMES.iter().find(|(k, _)| k.eq_ignore_ascii_case(s.trim())).map(|&(_, v)| v).ok_or_else(|| x.err(n, format!("\"{s}\" is not one of Mitsuba's named indices of refraction; give a number")))
             }
             other => Err(x.err(n, format!("expected <float> or <string>, found <{other}>"))),
-        }
+        })
     }
 
     /// `conductor`: a perfect mirror of `specular_reflectance`, with the conductor's Fresnel

@@ -208,7 +208,26 @@ impl<'a, 'i> Props<'a, 'i> {
     }
 }
 
+/// Property `name` of `p` as `read` makes it of its element, or `default` when absent.
+pub(crate) fn property<T>(
+    p: &Props<'_, '_>,
+    name: &str,
+    default: T,
+    read: impl FnOnce(Node<'_, '_>) -> Result<T, LoadError>,
+) -> Result<T, LoadError> {
+    match p.get(name) {
+        Some(n) => read(n),
+        None => Ok(default),
+    }
+}
+
 impl Xml<'_> {
+    /// The one number of a `<float>` or `<integer>` element `n` (its `value`).
+    pub(crate) fn scalar(&self, n: Node<'_, '_>) -> Result<f64, LoadError> {
+        self.number(n, "value")?
+            .ok_or_else(|| self.err(n, "missing attribute value"))
+    }
+
     /// A float property, or `default` when absent.
     pub(crate) fn float(
         &self,
@@ -216,15 +235,10 @@ impl Xml<'_> {
         name: &str,
         default: f64,
     ) -> Result<f64, LoadError> {
-        match p.get(name) {
-            Some(n) => match n.tag_name().name() {
-                "float" | "integer" => self
-                    .number(n, "value")?
-                    .ok_or_else(|| self.err(n, "missing attribute value")),
-                other => Err(self.err(n, format!("expected <float>, found <{other}>"))),
-            },
-            None => Ok(default),
-        }
+        property(p, name, default, |n| match n.tag_name().name() {
+            "float" | "integer" => self.scalar(n),
+            other => Err(self.err(n, format!("expected <float>, found <{other}>"))),
+        })
     }
 
     /// A string property, or `None` when absent.
@@ -243,13 +257,12 @@ impl Xml<'_> {
         name: &str,
         default: bool,
     ) -> Result<bool, LoadError> {
-        let Some(n) = p.get(name) else {
-            return Ok(default);
-        };
-        match self.need(n, "value")?.as_str() {
-            "true" => Ok(true),
-            "false" => Ok(false),
-            other => Err(self.err(n, format!("value \"{other}\" is not true or false"))),
-        }
+        property(p, name, default, |n| {
+            match self.need(n, "value")?.as_str() {
+                "true" => Ok(true),
+                "false" => Ok(false),
+                other => Err(self.err(n, format!("value \"{other}\" is not true or false"))),
+            }
+        })
     }
 }

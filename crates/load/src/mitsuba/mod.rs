@@ -5,7 +5,7 @@
 //!
 //! What maps: `<default>` and `$name`, `<path>`, `<include>`; shapes `obj`, `ply`,
 //! `rectangle`, `cube`, `sphere`, `disk`, `shapegroup`/`instance`; transforms; BSDFs
-//! (see `bsdf`); `point` emitters; a `perspective` sensor with its film size. Everything else
+//! (see `bsdf`); `point` emitters and `area` emitters nested in shapes; a `perspective` sensor with its film size. Everything else
 //! is refused with a one-line error, or ignored with a warning where it changes nothing bdpm
 //! renders (the integrator, the sampler, the film's filter).
 
@@ -41,6 +41,8 @@ pub(crate) struct State {
     groups: HashMap<String, TriangleMesh>,
     materials: Materials,
     default_material: Option<u32>,
+    /// Emitting copies of materials by (material, radiance bits).
+    emitting: HashMap<(u32, [u32; 3]), u32>,
     lights: Vec<PointLight>,
     shapes: Shapes,
     budget: Budget,
@@ -63,6 +65,7 @@ pub(crate) fn load(
         groups: HashMap::new(),
         materials: Materials::with_capacity(8),
         default_material: None,
+        emitting: HashMap::new(),
         lights: Vec::new(),
         shapes: Shapes::default(),
         budget: Budget::new(options.memory_limit.clone()),
@@ -221,15 +224,43 @@ impl State {
         Ok((self.materials.add_delta(name.to_string(), model), bsdf))
     }
 
-    /// The material of a shape: its nested `<bsdf>` or `<ref id=…>`, else Mitsuba's default
-    /// (diffuse of reflectance 0.5).
-    fn shape_material(&mut self, x: &Xml<'_>, node: Node<'_, '_>) -> Result<u32, LoadError> {
+    /// The material of a shape ([`Self::bsdf_of_shape`]); with `emission` (the radiance of
+    /// the shape's area emitter, W·m⁻²·sr⁻¹ per channel) a copy of it that emits from the
+    /// front side, as Mitsuba's area emitter does whatever the BSDF (`twosided` included),
+    /// one copy per material and radiance; a shape's own nested BSDF is given the emission
+    /// in place.
+    fn shape_material(
+        &mut self,
+        x: &Xml<'_>,
+        node: Node<'_, '_>,
+        emission: Option<glam::Vec3>,
+    ) -> Result<u32, LoadError> {
+        let (m, own) = self.bsdf_of_shape(x, node)?;
+        let Some(le) = emission else {
+            return Ok(m);
+        };
+        if own {
+            self.materials.set_emission(m, le, false);
+            return Ok(m);
+        }
+        let key = (m, le.to_array().map(f32::to_bits));
+        if let Some(&copy) = self.emitting.get(&key) {
+            return Ok(copy);
+        }
+        let copy = self.materials.add_emitting_copy(m, le);
+        self.emitting.insert(key, copy);
+        Ok(copy)
+    }
+
+    /// The material of a shape: its nested `<bsdf>` (then `true`: the shape's own) or
+    /// `<ref id=…>`, else Mitsuba's default (diffuse of reflectance 0.5).
+    fn bsdf_of_shape(&mut self, x: &Xml<'_>, node: Node<'_, '_>) -> Result<(u32, bool), LoadError> {
         let Some(b) = elements(node).find(|c| {
             c.tag_name().name() == "bsdf"
                 || (c.tag_name().name() == "ref" && c.attribute("name").is_none_or(|n| n == "bsdf"))
         }) else {
             if let Some(m) = self.default_material {
-                return Ok(m);
+                return Ok((m, false));
             }
             let model = bsdf::material(
                 x,
@@ -244,17 +275,17 @@ impl State {
                 .materials
                 .add_delta("mitsuba:default-diffuse".into(), model);
             self.default_material = Some(m);
-            return Ok(m);
+            return Ok((m, false));
         };
         if b.tag_name().name() == "ref" {
             let id = x.need(b, "id")?;
             return match self.named.get(&id) {
-                Some((index, _)) => Ok(*index),
+                Some((index, _)) => Ok((*index, false)),
                 None => Err(x.err(b, format!("no <bsdf id=\"{id}\"> before this reference"))),
             };
         }
         let name = format!("line {}", doc::line(b));
-        Ok(self.bsdf(x, b, &name)?.0)
+        Ok((self.bsdf(x, b, &name)?.0, true))
     }
 
     fn resolve(&self, dir: &Path, name: &str) -> PathBuf {
@@ -305,7 +336,7 @@ impl State {
         let scene = Scene::new(geometry, materials, self.lights, sensor.camera)
             .and_then(|s| s.with_textures(SceneTextures { base_colour, texcoords }))
             .map_err(|e| match e {
-                bdpm_scene::SceneError::NoLight if light_count == 0 => ctx.bad("emitter", "the scene has no point emitter; add <emitter type=\"point\"> (area emitters are not imported yet)"),
+                bdpm_scene::SceneError::NoLight if light_count == 0 => ctx.bad("emitter", "the scene has no light: add an <emitter type=\"point\">, or an <emitter type=\"area\"> with a positive radiance inside a <shape>"),
                 other => scene_error(&ctx, other, light_count),
             })?;
         Ok(LoadedScene {

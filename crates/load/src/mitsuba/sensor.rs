@@ -1,5 +1,5 @@
-//! The `<sensor>` (a pinhole camera and its film) and `<emitter>`s: point lights map,
-//! everything else is refused.
+//! The `<sensor>` (a pinhole camera and its film) and `<emitter>`s: point lights map, an area
+//! emitter gives its shape's radiance, everything else is refused.
 
 use bdpm_scene::{Camera, PointLight};
 use glam::{DMat4, DVec3, Vec3};
@@ -215,7 +215,7 @@ pub(crate) fn emitter(
     let kind = x.need(node, "type")?;
     match kind.as_str() {
         "point" => {}
-        "area" => return Err(refuse_area(x, node)),
+        "area" => return Err(x.err(node, "an area emitter must be nested in the <shape> that emits (Mitsuba takes its surface from there)")),
         other => return Err(x.err(node, format!("emitter type \"{other}\" is not supported: bdpm imports isotropic point lights only (use <emitter type=\"point\">)"))),
     }
     let p = Props::new(node);
@@ -225,16 +225,7 @@ pub(crate) fn emitter(
             .unwrap_or(DMat4::IDENTITY)
             .transform_point3(DVec3::ZERO),
     };
-    let named = Named::new();
-    let intensity = Reader {
-        x,
-        named: &named,
-        warnings,
-    }
-    .colour(&p, "intensity", DVec3::ONE)?;
-    if intensity.min_element() < 0.0 {
-        return Err(x.err(node, format!("intensity {intensity} is negative")));
-    }
+    let intensity = emitted(x, &p, "intensity", warnings)?;
     // In f64: bdpm's export writes Φ/(4π) with the digits that bring Φ back.
     let flux = (intensity * (4.0 * std::f64::consts::PI)).as_vec3();
     let position = position.as_vec3();
@@ -248,7 +239,43 @@ pub(crate) fn emitter(
     Ok(PointLight { position, flux })
 }
 
-/// The refusal of an area emitter.
-pub(crate) fn refuse_area(x: &Xml<'_>, node: Node<'_, '_>) -> LoadError {
-    x.err(node, "area emitters are not imported yet (issue 46): bdpm renders area lights from its own scene format (a material's `emission`, docs/scene-format.md) but reads only point lights from Mitsuba XML; write the scene in TOML or replace the emitter by <emitter type=\"point\"> lights")
+/// The radiance Le (W·m⁻²·sr⁻¹ per channel) of an `<emitter type="area">` nested in a
+/// shape: `radiance` as `<rgb>`, `<float>` or a `<spectrum>` (Mitsuba's default 1); a texture
+/// or a spectrum from a file is refused.
+pub(crate) fn area_radiance(
+    x: &Xml<'_>,
+    node: Node<'_, '_>,
+    warnings: &mut Vec<String>,
+) -> Result<DVec3, LoadError> {
+    let p = Props::new(node);
+    let radiance = emitted(x, &p, "radiance", warnings)?;
+    if !radiance.as_vec3().is_finite() {
+        return Err(x.err(
+            node,
+            format!("radiance {radiance} is beyond the single-precision range"),
+        ));
+    }
+    p.unread(x, "<emitter type=\"area\">", warnings);
+    Ok(radiance)
+}
+
+/// An emitter's colour property `name` (Mitsuba's default 1 in every channel), refused where
+/// negative.
+fn emitted(
+    x: &Xml<'_>,
+    p: &Props<'_, '_>,
+    name: &str,
+    warnings: &mut Vec<String>,
+) -> Result<DVec3, LoadError> {
+    let named = Named::new();
+    let c = Reader {
+        x,
+        named: &named,
+        warnings,
+    }
+    .colour(p, name, DVec3::ONE)?;
+    if c.min_element() < 0.0 {
+        return Err(x.err(p.node(), format!("{name} {c} is negative")));
+    }
+    Ok(c)
 }

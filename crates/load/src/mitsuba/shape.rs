@@ -1,6 +1,7 @@
 //! `<shape>`s as triangle meshes: `obj` and `ply` files through the loader's mesh reader,
 //! Mitsuba's built-in `rectangle`, `cube`, `sphere` and `disk` tessellated, `shapegroup`
-//! and `instance`; `flip_normals` and `face_normals`.
+//! and `instance`; `flip_normals` and `face_normals`; a nested `<emitter type="area">` makes
+//! the shape's material emit.
 
 use std::path::{Path, PathBuf};
 
@@ -27,19 +28,14 @@ pub(crate) fn shape(
     node: Node<'_, '_>,
 ) -> Result<Option<TriangleMesh>, LoadError> {
     let kind = x.need(node, "type")?;
-    if let Some(e) = elements(node).find(|c| c.tag_name().name() == "emitter") {
-        return Err(match x.attr(e, "type")?.as_deref() {
-            Some("area") => sensor::refuse_area(x, e),
-            _ => x.err(
-                e,
-                "an emitter attached to a shape is not supported: bdpm imports point lights only",
-            ),
-        });
-    }
+    let emission = attached_emitter(st, x, node, &kind)?;
     if kind == "shapegroup" {
         let id = x.need(node, "id")?;
         let mut group = TriangleMesh::default();
         for c in elements(node).filter(|c| c.tag_name().name() == "shape") {
+            if let Some(e) = emitter_of(c) {
+                return Err(x.err(e, "an emitter in a shapegroup is not supported: Mitsuba's instances cannot replicate emitters; attach it to a shape outside the group"));
+            }
             if let Some(m) = shape(st, x, dir, c)? {
                 append(&mut group, m);
             }
@@ -52,11 +48,11 @@ pub(crate) fn shape(
     let mut mesh = match kind.as_str() {
         "instance" => instance(st, x, node, to_world)?,
         "obj" | "ply" => {
-            let material = st.shape_material(x, node)?;
+            let material = st.shape_material(x, node, emission)?;
             file_mesh(st, x, dir, &p, &kind, to_world, material)?
         }
         "rectangle" | "cube" | "sphere" | "disk" => {
-            let material = st.shape_material(x, node)?;
+            let material = st.shape_material(x, node, emission)?;
             builtin(x, &p, &kind, to_world.unwrap_or(DMat4::IDENTITY), material, &mut st.builtin_triangles)?
         }
         "serialized" => return Err(x.err(node, "Mitsuba's serialized meshes are not supported: convert the mesh to PLY (e.g. load it in Mitsuba and write it with Mesh.write_ply)")),
@@ -71,6 +67,37 @@ pub(crate) fn shape(
     p.unread(x, &format!("<shape type=\"{kind}\">"), &mut st.warnings);
     check(x, node, &mesh)?;
     Ok(Some(mesh))
+}
+
+/// The `<emitter>` element nested in `node`, if any.
+fn emitter_of<'a, 'i>(node: Node<'a, 'i>) -> Option<Node<'a, 'i>> {
+    elements(node).find(|c| c.tag_name().name() == "emitter")
+}
+
+/// The radiance (W·m⁻²·sr⁻¹ per channel) of the area emitter nested in shape `node` of type
+/// `kind`, if it has one; another emitter type, or an emitter on a `shapegroup` or an
+/// `instance` (which Mitsuba refuses too), is an error.
+fn attached_emitter(
+    st: &mut State,
+    x: &Xml<'_>,
+    node: Node<'_, '_>,
+    kind: &str,
+) -> Result<Option<Vec3>, LoadError> {
+    let Some(e) = emitter_of(node) else {
+        return Ok(None);
+    };
+    if matches!(kind, "shapegroup" | "instance") {
+        return Err(x.err(e, format!("an emitter on a {kind} is not supported: Mitsuba's instances cannot replicate emitters; attach it to each shape")));
+    }
+    match x.attr(e, "type")?.as_deref() {
+        Some("area") => Ok(Some(
+            sensor::area_radiance(x, e, &mut st.warnings)?.as_vec3(),
+        )),
+        _ => Err(x.err(
+            e,
+            "only an area emitter can be attached to a shape (bdpm's emitting surfaces are Lambert emitters)",
+        )),
+    }
 }
 
 /// An `obj` or `ply` file, placed by `to_world`.
