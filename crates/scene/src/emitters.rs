@@ -29,7 +29,7 @@ use crate::{Material, PointLight, Scene, Shading};
 /// the triangle is small or far enough that area sampling's density, p(e)/A · d²/|cos θₑ|,
 /// varies little over it, and the trigonometry would cost more than it saves (measured:
 /// docs/method-notes.md, "Area lights: sampling").
-pub const SPHERICAL_MIN: f64 = 0.05;
+pub const SPHERICAL_MIN: f64 = 0.2;
 
 /// Solid angle (sr) above which a light sample goes back to area sampling: near 2π (a point
 /// almost on the emitter) the spherical triangle's angles approach π and its construction
@@ -60,13 +60,31 @@ impl Emitter {
 /// The emitting triangles of a scene and the distribution that light sampling picks them
 /// from (by flux luminance; a binary search, O(log n) per pick). Empty for a scene without
 /// emission, which then holds no per-triangle table.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub(crate) struct Emitters {
     pub(crate) list: Vec<Emitter>,
+    /// The solid angle (sr) from which on a light sample takes a triangle in solid angle
+    /// ([`SPHERICAL_MIN`] unless a measurement sets another, [`Scene::set_spherical_min`]).
+    spherical_min: f64,
+    /// Per emitter: its centroid and the largest distance from it to a vertex (m), for a
+    /// cheap bound on its solid angle.
+    spheres: Vec<(Vec3, f32)>,
     /// Cumulative flux luminance of `list`, normalised to end at 1.
     cdf: Vec<f32>,
     /// Per triangle: its index in `list`, or `u32::MAX`; empty without emitters.
     of_prim: Vec<u32>,
+}
+
+impl Default for Emitters {
+    fn default() -> Emitters {
+        Emitters {
+            list: Vec::new(),
+            spherical_min: SPHERICAL_MIN,
+            spheres: Vec::new(),
+            cdf: Vec::new(),
+            of_prim: Vec::new(),
+        }
+    }
 }
 
 impl Emitters {
@@ -99,7 +117,21 @@ impl Emitters {
             acc += f;
             cdf.push((acc / total) as f32);
         }
-        Emitters { list, cdf, of_prim }
+        let spheres = list
+            .iter()
+            .map(|e| {
+                let v = geometry.vertices(e.prim);
+                let c = (v[0] + v[1] + v[2]) / 3.0;
+                (c, v.iter().map(|x| x.distance(c)).fold(0.0, f32::max))
+            })
+            .collect();
+        Emitters {
+            list,
+            spherical_min: SPHERICAL_MIN,
+            spheres,
+            cdf,
+            of_prim,
+        }
     }
 
     /// Picks an emitter by flux luminance for `u` in [0, 1): (index, probability).
@@ -201,21 +233,44 @@ impl Scene {
         if d2 <= 0.0 || cos == 0.0 || (!e.two_sided && cos < 0.0) {
             return 0.0;
         }
-        let pick = self.emitters.probability(self.emitters.of_prim[prim as usize] as usize);
-        match self.spherical_solid_angle(prim, from) {
+        let i = self.emitters.of_prim[prim as usize] as usize;
+        let pick = self.emitters.probability(i);
+        match self.spherical_solid_angle(i, from) {
             Some(omega) => (pick as f64 / omega) as f32,
             None => pick / e.area * d2 / cos.abs(),
         }
     }
 
-    /// The solid angle (sr) of triangle `prim` seen from `from` where a light sample there
-    /// takes it in solid angle ([`SPHERICAL_MIN`] to [`SPHERICAL_MAX`]), else `None`: the one
-    /// rule that sampling and [`Self::emitter_pdf`] share.
-    fn spherical_solid_angle(&self, prim: u32, from: Vec3) -> Option<f64> {
-        let omega = spherical::solid_angle(from, self.geometry.vertices(prim));
-        (SPHERICAL_MIN..=SPHERICAL_MAX)
+    /// The solid angle (sr) of emitter `i` seen from `from` where a light sample there takes
+    /// it in solid angle ([`SPHERICAL_MIN`] to [`SPHERICAL_MAX`]), else `None`: the one rule
+    /// that sampling and [`Self::emitter_pdf`] share.
+    fn spherical_solid_angle(&self, i: usize, from: Vec3) -> Option<f64> {
+        let e = &self.emitters.list[i];
+        let (centre, radius) = self.emitters.spheres[i];
+        // Ω = ∫ h/d³ dA ≤ A·h/d_min³, with h the distance to the triangle's plane and d_min ≥
+        // max(h, |from − centre| − radius): most emitters are far below the threshold, and
+        // this spares them the exact Ω (three normalisations and an atan2 in f64).
+        let to = from - centre;
+        let h = self.geometry.normal(e.prim).dot(to).abs();
+        let d_min = h.max(to.length() - radius);
+        if d_min > 0.0
+            && (e.area as f64 * h as f64) < self.emitters.spherical_min * (d_min as f64).powi(3)
+        {
+            return None;
+        }
+        let omega = spherical::solid_angle(from, self.geometry.vertices(e.prim));
+        (self.emitters.spherical_min..=SPHERICAL_MAX)
             .contains(&omega)
             .then_some(omega)
+    }
+
+    /// Sets the solid angle (sr) from which on light samples take an emitting triangle in
+    /// solid angle (default [`SPHERICAL_MIN`]; `f64::INFINITY`: area sampling everywhere, 0:
+    /// solid angle wherever it is below [`SPHERICAL_MAX`]). Sampling and [`Self::emitter_pdf`]
+    /// follow it together, so every value gives an unbiased image; it is there to measure the
+    /// rule (tests/suite/area_lights.rs, `spherical_sampling_threshold`).
+    pub fn set_spherical_min(&mut self, sr: f64) {
+        self.emitters.spherical_min = sr;
     }
 
     /// A point on an emitter for the direct light at `from`: the emitter picked by flux with
@@ -236,7 +291,7 @@ impl Scene {
         let v = self.geometry.vertices(e.prim);
         let n = self.geometry.normal(e.prim);
         let at = |b1: f32, b2: f32| v[0] * (1.0 - b1 - b2) + v[1] * b1 + v[2] * b2;
-        if let Some(omega) = self.spherical_solid_angle(e.prim, from) {
+        if let Some(omega) = self.spherical_solid_angle(i, from) {
             let (b1, b2, _) = spherical::sample(from, v, u_point)?;
             return Some(EmitterSample {
                 p: at(b1, b2),
@@ -504,14 +559,20 @@ mod tests {
             let from = Vec3::new(0.0, (1.0 - h) as f32, 0.0);
             let lamp_prim = s.emitters()[0].prim;
             let omega = spherical::solid_angle(from, s.geometry.vertices(lamp_prim));
-            assert_eq!(s.spherical_solid_angle(lamp_prim, from).is_some(), spherical);
+            assert_eq!(s.spherical_solid_angle(0, from).is_some(), spherical);
             let exact =
                 4.0 * (a * b / ((a * a + 4.0 * h * h) * (b * b + 4.0 * h * h)).sqrt()).asin();
             let mut rng = Rng::new(3, Domain::Other, [0; 3]);
             let (mean, se) = mean_se(200_000, || {
-                let e = s.sample_emitter(from, rng.uniform(), rng.uniform2()).unwrap();
+                let e = s
+                    .sample_emitter(from, rng.uniform(), rng.uniform2())
+                    .unwrap();
                 let own = s.emitter_pdf(from, e.prim, e.p);
-                assert!((own - e.pdf).abs() <= 1e-5 * e.pdf, "{own} against {}", e.pdf);
+                assert!(
+                    (own - e.pdf).abs() <= 1e-5 * e.pdf,
+                    "{own} against {}",
+                    e.pdf
+                );
                 let lamp = s.geometry.material(e.prim) == 1;
                 if lamp { 1.0 / e.pdf as f64 } else { 0.0 }
             });
@@ -519,7 +580,10 @@ mod tests {
                 (mean - exact).abs() < 4.0 * se + 1e-5 * exact,
                 "h = {h} (triangle's Ω {omega}): {mean} ± {se} against {exact}"
             );
-            assert!(se < 0.02 * exact, "the test could not fail: {se} against {exact}");
+            assert!(
+                se < 0.02 * exact,
+                "the test could not fail: {se} against {exact}"
+            );
         }
     }
 
@@ -534,11 +598,14 @@ mod tests {
             (0.1, Vec3::new(0.15, 0.0, 0.05), true),
         ] {
             let s = scene_with_lamp_at(0.0, h);
-            let hit = s.geometry.intersect(p + Vec3::Y * 0.01, -Vec3::Y, 2.0).unwrap();
+            let hit = s
+                .geometry
+                .intersect(p + Vec3::Y * 0.01, -Vec3::Y, 2.0)
+                .unwrap();
             let wo = Vec3::new(0.0, 1.0, -1.0).normalize();
             let sh = s.shade(&hit, wo);
-            for e in &s.emitters()[..2] {
-                assert_eq!(s.spherical_solid_angle(e.prim, sh.p).is_some(), spherical);
+            for i in 0..2 {
+                assert_eq!(s.spherical_solid_angle(i, sh.p).is_some(), spherical);
             }
             let quad = |c: Vec3, u: Vec3, v: Vec3, le: f64| {
                 let k = 400;

@@ -174,7 +174,11 @@ mod tests {
     fn solid_angle_of_a_rectangle_is_the_closed_form() {
         // A rectangle a × b at height h above its centre: Ω = 4·asin(ab/√((a² + 4h²)(b² +
         // 4h²))), as the sum of its two triangles.
-        for (a, b, h) in [(0.4f32, 0.2f32, 1.0f32), (2.0, 1.0, 0.01), (1e-3, 2e-3, 5.0)] {
+        for (a, b, h) in [
+            (0.4f32, 0.2f32, 1.0f32),
+            (2.0, 1.0, 0.01),
+            (1e-3, 2e-3, 5.0),
+        ] {
             let (x, z) = (a / 2.0, b / 2.0);
             let c = [
                 Vec3::new(-x, h, -z),
@@ -185,7 +189,8 @@ mod tests {
             let omega = solid_angle(Vec3::ZERO, [c[0], c[1], c[2]])
                 + solid_angle(Vec3::ZERO, [c[0], c[2], c[3]]);
             let (a, b, h) = (a as f64, b as f64, h as f64);
-            let exact = 4.0 * (a * b / ((a * a + 4.0 * h * h) * (b * b + 4.0 * h * h)).sqrt()).asin();
+            let exact =
+                4.0 * (a * b / ((a * a + 4.0 * h * h) * (b * b + 4.0 * h * h)).sqrt()).asin();
             assert!(
                 (omega - exact).abs() < 1e-5 * exact,
                 "{omega} against {exact}"
@@ -238,7 +243,10 @@ mod tests {
         let (b1, b2, _) = sample(p, v, [0.5, 1.0]).unwrap();
         let c_half = v[0] * (1.0 - b1 - b2) + v[1] * b1 + v[2] * b2;
         let half = solid_angle(p, [v[0], v[1], c_half]);
-        assert!((half - omega / 2.0).abs() < 1e-4 * omega, "{half} of {omega}");
+        assert!(
+            (half - omega / 2.0).abs() < 1e-4 * omega,
+            "{half} of {omega}"
+        );
         // Central projection maps great arcs to segments: the spherical sub-triangle is the
         // planar triangle (v0, v1, c_half).
         let n = (v[1] - v[0]).cross(v[2] - v[0]);
