@@ -457,21 +457,10 @@ pub fn cosine_hemisphere(u: [f32; 2]) -> Vec3 {
 mod tests {
     use super::*;
     use crate::Camera;
+    use crate::test_stats::mean_se;
     use bdpm_bdf::Bdf;
     use bdpm_core::{Domain, Rng};
     use bdpm_geometry::TriangleMesh;
-
-    /// Mean and standard error of `n` values of `f`.
-    fn mean_se(n: usize, mut f: impl FnMut() -> f64) -> (f64, f64) {
-        let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-        for _ in 0..n {
-            let x = f();
-            sum += x;
-            sum2 += x * x;
-        }
-        let mean = sum / n as f64;
-        (mean, ((sum2 / n as f64 - mean * mean) / n as f64).sqrt())
-    }
 
     /// A floor (material 0, Lambert 0.5, 4 m × 4 m at y = 0 facing +y) under two emitters
     /// facing down: material 1 (a × b = 0.4 m × 0.2 m at height 1, Le = (1, 2, 3)) and

@@ -29,6 +29,8 @@ mod camera;
 mod delta;
 mod emitters;
 pub mod spherical;
+#[cfg(test)]
+mod test_stats;
 mod texture;
 mod traits;
 mod vertex;

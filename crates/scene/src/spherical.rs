@@ -111,19 +111,8 @@ fn barycentrics(p: DVec3, v: [DVec3; 3], w: DVec3) -> Option<(f64, f64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_stats::mean_se;
     use bdpm_core::{Domain, Rng};
-
-    /// Mean and standard error of `n` values of `f`.
-    fn mean_se(n: usize, mut f: impl FnMut() -> f64) -> (f64, f64) {
-        let (mut sum, mut sum2) = (0.0, 0.0);
-        for _ in 0..n {
-            let x = f();
-            sum += x;
-            sum2 += x * x;
-        }
-        let mean = sum / n as f64;
-        (mean, ((sum2 / n as f64 - mean * mean) / n as f64).sqrt())
-    }
 
     /// ∫ g(ω) dω over the triangle's solid angle by a midpoint quadrature in area measure
     /// (g·cos θₑ/d² dA), independent of the formulas under test.
