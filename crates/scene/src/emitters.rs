@@ -6,11 +6,13 @@
 //! that hits an emitter needs for its MIS weight, and photon emission from them
 //! ([`Scene::emit_from_emitter`]).
 //!
-//! A point is sampled uniformly by area on a triangle chosen in proportion to its emitted
-//! power. Spherical-triangle (solid-angle) sampling would have less variance close to a
-//! large emitter; it is left for later because it costs trigonometry per sample and its
-//! density is needed again for every BDF hit, while area sampling is exact for the small
-//! emitters the scenes have and its density is one division.
+//! A triangle is chosen in proportion to its emitted power, then a point on it: uniform in
+//! the solid angle it covers from the shading point (spherical-triangle sampling,
+//! [`crate::spherical`]) where that solid angle is at least [`SPHERICAL_MIN`] sr, uniform by
+//! area otherwise. Which of the two is a function of the shading point and the triangle
+//! alone, so a BDF sample that hits the emitter from the same point gets the same density for
+//! its MIS weight ([`Scene::emitter_pdf`]). Why that threshold: docs/method-notes.md, "Area
+//! lights: sampling".
 
 use std::f32::consts::PI;
 
@@ -19,7 +21,20 @@ use bdpm_core::sampling::uniform_triangle;
 use bdpm_geometry::{Frame, Geometry};
 use glam::Vec3;
 
+use crate::spherical;
 use crate::{Material, PointLight, Scene, Shading};
+
+/// Solid angle (sr) of an emitting triangle, seen from a shading point, from which on a
+/// light sample there takes its point uniform in solid angle rather than by area. Below it
+/// the triangle is small or far enough that area sampling's density, p(e)/A · d²/|cos θₑ|,
+/// varies little over it, and the trigonometry would cost more than it saves (measured:
+/// docs/method-notes.md, "Area lights: sampling").
+pub const SPHERICAL_MIN: f64 = 0.2;
+
+/// Solid angle (sr) above which a light sample goes back to area sampling: near 2π (a point
+/// almost on the emitter) the spherical triangle's angles approach π and its construction
+/// divides by their vanishing sines (pbrt-v4 stops at the same value).
+pub const SPHERICAL_MAX: f64 = 6.22;
 
 /// One emitting triangle.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -45,13 +60,31 @@ impl Emitter {
 /// The emitting triangles of a scene and the distribution that light sampling picks them
 /// from (by flux luminance; a binary search, O(log n) per pick). Empty for a scene without
 /// emission, which then holds no per-triangle table.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub(crate) struct Emitters {
     pub(crate) list: Vec<Emitter>,
+    /// The solid angle (sr) from which on a light sample takes a triangle in solid angle
+    /// ([`SPHERICAL_MIN`] unless a measurement sets another, [`Scene::set_spherical_min`]).
+    spherical_min: f64,
+    /// Per emitter: its centroid and the largest distance from it to a vertex (m), for a
+    /// cheap bound on its solid angle.
+    spheres: Vec<(Vec3, f32)>,
     /// Cumulative flux luminance of `list`, normalised to end at 1.
     cdf: Vec<f32>,
     /// Per triangle: its index in `list`, or `u32::MAX`; empty without emitters.
     of_prim: Vec<u32>,
+}
+
+impl Default for Emitters {
+    fn default() -> Emitters {
+        Emitters {
+            list: Vec::new(),
+            spherical_min: SPHERICAL_MIN,
+            spheres: Vec::new(),
+            cdf: Vec::new(),
+            of_prim: Vec::new(),
+        }
+    }
 }
 
 impl Emitters {
@@ -84,7 +117,21 @@ impl Emitters {
             acc += f;
             cdf.push((acc / total) as f32);
         }
-        Emitters { list, cdf, of_prim }
+        let spheres = list
+            .iter()
+            .map(|e| {
+                let v = geometry.vertices(e.prim);
+                let c = (v[0] + v[1] + v[2]) / 3.0;
+                (c, v.iter().map(|x| x.distance(c)).fold(0.0, f32::max))
+            })
+            .collect();
+        Emitters {
+            list,
+            spherical_min: SPHERICAL_MIN,
+            spheres,
+            cdf,
+            of_prim,
+        }
     }
 
     /// Picks an emitter by flux luminance for `u` in [0, 1): (index, probability).
@@ -117,8 +164,9 @@ pub struct EmitterSample {
     pub n: Vec3,
     /// The emitter's triangle.
     pub prim: u32,
-    /// Density of the point in area measure, the emitter's choice included, m⁻².
-    pub pdf_area: f32,
+    /// Density of the direction from the shading point to `p` in solid angle, the emitter's
+    /// choice included, sr⁻¹ (the same as [`Scene::emitter_pdf`] gives for it).
+    pub pdf: f32,
 }
 
 /// A photon leaving an emitter ([`Scene::emit_from_emitter`]).
@@ -172,35 +220,99 @@ impl Scene {
     /// Solid-angle density (sr⁻¹) with which [`Self::sample_emitter`] from `from` yields the
     /// point `p` of triangle `prim`: p(emitter)/A · d²/|cos θ_e|. 0 where `prim` emits
     /// nothing towards `from`.
+    /// yields the point `p` of triangle `prim`: p(emitter)/Ω where it samples that triangle in
+    /// solid angle from `from`, else p(emitter)/A · d²/|cos θₑ|. 0 where `prim` emits nothing
+    /// towards `from`.
     pub fn emitter_pdf(&self, from: Vec3, prim: u32, p: Vec3) -> f32 {
         let Some(e) = self.emitter_of(prim) else {
             return 0.0;
         };
-        let i = self.emitters.of_prim[prim as usize] as usize;
         let to = from - p;
         let d2 = to.length_squared();
         let cos = self.geometry.normal(prim).dot(to) / d2.sqrt();
         if d2 <= 0.0 || cos == 0.0 || (!e.two_sided && cos < 0.0) {
             return 0.0;
         }
-        self.emitters.probability(i) / e.area * d2 / cos.abs()
+        let i = self.emitters.of_prim[prim as usize] as usize;
+        let pick = self.emitters.probability(i);
+        match self.spherical_solid_angle(i, from) {
+            Some(omega) => (pick as f64 / omega) as f32,
+            None => pick / e.area * d2 / cos.abs(),
+        }
     }
 
-    /// A point on an emitter: the emitter picked by flux with `u_pick`, the point uniform on
-    /// its triangle by `u_point`. `None` without emitters.
-    pub fn sample_emitter(&self, u_pick: f32, u_point: [f32; 2]) -> Option<EmitterSample> {
+    /// The solid angle (sr) of emitter `i` seen from `from` where a light sample there takes
+    /// it in solid angle ([`SPHERICAL_MIN`] to [`SPHERICAL_MAX`]), else `None`: the one rule
+    /// that sampling and [`Self::emitter_pdf`] share.
+    fn spherical_solid_angle(&self, i: usize, from: Vec3) -> Option<f64> {
+        let e = &self.emitters.list[i];
+        let (centre, radius) = self.emitters.spheres[i];
+        // Ω = ∫ h/d³ dA ≤ A·h/d_min³, with h the distance to the triangle's plane and d_min ≥
+        // max(h, |from − centre| − radius): most emitters are far below the threshold, and
+        // this spares them the exact Ω (three normalisations and an atan2 in f64).
+        let to = from - centre;
+        let h = self.geometry.normal(e.prim).dot(to).abs();
+        let d_min = h.max(to.length() - radius);
+        if d_min > 0.0
+            && (e.area as f64 * h as f64) < self.emitters.spherical_min * (d_min as f64).powi(3)
+        {
+            return None;
+        }
+        let omega = spherical::solid_angle(from, self.geometry.vertices(e.prim));
+        (self.emitters.spherical_min..=SPHERICAL_MAX)
+            .contains(&omega)
+            .then_some(omega)
+    }
+
+    /// Sets the solid angle (sr) from which on light samples take an emitting triangle in
+    /// solid angle (default [`SPHERICAL_MIN`]; `f64::INFINITY`: area sampling everywhere, 0:
+    /// solid angle wherever it is below [`SPHERICAL_MAX`]). Sampling and [`Self::emitter_pdf`]
+    /// follow it together, so every value gives an unbiased image; it is there to measure the
+    /// rule (tests/suite/area_lights.rs, `spherical_sampling_threshold`).
+    pub fn set_spherical_min(&mut self, sr: f64) {
+        self.emitters.spherical_min = sr;
+    }
+
+    /// A point on an emitter for the direct light at `from`: the emitter picked by flux with
+    /// `u_pick`, the point uniform in the solid angle it covers from `from` or uniform by area
+    /// (the module's rule) with `u_point`. `None` without emitters or where the triangle has
+    /// no extent seen from `from`.
+    pub fn sample_emitter(
+        &self,
+        from: Vec3,
+        u_pick: f32,
+        u_point: [f32; 2],
+    ) -> Option<EmitterSample> {
         if !self.has_emission() {
             return None;
         }
-        let (i, p) = self.emitters.pick(u_pick);
+        let (i, pick) = self.emitters.pick(u_pick);
         let e = &self.emitters.list[i];
-        let [a, b, c] = self.geometry.vertices(e.prim);
+        let v = self.geometry.vertices(e.prim);
+        let n = self.geometry.normal(e.prim);
+        let at = |b1: f32, b2: f32| v[0] * (1.0 - b1 - b2) + v[1] * b1 + v[2] * b2;
+        if let Some(omega) = self.spherical_solid_angle(i, from) {
+            let (b1, b2, _) = spherical::sample(from, v, u_point)?;
+            return Some(EmitterSample {
+                p: at(b1, b2),
+                n,
+                prim: e.prim,
+                pdf: (pick as f64 / omega) as f32,
+            });
+        }
         let (b1, b2) = uniform_triangle(u_point);
+        let p = at(b1, b2);
+        let to = from - p;
+        let d2 = to.length_squared();
+        let cos = n.dot(to) / d2.sqrt();
+        if d2 <= 0.0 || cos == 0.0 {
+            return None;
+        }
         Some(EmitterSample {
-            p: a * (1.0 - b1 - b2) + b * b1 + c * b2,
-            n: self.geometry.normal(e.prim),
+            p,
+            n,
             prim: e.prim,
-            pdf_area: p / e.area,
+            pdf: pick / e.area * d2 / cos.abs(),
         })
     }
 
@@ -223,7 +335,7 @@ impl Scene {
         u: [f32; 3],
         mis: bool,
     ) -> Option<(Vec3, Vec3)> {
-        let s = self.sample_emitter(u[0], [u[1], u[2]])?;
+        let s = self.sample_emitter(sh.p, u[0], [u[1], u[2]])?;
         let to = s.p - sh.p;
         let d2 = to.length_squared();
         if d2 <= 0.0 {
@@ -254,7 +366,7 @@ impl Scene {
         if !self.light_visible(sh, &at) {
             return None;
         }
-        let pdf = s.pdf_area * d2 / cos_e;
+        let pdf = s.pdf;
         let weight = if mis {
             let bdf = self.bdf_at(sh);
             power_heuristic(pdf, bdf.pdf(sh.frame.to_local(wo), sh.frame.to_local(wi)))
@@ -345,6 +457,7 @@ pub fn cosine_hemisphere(u: [f32; 2]) -> Vec3 {
 mod tests {
     use super::*;
     use crate::Camera;
+    use crate::test_stats::mean_se;
     use bdpm_bdf::Bdf;
     use bdpm_core::{Domain, Rng};
     use bdpm_geometry::TriangleMesh;
@@ -354,9 +467,14 @@ mod tests {
     /// material 2 (two-sided, 0.2 m × 0.2 m at x = 1, height 0.5, Le = 5), plus a point light
     /// of flux `point` unless it is zero.
     fn scene(point: f32) -> Scene {
+        scene_with_lamp_at(point, 1.0)
+    }
+
+    /// [`scene`] with the lamp at height `h` (m).
+    fn scene_with_lamp_at(point: f32, h: f32) -> Scene {
         let mut mesh = TriangleMesh::default();
         mesh.push_rect(Vec3::ZERO, Vec3::Z * 2.0, Vec3::X * 2.0, 0);
-        mesh.push_rect(Vec3::Y, Vec3::X * 0.2, Vec3::Z * 0.1, 1);
+        mesh.push_rect(Vec3::Y * h, Vec3::X * 0.2, Vec3::Z * 0.1, 1);
         mesh.push_rect(Vec3::new(1.0, 0.5, 0.0), Vec3::X * 0.1, Vec3::Z * 0.1, 2);
         let lambert = |k: f32| Bdf::lambert(Vec3::splat(k)).unwrap();
         let materials = vec![
@@ -419,85 +537,98 @@ mod tests {
 
     /// E[1/p_ω] over light samples is the solid angle the emitters cover from the shading
     /// point (counting each point an emitter lights once), here the lamp alone seen from
-    /// under its centre: Ω = 4·asin(ab/√((a² + 4h²)(b² + 4h²))). Also each sample's density
-    /// is the one `emitter_pdf` gives for its point.
+    /// under its centre: Ω = 4·asin(ab/√((a² + 4h²)(b² + 4h²))), at a height h below it where
+    /// its triangles are sampled by area (far) and where they are sampled in solid angle
+    /// (near). Also each sample's density is the one `emitter_pdf` gives for its point.
     #[test]
-    fn area_sampling_density_integrates_to_the_solid_angle() {
+    fn light_sampling_density_integrates_to_the_solid_angle() {
         let s = scene(0.0);
-        let from = Vec3::new(0.0, 0.0, 0.0);
-        let (a, b, h) = (0.4f64, 0.2, 1.0);
-        let exact = 4.0 * (a * b / ((a * a + 4.0 * h * h) * (b * b + 4.0 * h * h)).sqrt()).asin();
-        let mut rng = Rng::new(3, Domain::Other, [0; 3]);
-        let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-        let n = 200_000;
-        for _ in 0..n {
-            let e = s.sample_emitter(rng.uniform(), rng.uniform2()).unwrap();
-            let lamp = s.geometry.material(e.prim) == 1;
-            let to = e.p - from;
-            let d2 = to.length_squared();
-            let pdf = e.pdf_area * d2 / e.n.dot(to / d2.sqrt()).abs();
-            let own = s.emitter_pdf(from, e.prim, e.p);
-            assert!((own - pdf).abs() <= 1e-5 * pdf, "{own} against {pdf}");
-            let x = if lamp { 1.0 / pdf as f64 } else { 0.0 };
-            sum += x;
-            sum2 += x * x;
+        let (a, b) = (0.4f64, 0.2);
+        for (h, spherical) in [(1.0f64, false), (0.1, true)] {
+            let from = Vec3::new(0.0, (1.0 - h) as f32, 0.0);
+            let lamp_prim = s.emitters()[0].prim;
+            let omega = spherical::solid_angle(from, s.geometry.vertices(lamp_prim));
+            assert_eq!(s.spherical_solid_angle(0, from).is_some(), spherical);
+            let exact =
+                4.0 * (a * b / ((a * a + 4.0 * h * h) * (b * b + 4.0 * h * h)).sqrt()).asin();
+            let mut rng = Rng::new(3, Domain::Other, [0; 3]);
+            let (mean, se) = mean_se(200_000, || {
+                let e = s
+                    .sample_emitter(from, rng.uniform(), rng.uniform2())
+                    .unwrap();
+                let own = s.emitter_pdf(from, e.prim, e.p);
+                assert!(
+                    (own - e.pdf).abs() <= 1e-5 * e.pdf,
+                    "{own} against {}",
+                    e.pdf
+                );
+                let lamp = s.geometry.material(e.prim) == 1;
+                if lamp { 1.0 / e.pdf as f64 } else { 0.0 }
+            });
+            assert!(
+                (mean - exact).abs() < 4.0 * se + 1e-5 * exact,
+                "h = {h} (triangle's Ω {omega}): {mean} ± {se} against {exact}"
+            );
+            assert!(
+                se < 0.02 * exact,
+                "the test could not fail: {se} against {exact}"
+            );
         }
-        let mean = sum / n as f64;
-        let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
-        assert!(
-            (mean - exact).abs() < 4.0 * se,
-            "{mean} ± {se} against {exact}"
-        );
     }
 
     /// The direct light of the area lights at a floor point, by light sampling, against a
     /// midpoint quadrature of ∫ f·Le·cos θ·cos θₑ/d² dA over both emitters (400 × 400 cells
-    /// each; the panel's both sides, the floor sees its lower one).
+    /// each; the panel's both sides, the floor sees its lower one): with the lamp 1 m up,
+    /// whose triangles are sampled by area, and 0.1 m up, in solid angle.
     #[test]
     fn direct_area_light_matches_quadrature() {
-        let s = scene(0.0);
-        let p = Vec3::new(0.3, 0.0, 0.2);
-        let hit = s.geometry.intersect(p + Vec3::Y, -Vec3::Y, 2.0).unwrap();
-        let wo = Vec3::new(0.0, 1.0, -1.0).normalize();
-        let sh = s.shade(&hit, wo);
-        let quad = |c: Vec3, u: Vec3, v: Vec3, le: f64| {
-            let k = 400;
-            let area = (4.0 * u.length() * v.length()) as f64;
-            let mut sum = 0.0f64;
-            for i in 0..k {
-                for j in 0..k {
-                    let x = c
-                        + u * (2.0 * (i as f32 + 0.5) / k as f32 - 1.0)
-                        + v * (2.0 * (j as f32 + 0.5) / k as f32 - 1.0);
-                    let to = (x - sh.p).as_dvec3();
-                    let d2 = to.length_squared();
-                    let cos = to.y / d2.sqrt();
-                    sum += cos * cos / d2;
-                }
+        for (h, p, spherical) in [
+            (1.0f32, Vec3::new(0.3, 0.0, 0.2), false),
+            (0.1, Vec3::new(0.15, 0.0, 0.05), true),
+        ] {
+            let s = scene_with_lamp_at(0.0, h);
+            let hit = s
+                .geometry
+                .intersect(p + Vec3::Y * 0.01, -Vec3::Y, 2.0)
+                .unwrap();
+            let wo = Vec3::new(0.0, 1.0, -1.0).normalize();
+            let sh = s.shade(&hit, wo);
+            for i in 0..2 {
+                assert_eq!(s.spherical_solid_angle(i, sh.p).is_some(), spherical);
             }
-            0.5 / std::f64::consts::PI * le * sum * area / (k * k) as f64
-        };
-        let lamp = quad(Vec3::Y, Vec3::X * 0.2, Vec3::Z * 0.1, 1.0);
-        let panel = quad(Vec3::new(1.0, 0.5, 0.0), Vec3::X * 0.1, Vec3::Z * 0.1, 5.0);
-        let exact = lamp + panel;
-        let mut rng = Rng::new(5, Domain::Other, [0; 3]);
-        let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-        let n = 200_000;
-        for _ in 0..n {
-            let x = s.direct_area(&sh, wo, rng.uniform3(), false).x as f64;
-            sum += x;
-            sum2 += x * x;
+            let quad = |c: Vec3, u: Vec3, v: Vec3, le: f64| {
+                let k = 400;
+                let area = (4.0 * u.length() * v.length()) as f64;
+                let mut sum = 0.0f64;
+                for i in 0..k {
+                    for j in 0..k {
+                        let x = c
+                            + u * (2.0 * (i as f32 + 0.5) / k as f32 - 1.0)
+                            + v * (2.0 * (j as f32 + 0.5) / k as f32 - 1.0);
+                        let to = (x - sh.p).as_dvec3();
+                        let d2 = to.length_squared();
+                        let cos = to.y / d2.sqrt();
+                        sum += cos * cos / d2;
+                    }
+                }
+                0.5 / std::f64::consts::PI * le * sum * area / (k * k) as f64
+            };
+            let lamp = quad(Vec3::Y * h, Vec3::X * 0.2, Vec3::Z * 0.1, 1.0);
+            let panel = quad(Vec3::new(1.0, 0.5, 0.0), Vec3::X * 0.1, Vec3::Z * 0.1, 5.0);
+            let exact = lamp + panel;
+            let mut rng = Rng::new(5, Domain::Other, [0; 3]);
+            let (mean, se) = mean_se(200_000, || {
+                s.direct_area(&sh, wo, rng.uniform3(), false).x as f64
+            });
+            assert!(
+                (mean - exact).abs() < 4.0 * se,
+                "h = {h}: {mean} ± {se} against {exact}"
+            );
+            assert!(
+                se < 0.01 * exact,
+                "the test could not fail: {se} against {exact}"
+            );
         }
-        let mean = sum / n as f64;
-        let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
-        assert!(
-            (mean - exact).abs() < 4.0 * se,
-            "{mean} ± {se} against {exact}"
-        );
-        assert!(
-            se < 0.01 * exact,
-            "the test could not fail: {se} against {exact}"
-        );
     }
 
     /// Photons leave the panel from both sides with cosine-distributed directions: E[cos θ]
