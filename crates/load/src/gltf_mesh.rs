@@ -734,23 +734,10 @@ fn add_primitive(
     let normals = read_normals(prim, buffers, world, positions.len(), &err)?;
     let texcoords = read_texcoords(prim, buffers, reads.base, positions.len(), &err)?;
     let emission_texcoords = read_texcoords(prim, buffers, reads.emissive, positions.len(), &err)?;
-    let indices = read_indices(prim, buffers, positions.len(), &err)?;
-    // Strips and fans become lists (glTF 2.0 §3.7.2.1): strip triangle i is
-    // (v[i], v[i+1+i%2], v[i+2-i%2]), which keeps every triangle's winding; fan triangle i is
-    // (v[i+1], v[i+2], v[0]). Degenerate triangles that stitch strips have zero area and are
-    // left out of the BVH like any other.
-    let indices: Vec<u32> = match prim.mode() {
-        Mode::TriangleStrip => (0..indices.len().saturating_sub(2))
-            .flat_map(|i| {
-                let odd = i % 2;
-                [indices[i], indices[i + 1 + odd], indices[i + 2 - odd]]
-            })
-            .collect(),
-        Mode::TriangleFan => (1..indices.len().saturating_sub(1))
-            .flat_map(|i| [indices[i], indices[i + 1], indices[0]])
-            .collect(),
-        _ => indices,
-    };
+    let indices = triangle_list(
+        prim.mode(),
+        read_indices(prim, buffers, positions.len(), &err)?,
+    );
     if !indices.len().is_multiple_of(3) {
         return Err(err(format!(
             "{} indices is not a multiple of 3",
@@ -808,6 +795,25 @@ fn add_primitive(
     }
     mesh.positions.extend_from_slice(&positions);
     Ok(())
+}
+
+/// A primitive's indices as a triangle list. Strips and fans become lists (glTF 2.0
+/// §3.7.2.1): strip triangle i is (v[i], v[i+1+i%2], v[i+2-i%2]), which keeps every
+/// triangle's winding; fan triangle i is (v[i+1], v[i+2], v[0]). Degenerate triangles that
+/// stitch strips have zero area and are left out of the BVH like any other.
+fn triangle_list(mode: Mode, indices: Vec<u32>) -> Vec<u32> {
+    match mode {
+        Mode::TriangleStrip => (0..indices.len().saturating_sub(2))
+            .flat_map(|i| {
+                let odd = i % 2;
+                [indices[i], indices[i + 1 + odd], indices[i + 2 - odd]]
+            })
+            .collect(),
+        Mode::TriangleFan => (1..indices.len().saturating_sub(1))
+            .flat_map(|i| [indices[i], indices[i + 1], indices[0]])
+            .collect(),
+        _ => indices,
+    }
 }
 
 /// The primitive's NORMAL attribute transformed by `world`'s inverse transpose and
