@@ -10,6 +10,7 @@ mod cornell;
 mod determinism;
 mod doc_claims;
 mod furnace;
+mod gltf_emission;
 mod gltf_glass;
 mod light_leak;
 mod mesh_files;

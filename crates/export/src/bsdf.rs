@@ -144,6 +144,21 @@ fn diffuse(
         return Ok((element.rgb("reflectance", kd), None));
     };
     let path = format!("textures/{}.exr", id(index));
+    let bitmap = bitmap(texture, "reflectance", &path, name, warnings);
+    let bytes = crate::image::exr(texture, kd)?;
+    Ok((element.child(bitmap), Some((path, bytes))))
+}
+
+/// A `bitmap` texture named `parameter` reading the EXR at `path` as bdpm samples `texture`:
+/// bilinear, raw (linear) values, the sampler's wrap mode (u's for both axes, with a warning
+/// naming material `name` where v's differs).
+pub(crate) fn bitmap(
+    texture: &Texture,
+    parameter: &str,
+    path: &str,
+    name: &str,
+    warnings: &mut Vec<String>,
+) -> Element {
     let wrap = |w: Wrap| match w {
         Wrap::Repeat => "repeat",
         Wrap::ClampToEdge => "clamp",
@@ -160,12 +175,10 @@ fn diffuse(
             wrap(wrap_u)
         ));
     }
-    let bitmap = Element::plugin("texture", "bitmap")
-        .attr("name", "reflectance")
-        .string("filename", &path)
+    Element::plugin("texture", "bitmap")
+        .attr("name", parameter)
+        .string("filename", path)
         .string("filter_type", "bilinear")
         .string("wrap_mode", wrap(wrap_u))
-        .boolean("raw", true);
-    let bytes = crate::image::exr(texture, kd)?;
-    Ok((element.child(bitmap), Some((path, bytes))))
+        .boolean("raw", true)
 }

@@ -308,7 +308,14 @@ fn add_shapes(
         }
         shape = shape.child(Element::new("ref").attr("id", bsdf::id(group.material)));
         if material.emits() {
-            shape = shape.child(area_emitter(material, report));
+            let (emitter, image) = area_emitter(scene, source, group, report)?;
+            shape = shape.child(emitter);
+            // Once per material, whatever its groups (smooth and flat triangles).
+            if let Some((path, bytes)) = image.filter(|(p, _)| !files.iter().any(|f| &f.path == p))
+            {
+                files.push(ExportFile { path, bytes });
+                report.textures += 1;
+            }
         }
         root = root.child(shape);
         let comment = format!("bdpm material '{}'", material.name);
@@ -323,11 +330,19 @@ fn add_shapes(
     Ok(root)
 }
 
-/// The `<emitter type="area">` of an emitting material's shape: Mitsuba's area emitter
-/// sends its radiance from the front side (the triangles' winding normals, which the PLY
-/// keeps), as bdpm's one-sided emission does; a two-sided emitter is exported one-sided with
-/// a warning.
-fn area_emitter(material: &bdpm_scene::Material, report: &mut ExportReport) -> Element {
+/// The `<emitter type="area">` of an emitting material's shape (`group`): Mitsuba's area
+/// emitter sends its radiance from the front side (the triangles' winding normals, which the
+/// PLY keeps), as bdpm's one-sided emission does; a two-sided emitter is exported one-sided
+/// with a warning. An emissive texture becomes the radiance's `bitmap` (`textures/matK-
+/// emission.exr`: bdpm's linear texels times the emission factor, returned to be written),
+/// read through the PLY's texture coordinates.
+fn area_emitter(
+    scene: &Scene,
+    source: &Path,
+    group: &mesh::Group,
+    report: &mut ExportReport,
+) -> Result<(Element, Option<bsdf::Image>), ExportError> {
+    let material = &scene.materials()[group.material as usize];
     if material.two_sided_emission {
         report.warnings.push(format!(
             "material '{}' emits from both sides; Mitsuba's area emitter emits from the front \
@@ -336,7 +351,32 @@ fn area_emitter(material: &bdpm_scene::Material, report: &mut ExportReport) -> E
         ));
     }
     report.emitters += 1;
-    Element::plugin("emitter", "area").rgb("radiance", material.emission)
+    let emitter = Element::plugin("emitter", "area");
+    let Some(texture) = scene.emission_texture(group.material) else {
+        return Ok((emitter.rgb("radiance", material.emission), None));
+    };
+    let path = format!("textures/{}-emission.exr", bsdf::id(group.material));
+    let bitmap = bsdf::bitmap(
+        texture,
+        "radiance",
+        &path,
+        &material.name,
+        &mut report.warnings,
+    );
+    let bytes = image::exr(texture, material.emission).map_err(|message| ExportError::Texture {
+        scene: source.to_path_buf(),
+        material: material.name.clone(),
+        message,
+    })?;
+    if scene.texture(group.material).is_some() {
+        report.warnings.push(format!(
+            "material '{}' has a base-colour and an emissive texture; the PLY carries one set \
+             of texture coordinates, the base colour's, which the emission is read through \
+             (exact where both textures use the same coordinates)",
+            material.name
+        ));
+    }
+    Ok((emitter.child(bitmap), Some((path, bytes))))
 }
 
 /// A material name as a short file-name part: ASCII letters, digits, `-` and `_` kept,

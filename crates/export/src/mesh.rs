@@ -12,7 +12,8 @@ pub(crate) struct Group {
     pub material: u32,
     /// Whether the triangles have vertex normals (smooth shading).
     pub smooth: bool,
-    /// Whether the triangles carry texture coordinates (their material is textured).
+    /// Whether the triangles carry texture coordinates (their material has a base-colour or
+    /// an emissive texture).
     pub textured: bool,
     /// Vertices of each triangle, metres, in the scene's frame.
     pub positions: Vec<[Vec3; 3]>,
@@ -43,7 +44,10 @@ pub(crate) fn groups(scene: &Scene) -> Vec<Group> {
         let material = geometry.material(prim);
         let normals = geometry.vertex_normals(prim);
         let smooth = normals.is_some();
-        let textured = scene.texture(material).is_some();
+        // Base colour's texture coordinates where the material has that texture, else those of
+        // its emissive texture (a PLY has one set; `area_emitter` warns where both differ).
+        let base_textured = scene.texture(material).is_some();
+        let textured = base_textured || scene.emission_texture(material).is_some();
         let at = match out
             .iter()
             .position(|g| g.material == material && g.smooth == smooth)
@@ -65,9 +69,12 @@ pub(crate) fn groups(scene: &Scene) -> Vec<Group> {
             group.normals.push(n);
         }
         if textured {
-            group
-                .texcoords
-                .push(scene.texcoords(prim).unwrap_or([Vec2::ZERO; 3]));
+            let uv = if base_textured {
+                scene.texcoords(prim)
+            } else {
+                scene.emission_texcoords(prim)
+            };
+            group.texcoords.push(uv.unwrap_or([Vec2::ZERO; 3]));
         }
     }
     out.sort_by_key(|g| (g.material, g.smooth));

@@ -168,7 +168,10 @@ fn every_scene_exports_and_its_xml_has_the_scenes_parts() {
         assert_eq!(area.len(), emitting_groups, "{name}");
         for e in &area {
             assert_eq!(e.kind(), Some("area"), "{name}");
-            assert!(e.value("rgb", "radiance").is_some(), "{name}");
+            let bitmap = e
+                .all("texture")
+                .any(|t| t.attr("name") == Some("radiance") && t.kind() == Some("bitmap"));
+            assert!(e.value("rgb", "radiance").is_some() || bitmap, "{name}");
         }
         assert_eq!(bsdfs.len(), materials.len(), "{name}");
         assert_eq!(shapes.len(), groups.len(), "{name}");
@@ -462,6 +465,64 @@ fn textures_are_bdpms_texels_times_kd() {
         first,
         [Vec2::ZERO; 3],
         "the box has real texture coordinates"
+    );
+}
+
+/// scenes/emissive-room.toml's sign: its area emitter's radiance is a bitmap of bdpm's
+/// linear texels times the emission factor, read through the PLY's texture coordinates (the
+/// emissive texture's: the sign has no base-colour texture).
+#[test]
+fn emissive_textures_are_bdpms_texels_times_the_emission_factor() {
+    let path = repo().join("scenes/emissive-room.toml");
+    let loaded = load_scene(&path).unwrap();
+    let scene = &loaded.scene;
+    let export = bdpm_export::mitsuba(scene, &loaded.settings, &path).unwrap();
+    assert_eq!(export.report.textures, 1);
+    let (index, texture) = (0..scene.materials().len() as u32)
+        .find_map(|m| scene.emission_texture(m).map(|t| (m, t)))
+        .expect("the sign's texture");
+    let exr_name = format!("textures/mat{index}-emission.exr");
+    let file = export.files.iter().find(|f| f.path == exr_name).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let exr_path = dir.path().join("t.exr");
+    std::fs::write(&exr_path, &file.bytes).unwrap();
+    let width = texture.size().0 as usize;
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        &exr_path,
+        |size, _| vec![Vec3::ZERO; size.0 * size.1],
+        move |px: &mut Vec<Vec3>, p, (r, g, b, _a): (f32, f32, f32, f32)| {
+            px[p.1 * width + p.0] = Vec3::new(r, g, b);
+        },
+    )
+    .unwrap();
+    let texels = &image.layer_data.channel_data.pixels;
+    let factor = scene.materials()[index as usize].emission;
+    let (w, h) = texture.size();
+    for y in 0..h {
+        for x in 0..w {
+            assert_eq!(texels[(y * w + x) as usize], texture.texel(x, y) * factor);
+        }
+    }
+    let root = parse(&export.files.last().unwrap().bytes);
+    let shape = root
+        .all("shape")
+        .find(|s| s.all("ref").next().unwrap().attr("id") == Some(&format!("mat{index}")))
+        .unwrap();
+    let emitter = shape.all("emitter").next().expect("an area emitter");
+    let bitmap = emitter.all("texture").next().expect("a radiance texture");
+    assert_eq!(
+        (bitmap.attr("name"), bitmap.value("string", "filename")),
+        (Some("radiance"), Some(exr_name.as_str()))
+    );
+    let ply = export
+        .files
+        .iter()
+        .find(|f| Some(f.path.as_str()) == shape.value("string", "filename"))
+        .unwrap();
+    let header = String::from_utf8_lossy(&ply.bytes[..300]);
+    assert!(
+        header.contains("property float u\nproperty float v\n"),
+        "{header}"
     );
 }
 

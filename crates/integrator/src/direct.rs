@@ -90,7 +90,7 @@ pub(crate) fn direct_through(
 /// estimators that call this weigh no BDF ray against it; docs/method-notes.md, "Area
 /// lights").
 pub(crate) fn emitted_and_area(scene: &Scene, sh: &Shading, wo: Vec3, u: [f32; 3]) -> Vec3 {
-    scene.emitted(sh.prim, wo) + scene.direct_area(sh, wo, u, false)
+    scene.emitted(sh.prim, sh.bary, wo) + scene.direct_area(sh, wo, u, false)
 }
 
 /// The four fixed points of a pixel where L₀ is probed (offsets in the pixel, [0, 1)²).

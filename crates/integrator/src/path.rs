@@ -107,8 +107,8 @@ pub(crate) fn emitted_along(
     wo: Vec3,
 ) -> Vec3 {
     match from {
-        None => scene.emitted(hit.prim, wo),
-        Some((p, pdf)) => scene.emitted_mis(p, pdf, hit.prim, hit.p),
+        None => scene.emitted(hit.prim, hit.uv, wo),
+        Some((p, pdf)) => scene.emitted_mis(p, pdf, hit.prim, hit.p, hit.uv),
     }
 }
 

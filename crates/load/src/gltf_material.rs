@@ -47,10 +47,9 @@ pub(crate) struct Factors {
     /// Whether it has a `transmissionTexture`.
     pub(crate) transmission_texture: bool,
     /// `emissiveFactor` × `KHR_materials_emissive_strength.emissiveStrength` (1 without the
-    /// extension): the emitted radiance, W·m⁻²·sr⁻¹ per channel.
+    /// extension): the emitted radiance, W·m⁻²·sr⁻¹ per channel, before the
+    /// `emissiveTexture` (which the caller applies).
     pub(crate) emission: Vec3,
-    /// Whether it has an `emissiveTexture` (not applied: the emission is uniform).
-    pub(crate) emissive_texture: bool,
     /// `doubleSided`: emission then leaves both sides.
     pub(crate) double_sided: bool,
 }
@@ -93,7 +92,6 @@ impl Factors {
                 * ext
                     .and_then(|e| e.emissive_strength.as_ref())
                     .map_or(1.0, |s| s.emissive_strength.0),
-            emissive_texture: m.emissive_texture.is_some(),
             double_sided: m.double_sided,
         }
     }
@@ -136,8 +134,8 @@ pub(crate) fn make(
         .get(index)
         .ok_or_else(|| format!("material {index} does not exist"))?;
     let factors = Factors::read(material);
-    let mut mapping = map(&factors).map_err(|e| format!("{what}: {e}"))?;
-    let emission = emission(&factors, &mut mapping.notes).map_err(|e| format!("{what}: {e}"))?;
+    let mapping = map(&factors).map_err(|e| format!("{what}: {e}"))?;
+    let emission = emission(&factors).map_err(|e| format!("{what}: {e}"))?;
     for note in mapping.notes {
         let line = format!("glTF {}: {what}: {note}", written.display());
         if !tally.warnings.contains(&line) {
@@ -158,21 +156,14 @@ pub(crate) fn make(
     Ok((made, emission))
 }
 
-/// A glTF material's emission: (Le, two-sided) from its factors, with a note when its
-/// `emissiveTexture` is left out; an error names a factor that is negative or not finite.
-fn emission(f: &Factors, notes: &mut Vec<String>) -> Result<(Vec3, bool), String> {
+/// A glTF material's emission: (Le, two-sided) from its factors (the `emissiveTexture`, which
+/// multiplies Le, is the caller's); an error names a factor that is negative or not finite.
+fn emission(f: &Factors) -> Result<(Vec3, bool), String> {
     let e = f.emission;
     if !(e.is_finite() && e.min_element() >= 0.0) {
         return Err(format!(
             "emissiveFactor × emissiveStrength = {e} must be finite and non-negative"
         ));
-    }
-    if f.emissive_texture && e.max_element() > 0.0 {
-        notes.push(
-            "emissiveTexture is not applied: the emission is emissiveFactor × emissiveStrength, \
-             uniform over the surface"
-                .to_string(),
-        );
     }
     Ok((e, f.double_sided))
 }
@@ -375,42 +366,28 @@ mod tests {
             metallic_roughness_texture: false,
             transmission_texture: false,
             emission: Vec3::ZERO,
-            emissive_texture: false,
             double_sided: false,
         }
     }
 
     #[test]
-    fn emission_is_checked_and_an_emissive_texture_noted() {
-        let mut notes = Vec::new();
+    fn emission_is_checked() {
         let lit = Factors {
             emission: Vec3::new(2.0, 1.0, 0.0),
-            emissive_texture: true,
             double_sided: true,
             ..plain()
         };
-        assert_eq!(emission(&lit, &mut notes), Ok((lit.emission, true)));
-        assert!(
-            notes[0].contains("emissiveTexture is not applied"),
-            "{notes:?}"
-        );
+        assert_eq!(emission(&lit), Ok((lit.emission, true)));
         let bad = Factors {
             emission: Vec3::new(1.0, -1.0, 0.0),
             ..plain()
         };
-        let e = emission(&bad, &mut notes).unwrap_err();
+        let e = emission(&bad).unwrap_err();
         assert!(
             e.contains("emissiveFactor") && e.contains("non-negative"),
             "{e}"
         );
-        // No emission, no note, whatever the texture.
-        let mut none = Vec::new();
-        let dark = Factors {
-            emissive_texture: true,
-            ..plain()
-        };
-        assert_eq!(emission(&dark, &mut none), Ok((Vec3::ZERO, false)));
-        assert!(none.is_empty());
+        assert_eq!(emission(&plain()), Ok((Vec3::ZERO, false)));
     }
 
     fn solid() -> Option<Volume> {

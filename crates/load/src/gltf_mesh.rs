@@ -51,8 +51,14 @@ pub(crate) struct GltfPart {
     pub(crate) texcoords: Vec<[Vec2; 3]>,
     /// Materials made from this file that use a base-colour texture.
     pub(crate) textured_materials: usize,
-    /// Materials made from this file with normal, occlusion, emissive or metallic-roughness
-    /// textures, which are ignored.
+    /// Texture coordinates of each triangle of `mesh` for its material's emissive texture
+    /// (zero where it has none); empty while no triangle's material has one, and then
+    /// shorter than `mesh` by the triangles after the last that has.
+    pub(crate) emission_texcoords: Vec<[Vec2; 3]>,
+    /// Materials made from this file that emit with an emissive texture.
+    pub(crate) emission_textured: usize,
+    /// Materials made from this file with normal, occlusion or metallic-roughness textures,
+    /// which are ignored.
     pub(crate) other_textures: usize,
     /// Triangle primitives without normals, shaded flat as glTF requires.
     pub(crate) flat_primitives: usize,
@@ -127,7 +133,7 @@ pub(crate) fn load_gltf(
     let roots = root_nodes(doc);
 
     let mut part = GltfPart::default();
-    let mut material_map: HashMap<usize, (u32, Option<TexRead>)> = HashMap::new();
+    let mut material_map: HashMap<usize, (u32, TexReads)> = HashMap::new();
     let mut images: HashMap<(usize, Wrap, Wrap), Arc<Texture>> = HashMap::new();
     let mut stack: Vec<(Node<'_>, Mat4, usize)> =
         roots.into_iter().rev().map(|n| (n, post, 0)).collect();
@@ -156,7 +162,7 @@ pub(crate) fn load_gltf(
                     }
                 }
                 let (m, tex_read) = match material {
-                    Some(m) => (m, None),
+                    Some(m) => (m, TexReads::default()),
                     None => {
                         let mut seen = Seen {
                             json: doc.as_json(),
@@ -382,42 +388,43 @@ fn node_light<'a>(
 }
 
 /// What one file's walk has met so far: its materials (scene index and the texture-coordinate
-/// set of their base-colour texture), its decoded images, and the counts in `part`.
+/// sets of their base-colour and emissive textures), its decoded images, and the counts in
+/// `part`.
 struct Seen<'a> {
     /// The file's JSON, read directly where the `gltf` crate's accessors would panic.
     json: &'a gltf::json::Root,
     assets: &'a mut Assets,
-    materials: &'a mut HashMap<usize, (u32, Option<TexRead>)>,
+    materials: &'a mut HashMap<usize, (u32, TexReads)>,
     images: &'a mut HashMap<(usize, Wrap, Wrap), Arc<Texture>>,
     part: &'a mut GltfPart,
 }
 
-/// The scene material of a primitive and the TEXCOORD set its texture reads: the TOML
+/// The scene material of a primitive and the TEXCOORD sets its textures read: the TOML
 /// material of the same name if there is one (used as it is, without a texture), otherwise
 /// the model `gltf_material::map` makes of it (a mirror, a dielectric, or Lambert with
-/// kd = baseColorFactor × the base-colour texture if it has one), or the shared default
-/// (kd = 0.8) when the primitive has none. Materials are counted once, when first met.
+/// kd = baseColorFactor × the base-colour texture if it has one; any of them emitting
+/// emissiveFactor × emissiveStrength × the emissive texture if it has one), or the shared
+/// default (kd = 0.8) when the primitive has none. Materials are counted once, when first met.
 fn primitive_material(
     origin: &Origin<'_>,
     prim: &gltf::Primitive<'_>,
     buffers: &[Vec<u8>],
     seen: &mut Seen<'_>,
     materials: &mut Materials,
-) -> Result<(u32, Option<TexRead>), LoadError> {
+) -> Result<(u32, TexReads), LoadError> {
     let mat = prim.material();
     let Some(index) = mat.index() else {
-        return Ok((materials.gltf_default()?, None));
+        return Ok((materials.gltf_default()?, TexReads::default()));
     };
     if let Some(&m) = seen.materials.get(&index) {
         return Ok(m);
     }
     let m = if let Some(m) = mat.name().and_then(|name| materials.lookup(name)) {
-        (m, None)
+        (m, TexReads::default())
     } else {
         let pbr = mat.pbr_metallic_roughness();
         if mat.normal_texture().is_some()
             || mat.occlusion_texture().is_some()
-            || mat.emissive_texture().is_some()
             || pbr.metallic_roughness_texture().is_some()
         {
             seen.part.other_textures += 1;
@@ -433,30 +440,75 @@ fn primitive_material(
             Made::Lambert(kd) => kd,
             Made::Delta(m) => {
                 materials.set_emission(m, emission, two_sided);
-                let _ = seen.materials.insert(index, (m, None));
-                return Ok((m, None));
+                let reads = TexReads {
+                    base: None,
+                    emissive: emissive_texture(origin, &mat, m, buffers, seen, materials)?,
+                };
+                let _ = seen.materials.insert(index, (m, reads));
+                return Ok((m, reads));
             }
         };
         let m = materials
             .add_lambert(name, kd)
             .map_err(|e| origin.err(format!("material {index}: {e}")))?;
         materials.set_emission(m, emission, two_sided);
-        match pbr.base_color_texture() {
+        let base = match pbr.base_color_texture() {
             Some(info) => {
-                let texture = base_colour_texture(origin, index, &info.texture(), buffers, seen)?;
+                let texture =
+                    material_texture(origin, index, &info.texture(), BASE, buffers, seen)?;
                 materials.set_texture(m, texture);
                 seen.part.textured_materials += 1;
-                (m, Some(TexRead::of(&info)))
+                Some(TexRead::of(&info))
             }
-            None => (m, None),
-        }
+            None => None,
+        };
+        let emissive = emissive_texture(origin, &mat, m, buffers, seen, materials)?;
+        (m, TexReads { base, emissive })
     };
     let _ = seen.materials.insert(index, m);
     Ok(m)
 }
 
-/// How a primitive's texture coordinates are read for its material's base-colour texture:
-/// the TEXCOORD set, and the KHR_texture_transform of the texture reference, if any.
+/// How a primitive's texture coordinates are read for each of its material's textures.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct TexReads {
+    /// For the base-colour texture.
+    base: Option<TexRead>,
+    /// For the emissive texture (only where the material emits).
+    emissive: Option<TexRead>,
+}
+
+/// The emissive texture of glTF material `mat` (scene material `m`), if it has one and emits:
+/// decoded as base colour is (sRGB, glTF 2.0 §3.9.5), given to the scene material, counted;
+/// the texture coordinates its reference reads.
+fn emissive_texture(
+    origin: &Origin<'_>,
+    mat: &gltf::Material<'_>,
+    m: u32,
+    buffers: &[Vec<u8>],
+    seen: &mut Seen<'_>,
+    materials: &mut Materials,
+) -> Result<Option<TexRead>, LoadError> {
+    let Some(info) = mat.emissive_texture() else {
+        return Ok(None);
+    };
+    if !materials.emits(m) {
+        // Le = emissiveFactor × texture: a zero factor leaves nothing to texture.
+        return Ok(None);
+    }
+    let index = mat.index().unwrap_or_default();
+    let texture = material_texture(origin, index, &info.texture(), EMISSIVE, buffers, seen)?;
+    materials.set_emission_texture(m, texture);
+    seen.part.emission_textured += 1;
+    Ok(Some(TexRead::of(&info)))
+}
+
+/// The names of the two textures read, for messages.
+const BASE: &str = "base-colour";
+const EMISSIVE: &str = "emissive";
+
+/// How a primitive's texture coordinates are read for one of its material's textures: the
+/// TEXCOORD set, and the KHR_texture_transform of the texture reference, if any.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct TexRead {
     set: u32,
@@ -485,13 +537,15 @@ impl TexRead {
     }
 }
 
-/// The decoded image of a base-colour texture with its sampler's wrap modes (decoded once per
-/// image and sampler). The image is a PNG or JPEG file next to the glTF file, a base64
-/// `data:` URI, or a bufferView (GLB).
-fn base_colour_texture(
+/// The decoded image of a base-colour or emissive texture (`kind`, for messages) with its
+/// sampler's wrap modes (decoded once per image and sampler, sRGB as glTF asks of both). The
+/// image is a PNG or JPEG file next to the glTF file, a base64 `data:` URI, or a bufferView
+/// (GLB).
+fn material_texture(
     origin: &Origin<'_>,
     material: usize,
     texture: &gltf::Texture<'_>,
+    kind: &str,
     buffers: &[Vec<u8>],
     seen: &mut Seen<'_>,
 ) -> Result<Arc<Texture>, LoadError> {
@@ -508,7 +562,7 @@ fn base_colour_texture(
         return Ok(Arc::clone(t));
     }
     let what = format!(
-        "material {material}: base-colour texture {} (image {})",
+        "material {material}: {kind} texture {} (image {})",
         texture.index(),
         image.index()
     );
@@ -640,7 +694,7 @@ fn image_bytes(
 }
 
 /// Appends one triangle primitive, transformed by `world`, to `part`, with the texture
-/// coordinates `tex_read` asks for when its material has a texture (zero when the primitive
+/// coordinates `reads` asks for when its material has textures (zero when the primitive
 /// lacks that set).
 #[allow(clippy::too_many_arguments)]
 fn add_primitive(
@@ -650,7 +704,7 @@ fn add_primitive(
     buffers: &[Vec<u8>],
     world: Mat4,
     material: u32,
-    tex_read: Option<TexRead>,
+    reads: TexReads,
     part: &mut GltfPart,
 ) -> Result<(), LoadError> {
     let err = |m: String| origin.err(format!("{what}: {m}"));
@@ -678,24 +732,12 @@ fn add_primitive(
     }
 
     let normals = read_normals(prim, buffers, world, positions.len(), &err)?;
-    let texcoords = read_texcoords(prim, buffers, tex_read, positions.len(), &err)?;
-    let indices = read_indices(prim, buffers, positions.len(), &err)?;
-    // Strips and fans become lists (glTF 2.0 §3.7.2.1): strip triangle i is
-    // (v[i], v[i+1+i%2], v[i+2-i%2]), which keeps every triangle's winding; fan triangle i is
-    // (v[i+1], v[i+2], v[0]). Degenerate triangles that stitch strips have zero area and are
-    // left out of the BVH like any other.
-    let indices: Vec<u32> = match prim.mode() {
-        Mode::TriangleStrip => (0..indices.len().saturating_sub(2))
-            .flat_map(|i| {
-                let odd = i % 2;
-                [indices[i], indices[i + 1 + odd], indices[i + 2 - odd]]
-            })
-            .collect(),
-        Mode::TriangleFan => (1..indices.len().saturating_sub(1))
-            .flat_map(|i| [indices[i], indices[i + 1], indices[0]])
-            .collect(),
-        _ => indices,
-    };
+    let texcoords = read_texcoords(prim, buffers, reads.base, positions.len(), &err)?;
+    let emission_texcoords = read_texcoords(prim, buffers, reads.emissive, positions.len(), &err)?;
+    let indices = triangle_list(
+        prim.mode(),
+        read_indices(prim, buffers, positions.len(), &err)?,
+    );
     if !indices.len().is_multiple_of(3) {
         return Err(err(format!(
             "{} indices is not a multiple of 3",
@@ -718,15 +760,26 @@ fn add_primitive(
     // A mirroring transform turns counter-clockwise into clockwise; glTF asks to keep the
     // front face, so the winding is reversed.
     let mirror = Mat3::from_mat4(world).determinant() < 0.0;
-    let uv = |i: u32| texcoords.get(i as usize).copied().unwrap_or(Vec2::ZERO);
+    let corners = |uv: &[Vec2], t: &[u32]| {
+        let at = |i: u32| uv.get(i as usize).copied().unwrap_or(Vec2::ZERO);
+        let (ta, tb, tc) = (at(t[0]), at(t[1]), at(t[2]));
+        if mirror { [ta, tc, tb] } else { [ta, tb, tc] }
+    };
+    if reads.emissive.is_some() {
+        // Kept from the first triangle with an emissive texture on: zero for those before.
+        part.emission_texcoords
+            .resize(mesh.indices.len(), [Vec2::ZERO; 3]);
+    }
     for t in indices.chunks_exact(3) {
         let (a, b, c) = (t[0] + base, t[1] + base, t[2] + base);
         mesh.indices
             .push(if mirror { [a, c, b] } else { [a, b, c] });
         mesh.materials.push(material);
-        let (ta, tb, tc) = (uv(t[0]), uv(t[1]), uv(t[2]));
-        part.texcoords
-            .push(if mirror { [ta, tc, tb] } else { [ta, tb, tc] });
+        part.texcoords.push(corners(&texcoords, t));
+        if reads.emissive.is_some() {
+            part.emission_texcoords
+                .push(corners(&emission_texcoords, t));
+        }
     }
     if normals.is_empty() {
         part.flat_primitives += 1;
@@ -742,6 +795,25 @@ fn add_primitive(
     }
     mesh.positions.extend_from_slice(&positions);
     Ok(())
+}
+
+/// A primitive's indices as a triangle list. Strips and fans become lists (glTF 2.0
+/// §3.7.2.1): strip triangle i is (v[i], v[i+1+i%2], v[i+2-i%2]), which keeps every
+/// triangle's winding; fan triangle i is (v[i+1], v[i+2], v[0]). Degenerate triangles that
+/// stitch strips have zero area and are left out of the BVH like any other.
+fn triangle_list(mode: Mode, indices: Vec<u32>) -> Vec<u32> {
+    match mode {
+        Mode::TriangleStrip => (0..indices.len().saturating_sub(2))
+            .flat_map(|i| {
+                let odd = i % 2;
+                [indices[i], indices[i + 1 + odd], indices[i + 2 - odd]]
+            })
+            .collect(),
+        Mode::TriangleFan => (1..indices.len().saturating_sub(1))
+            .flat_map(|i| [indices[i], indices[i + 1], indices[0]])
+            .collect(),
+        _ => indices,
+    }
 }
 
 /// The primitive's NORMAL attribute transformed by `world`'s inverse transpose and

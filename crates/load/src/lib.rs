@@ -147,11 +147,14 @@ pub struct LoadReport {
     pub skipped_cameras: usize,
     /// glTF materials with a base-colour texture: kd = `baseColorFactor` × the texture.
     pub textured_materials: usize,
-    /// Base-colour texture images decoded: each once, whatever the samplers, materials, glTF
-    /// files and shapes that show it.
+    /// Texture images decoded (base-colour and emissive): each once, whatever the samplers,
+    /// materials, glTF files and shapes that show it.
     pub textures: usize,
-    /// glTF materials with normal, occlusion, emissive or metallic-roughness textures, which
-    /// are ignored.
+    /// glTF materials that emit with an `emissiveTexture`: Le = `emissiveFactor` ×
+    /// `emissiveStrength` × the texture.
+    pub emission_textured_materials: usize,
+    /// glTF materials with normal, occlusion or metallic-roughness textures, which are
+    /// ignored.
     pub other_textures: usize,
     /// glTF materials made perfect mirrors (metallicFactor 1, roughnessFactor ≤ 0.05).
     pub gltf_mirrors: usize,
@@ -202,8 +205,8 @@ impl LoadReport {
         }
         if self.other_textures > 0 {
             out.push(format!(
-                "glTF: {} material(s) have normal, occlusion, emissive or metallic-roughness \
-                 textures, which are ignored (only base colour is used)",
+                "glTF: {} material(s) have normal, occlusion or metallic-roughness textures, \
+                 which are ignored (only base colour and emission are used)",
                 self.other_textures
             ));
         }

@@ -1,5 +1,5 @@
 //! The scene's materials as the loader assembles them: the scene file's, by name, then those
-//! made from glTF files, with their base-colour textures. Shared by the scene file's build
+//! made from glTF files, with their base-colour and emissive textures. Shared by the scene file's build
 //! and the glTF reader.
 
 use std::collections::HashMap;
@@ -19,6 +19,8 @@ pub(crate) struct Materials {
     gltf_default: Option<u32>,
     /// Base-colour textures by material index (shorter than `list` where the rest have none).
     textures: Vec<Option<Arc<Texture>>>,
+    /// Emissive textures by material index (shorter than `list` where the rest have none).
+    emission_textures: Vec<Option<Arc<Texture>>>,
 }
 
 impl Materials {
@@ -29,6 +31,7 @@ impl Materials {
             by_name: HashMap::new(),
             gltf_default: None,
             textures: Vec::new(),
+            emission_textures: Vec::new(),
         }
     }
 
@@ -101,6 +104,11 @@ impl Materials {
         index
     }
 
+    /// Whether material `m` emits (some channel of its emission is positive).
+    pub(crate) fn emits(&self, m: u32) -> bool {
+        self.list[m as usize].emits()
+    }
+
     /// Gives material `m` a base-colour texture.
     pub(crate) fn set_texture(&mut self, m: u32, texture: Arc<Texture>) {
         let m = m as usize;
@@ -108,6 +116,20 @@ impl Materials {
             self.textures.resize(m + 1, None);
         }
         self.textures[m] = Some(texture);
+    }
+
+    /// Gives material `m` an emissive texture: its Le is its emission × the texture.
+    pub(crate) fn set_emission_texture(&mut self, m: u32, texture: Arc<Texture>) {
+        let m = m as usize;
+        if self.emission_textures.len() <= m {
+            self.emission_textures.resize(m + 1, None);
+        }
+        self.emission_textures[m] = Some(texture);
+    }
+
+    /// The emissive textures by material index, taken out (empty without any).
+    pub(crate) fn take_emission_textures(&mut self) -> Vec<Option<Arc<Texture>>> {
+        std::mem::take(&mut self.emission_textures)
     }
 
     /// The material of glTF primitives without one: Lambert, kd = 0.8 in every channel.

@@ -221,9 +221,11 @@ struct GltfOut {
     skipped_cameras: usize,
     /// Materials whose kd is baseColorFactor × a base-colour texture.
     textured_materials: usize,
-    /// Base-colour images decoded.
+    /// Images decoded (base-colour and emissive textures).
     textures: usize,
-    /// Materials whose normal, occlusion, emissive or metallic-roughness textures were ignored.
+    /// Materials whose emission is emissiveFactor × emissiveStrength × an emissive texture.
+    emission_textured_materials: usize,
+    /// Materials whose normal, occlusion or metallic-roughness textures were ignored.
     other_textures: usize,
     /// Materials made perfect mirrors (smooth metal).
     mirrors: usize,
@@ -320,6 +322,7 @@ impl SceneOut {
                 skipped_cameras: load.skipped_cameras,
                 textured_materials: load.textured_materials,
                 textures: load.textures,
+                emission_textured_materials: load.emission_textured_materials,
                 other_textures: load.other_textures,
                 mirrors: load.gltf_mirrors,
                 dielectrics: load.gltf_dielectrics,

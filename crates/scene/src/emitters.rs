@@ -19,7 +19,7 @@ use std::f32::consts::PI;
 use bdpm_bdf::luminance;
 use bdpm_core::sampling::uniform_triangle;
 use bdpm_geometry::{Frame, Geometry};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use crate::spherical;
 use crate::{Material, PointLight, Scene, Shading};
@@ -41,7 +41,11 @@ pub const SPHERICAL_MAX: f64 = 6.22;
 pub struct Emitter {
     /// Index of the triangle in the geometry.
     pub prim: u32,
-    /// Emitted radiance Le, W·m⁻²·sr⁻¹ per channel (constant over the triangle).
+    /// Emitted radiance Le, W·m⁻²·sr⁻¹ per channel: constant over the triangle, or, where
+    /// the material has an emissive texture, its mean over the triangle estimated at a fixed
+    /// stratified set of points (at least [`crate::EMISSION_PICK_FLOOR`] of the factor), the
+    /// weight the light distribution gives the triangle; Le at a point is
+    /// [`Scene::emission_at`].
     pub radiance: Vec3,
     /// Emits on both sides, not only on the side of the winding normal.
     pub two_sided: bool,
@@ -72,7 +76,10 @@ pub(crate) struct Emitters {
     /// Cumulative flux luminance of `list`, normalised to end at 1.
     cdf: Vec<f32>,
     /// Per triangle: its index in `list`, or `u32::MAX`; empty without emitters.
-    of_prim: Vec<u32>,
+    pub(crate) of_prim: Vec<u32>,
+    /// Per emitter: the texture coordinates of its vertices for its material's emissive
+    /// texture; empty when no emitting material has one (`emission_texture.rs`).
+    pub(crate) texcoords: Vec<[Vec2; 3]>,
 }
 
 impl Default for Emitters {
@@ -83,6 +90,7 @@ impl Default for Emitters {
             spheres: Vec::new(),
             cdf: Vec::new(),
             of_prim: Vec::new(),
+            texcoords: Vec::new(),
         }
     }
 }
@@ -109,14 +117,6 @@ impl Emitters {
                 });
             }
         }
-        let mut acc = 0.0f64;
-        let mut cdf: Vec<f32> = Vec::with_capacity(list.len());
-        let fluxes: Vec<f64> = list.iter().map(|e| luminance(e.flux()) as f64).collect();
-        let total: f64 = fluxes.iter().sum();
-        for f in &fluxes {
-            acc += f;
-            cdf.push((acc / total) as f32);
-        }
         let spheres = list
             .iter()
             .map(|e| {
@@ -125,13 +125,33 @@ impl Emitters {
                 (c, v.iter().map(|x| x.distance(c)).fold(0.0, f32::max))
             })
             .collect();
-        Emitters {
+        let mut emitters = Emitters {
             list,
             spherical_min: SPHERICAL_MIN,
             spheres,
-            cdf,
+            cdf: Vec::new(),
             of_prim,
+            texcoords: Vec::new(),
+        };
+        emitters.build_cdf();
+        emitters
+    }
+
+    /// (Re)builds the CDF from the emitters' fluxes.
+    pub(crate) fn build_cdf(&mut self) {
+        let mut acc = 0.0f64;
+        let mut cdf: Vec<f32> = Vec::with_capacity(self.list.len());
+        let fluxes: Vec<f64> = self
+            .list
+            .iter()
+            .map(|e| luminance(e.flux()) as f64)
+            .collect();
+        let total: f64 = fluxes.iter().sum();
+        for f in &fluxes {
+            acc += f;
+            cdf.push((acc / total) as f32);
         }
+        self.cdf = cdf;
     }
 
     /// Picks an emitter by flux luminance for `u` in [0, 1): (index, probability).
@@ -164,6 +184,8 @@ pub struct EmitterSample {
     pub n: Vec3,
     /// The emitter's triangle.
     pub prim: u32,
+    /// Barycentric coordinates (b1, b2) of `p` in the triangle (vertex 0's weight 1 − b1 − b2).
+    pub bary: Vec2,
     /// Density of the direction from the shading point to `p` in solid angle, the emitter's
     /// choice included, sr⁻¹ (the same as [`Scene::emitter_pdf`] gives for it).
     pub pdf: f32,
@@ -176,8 +198,8 @@ pub struct EmitterPhoton {
     pub origin: Vec3,
     /// Unit direction, cosine-distributed about the emitting side's normal.
     pub direction: Vec3,
-    /// Flux the photon stands for before the division by N_F: Le·π·A·sides / p(emitter),
-    /// W per channel.
+    /// Flux the photon stands for before the division by N_F: Le(p)·π·A·sides / p(emitter),
+    /// W per channel, with Le at the photon's point p.
     pub flux: Vec3,
 }
 
@@ -194,10 +216,11 @@ impl Scene {
         !self.emitters.list.is_empty()
     }
 
-    /// Radiance emitted by triangle `prim` towards the unit world direction `wo` (pointing
-    /// away from it), W·m⁻²·sr⁻¹: Le on an emitting side, else 0.
+    /// Radiance emitted at barycentric point `bary` of triangle `prim` towards the unit world
+    /// direction `wo` (pointing away from it), W·m⁻²·sr⁻¹: Le there on an emitting side
+    /// (textured where the material has an emissive texture), else 0.
     #[inline]
-    pub fn emitted(&self, prim: u32, wo: Vec3) -> Vec3 {
+    pub fn emitted(&self, prim: u32, bary: Vec2, wo: Vec3) -> Vec3 {
         if !self.has_emission() {
             return Vec3::ZERO;
         }
@@ -205,24 +228,22 @@ impl Scene {
             return Vec3::ZERO;
         };
         if e.two_sided || self.geometry.normal(prim).dot(wo) > 0.0 {
-            e.radiance
+            self.emitter_radiance(self.emitters.of_prim[prim as usize] as usize, bary)
         } else {
             Vec3::ZERO
         }
     }
 
     /// The emitter on triangle `prim`, if it emits.
-    fn emitter_of(&self, prim: u32) -> Option<&Emitter> {
+    pub(crate) fn emitter_of(&self, prim: u32) -> Option<&Emitter> {
         let i = *self.emitters.of_prim.get(prim as usize)?;
         self.emitters.list.get(i as usize)
     }
 
     /// Solid-angle density (sr⁻¹) with which [`Self::sample_emitter`] from `from` yields the
-    /// point `p` of triangle `prim`: p(emitter)/A · d²/|cos θ_e|. 0 where `prim` emits
-    /// nothing towards `from`.
-    /// yields the point `p` of triangle `prim`: p(emitter)/Ω where it samples that triangle in
-    /// solid angle from `from`, else p(emitter)/A · d²/|cos θₑ|. 0 where `prim` emits nothing
-    /// towards `from`.
+    /// point `p` of triangle `prim`: p(emitter)/Ω where it samples that triangle in solid angle
+    /// from `from`, else p(emitter)/A · d²/|cos θₑ|. 0 where `prim` emits nothing towards
+    /// `from`.
     pub fn emitter_pdf(&self, from: Vec3, prim: u32, p: Vec3) -> f32 {
         let Some(e) = self.emitter_of(prim) else {
             return 0.0;
@@ -297,6 +318,7 @@ impl Scene {
                 p: at(b1, b2),
                 n,
                 prim: e.prim,
+                bary: Vec2::new(b1, b2),
                 pdf: (pick as f64 / omega) as f32,
             });
         }
@@ -312,6 +334,7 @@ impl Scene {
             p,
             n,
             prim: e.prim,
+            bary: Vec2::new(b1, b2),
             pdf: pick / e.area * d2 / cos.abs(),
         })
     }
@@ -342,7 +365,7 @@ impl Scene {
             return None;
         }
         let wi = to / d2.sqrt();
-        let le = self.emitted(s.prim, -wi);
+        let le = self.emitted(s.prim, s.bary, -wi);
         let cos_e = s.n.dot(wi).abs();
         if le == Vec3::ZERO || cos_e <= 0.0 || sh.ng.dot(wi) <= 0.0 {
             return None;
@@ -377,12 +400,13 @@ impl Scene {
         c.is_finite().then_some((c, wi))
     }
 
-    /// Radiance emitted by the triangle of a BDF sample's hit (`prim`, at `p`) back towards
-    /// the vertex `from` it was sampled at with solid-angle density `pdf_bdf` (sr⁻¹), weighted
-    /// by the power heuristic against [`Self::direct_area`]'s light sample there.
-    pub fn emitted_mis(&self, from: Vec3, pdf_bdf: f32, prim: u32, p: Vec3) -> Vec3 {
+    /// Radiance emitted by the triangle of a BDF sample's hit (`prim`, at `p`, barycentric
+    /// point `bary`) back towards the vertex `from` it was sampled at with solid-angle density
+    /// `pdf_bdf` (sr⁻¹), weighted by the power heuristic against [`Self::direct_area`]'s light
+    /// sample there.
+    pub fn emitted_mis(&self, from: Vec3, pdf_bdf: f32, prim: u32, p: Vec3, bary: Vec2) -> Vec3 {
         let wo = (from - p).normalize_or_zero();
-        let le = self.emitted(prim, wo);
+        let le = self.emitted(prim, bary, wo);
         if le == Vec3::ZERO {
             return Vec3::ZERO;
         }
@@ -391,7 +415,9 @@ impl Scene {
 
     /// A photon from the area lights: emitter `index` (chosen with probability
     /// `probability` by the caller's light distribution), a point uniform on it (`u_point`),
-    /// a side (`u_dir[0]` for a two-sided one) and a cosine-distributed direction.
+    /// a side (`u_dir[0]` for a two-sided one) and a cosine-distributed direction. Its flux
+    /// carries Le at its point over the density of that point, so that a textured emitter,
+    /// picked by its mean Le, stays unbiased; `None` where Le is 0 there.
     pub fn emit_from_emitter(
         &self,
         index: usize,
@@ -420,10 +446,19 @@ impl Scene {
         let local = cosine_hemisphere(u);
         let direction = Frame::from_normal(n).to_world(local);
         let origin = p + n * self.geometry.spawn_offset(e.prim);
+        let flux = if self.emitters.texcoords.is_empty() {
+            e.flux() / probability
+        } else {
+            let le = self.emitter_radiance(index, Vec2::new(b1, b2));
+            if le == Vec3::ZERO {
+                return None;
+            }
+            Emitter { radiance: le, ..*e }.flux() / probability
+        };
         Some(EmitterPhoton {
             origin,
             direction,
-            flux: e.flux() / probability,
+            flux,
         })
     }
 }

@@ -27,6 +27,7 @@
 
 mod camera;
 mod delta;
+mod emission_texture;
 mod emitters;
 pub mod spherical;
 #[cfg(test)]
@@ -37,6 +38,7 @@ mod vertex;
 
 pub use camera::Camera;
 pub use delta::{DeltaStep, DeltaWalk, MAX_DELTA_CHAIN};
+pub use emission_texture::{EMISSION_PICK_FLOOR, EmissionTextures};
 pub use emitters::{
     Emitter, EmitterPhoton, EmitterSample, SPHERICAL_MAX, SPHERICAL_MIN, cosine_hemisphere,
     power_heuristic,
@@ -276,6 +278,8 @@ pub struct Scene {
     light_cdf: Vec<f32>,
     emitters: emitters::Emitters,
     textures: SceneTextures,
+    /// Per material index: its emissive texture (`emission_texture.rs`); empty without.
+    emission_textures: Vec<Option<std::sync::Arc<Texture>>>,
     /// Per material index: is it a delta material ([`Material::is_delta`]).
     delta: Vec<bool>,
     /// Whether any material is a delta one: scenes without keep every path as it was.
@@ -324,20 +328,7 @@ impl Scene {
             }
         }
         let emitters = emitters::Emitters::new(&geometry, &materials);
-        let mut acc = 0.0;
-        let mut light_cdf: Vec<f32> = lights
-            .iter()
-            .map(|l| l.flux)
-            .chain(emitters.list.iter().map(Emitter::flux))
-            .map(|flux| {
-                acc += luminance(flux);
-                acc
-            })
-            .collect();
-        if acc <= 0.0 {
-            return Err(SceneError::NoLight);
-        }
-        light_cdf.iter_mut().for_each(|c| *c /= acc);
+        let light_cdf = light_cdf(&lights, &emitters)?;
         let origin = geometry.origin();
         for l in &mut lights {
             l.position -= origin;
@@ -355,6 +346,7 @@ impl Scene {
             light_cdf,
             emitters,
             textures: SceneTextures::default(),
+            emission_textures: Vec::new(),
         })
     }
 
@@ -385,13 +377,16 @@ impl Scene {
         let texcoords = (self.textures.texcoords.capacity() * size_of::<[Vec2; 3]>()) as u64;
         // Each image once, however many textures (samplers, materials) show it.
         let mut images: Vec<&std::sync::Arc<TexelImage>> = Vec::new();
-        for t in self.textures.base_colour.iter().flatten() {
+        let emissive = self.emission_textures.iter().flatten();
+        for t in self.textures.base_colour.iter().flatten().chain(emissive) {
             if !images.iter().any(|i| std::sync::Arc::ptr_eq(i, t.image())) {
                 images.push(t.image());
             }
         }
+        let emitter_texcoords =
+            (self.emitters.texcoords.capacity() * size_of::<[Vec2; 3]>()) as u64;
         SceneMemory {
-            triangles: g.triangles + texcoords,
+            triangles: g.triangles + texcoords + emitter_texcoords,
             bvh: g.bvh,
             textures: images.iter().map(|i| i.bytes()).sum(),
             bvh_build: Geometry::build_transient_bytes(self.geometry.triangle_count()),
@@ -687,6 +682,29 @@ impl Scene {
         let to = light.position - sh.p;
         sh.ng.dot(to) > 0.0 && !self.geometry.occluded(self.spawn(sh, to), light.position)
     }
+}
+
+/// Cumulative flux luminance over the point lights, then the emitters, normalised to 1: the
+/// photons' light distribution. [`SceneError::NoLight`] if the total is not positive.
+pub(crate) fn light_cdf(
+    lights: &[PointLight],
+    emitters: &emitters::Emitters,
+) -> Result<Vec<f32>, SceneError> {
+    let mut acc = 0.0;
+    let mut light_cdf: Vec<f32> = lights
+        .iter()
+        .map(|l| l.flux)
+        .chain(emitters.list.iter().map(Emitter::flux))
+        .map(|flux| {
+            acc += luminance(flux);
+            acc
+        })
+        .collect();
+    if acc <= 0.0 {
+        return Err(SceneError::NoLight);
+    }
+    light_cdf.iter_mut().for_each(|c| *c /= acc);
+    Ok(light_cdf)
 }
 
 #[cfg(test)]

@@ -6,6 +6,7 @@
 mod errors;
 mod fuzz;
 mod gltf;
+mod gltf_emission;
 mod gltf_materials;
 mod mesh_files;
 mod mitsuba;
