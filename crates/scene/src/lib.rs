@@ -34,7 +34,9 @@ mod vertex;
 
 pub use camera::Camera;
 pub use delta::{DeltaStep, DeltaWalk, MAX_DELTA_CHAIN};
-pub use emitters::{Emitter, EmitterPhoton, EmitterSample, cosine_hemisphere, power_heuristic};
+pub use emitters::{
+    Emitter, EmitterPhoton, EmitterSample, MASKED_EMITTERS, cosine_hemisphere, power_heuristic,
+};
 pub use texture::{SceneTextures, TexelImage, Texture, TextureError, Wrap, srgb_to_linear};
 // The plain data the photon tracer, the cache and the weights share lives in bdpm-core.
 pub use bdpm_core::{MASKED_LIGHTS, PointLight, Shading, WeightVertex};
