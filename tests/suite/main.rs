@@ -20,6 +20,7 @@ mod new_scenes;
 mod noise_model;
 mod precision;
 mod predict;
+mod predict_area;
 mod predict_specular;
 mod seams;
 mod smooth_spheres;

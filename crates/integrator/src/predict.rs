@@ -47,6 +47,13 @@
 //! weight) and w²b → w_m²·b (b comes from the merge photons at x₁ only). For every other mode
 //! w_ob = w_m = w and both readings coincide.
 //!
+//! **Area lights.** Direct light from emitting triangles is one light sample per camera sample
+//! at x₁ (BDD=1) and at x₀ (M with `direct_boost`). The model draws [`AREA_SAMPLES`] such
+//! samples per vertex: their mean joins L₀ (at x₁ each sample weighted by its own path's w₁,
+//! at x₀ with x₀'s own Le), and the variance of one sample is added to T1 (at x₁, times E²)
+//! and to T_jitter (at x₀, over M), less the 1/K of it that the K-sample means already carry
+//! into the sample variances. A scene without emission draws none.
+//!
 //! Units: every term is a variance of a radiance, W²·m⁻⁴·sr⁻².
 use bdpm_bdf::{Transport, luminance};
 use bdpm_cache::RadianceCache;
@@ -68,6 +75,11 @@ use bdpm_settings::PINHOLE_TABLE_RAYS;
 /// Jittered primary rays per pixel for T_jitter (method.md §12 leaves this term out; 16 gives
 /// its per-pixel value to about ±35 %, far less over blocks of pixels).
 pub const JITTER_RAYS: u32 = 16;
+
+/// Light samples per vertex with which the model estimates the area lights' direct light at
+/// x₁ and at x₀ and the variance of the renderer's one sample there (8 keeps the per-pixel
+/// estimate's own noise below that of its 64 directions; a scene without emission draws none).
+pub const AREA_SAMPLES: u32 = 8;
 
 /// Normals within about 8° count as the same surface for T_jitter's L_d (a tessellated sphere
 /// of 20480 facets turns by about 2° from facet to facet).
@@ -115,6 +127,9 @@ struct Direction {
     photons_x0: f64,
     /// w_m²·E²·b.
     photons_x1: f64,
+    /// E²·Var(w·c): the variance of one light sample c of the area lights at x₁ (weighted by
+    /// its path's w₁), which BDD=1's value carries beside the jumps of x₁.
+    light_var: f64,
 }
 
 impl Renderer<'_> {
@@ -221,7 +236,7 @@ impl Renderer<'_> {
         // a prediction does not get noisier where the table takes fewer.
         let rays = s.pixel_table_rays.unwrap_or(PINHOLE_TABLE_RAYS).max(2);
         let (mut sum, mut sum_sq, mut photons_x0, mut photons_x1) = (0.0, 0.0, 0.0, 0.0);
-        let mut caustic_x0 = 0.0;
+        let (mut caustic_x0, mut light_var) = (0.0, 0.0);
         let grid = direction_strata(s);
         // With stratified directions, rays 2i and 2i + 1 fall in one random cell of the
         // sampler's grid: half their squared difference estimates that cell's variance.
@@ -245,6 +260,7 @@ impl Renderer<'_> {
             sum_sq += value * value;
             photons_x0 += share * beta * beta * d.photons_x0;
             photons_x1 += beta * beta * d.photons_x1;
+            light_var += beta * beta * d.light_var;
             if let Some(c) = caustic {
                 let b = c.lookup(at.sh.prim, at.sh.p, at.u).1 as f64;
                 caustic_x0 += share * beta * beta * b;
@@ -270,11 +286,14 @@ impl Renderer<'_> {
         } else {
             0.0
         };
+        // The area light's sample at x₁: its variance, less the 1/K of it that the values' own
+        // K-sample means already put into `jumps`.
+        let light_samples = 1.0 - 1.0 / AREA_SAMPLES as f64;
         // The caustic's photons at x₀ (light → mirrors and glass → x₀) are the merge at x₀'s
         // alone, (1 − w)² = 1: their noise is α·N_eff/N_B·b_caustic(x₀→u).
         Some(Terms {
             t0: alpha * n_eff / n_b * (photons_x0 + caustic_x0) / n,
-            t1: jumps / n_b,
+            t1: (jumps + light_samples * light_var / n) / n_b,
             t2: alpha / n_b * photons_x1 / n,
             jitter,
             overlap,
@@ -330,6 +349,8 @@ impl Renderer<'_> {
         // half squared differences: the pixel's `direct_boost` M divides L₀'s share.
         let (mut sum, mut sum_sq, mut within) = ([0.0; 2], [0.0; 3], [0.0; 3]);
         let (mut previous, mut cell) = ([0.0; 2], (0, 0));
+        // Σ over the rays of β²·Var(one light sample of the area lights at x₀).
+        let mut light_var = 0.0;
         for m in 0..JITTER_RAYS {
             let mut rng = Rng::new(seed, Domain::PixelTable, [pixel, m as u64, 2]);
             let mut jitter = rng.uniform2();
@@ -349,7 +370,14 @@ impl Renderer<'_> {
                 .map_or([0.0; 2], |walk| {
                     let (u, sh) = (walk.wo, walk.sh);
                     let beta = luminance(walk.beta) as f64;
-                    let direct = luminance(scene.direct(&sh, u)) as f64;
+                    let mut direct = luminance(scene.direct(&sh, u)) as f64;
+                    if scene.has_emission() {
+                        // x₀'s own Le and its area-light sample, as the renderer's direct term.
+                        let area = area_moments(scene, (&sh, u), &mut rng, |_| 1.0);
+                        direct +=
+                            luminance(scene.emitted(sh.prim, sh.bary, u)) as f64 + area.weighted;
+                        light_var += beta * beta * area.variance;
+                    }
                     let faces = sh.frame.to_local(u).z > 0.0;
                     let same_plane = sh.ng.dot(n0) > SAME_PLANE_COS
                         && (n0.dot(sh.p - centre.sh.p)).abs() < self.radius();
@@ -379,20 +407,24 @@ impl Renderer<'_> {
         let inv_m = 1.0 / self.direct_samples().map_or(1, |d| d.at(x, y)) as f64;
         let combine = |[dd, ll, dl]: [f64; 3]| dd * inv_m + ll + 2.0 * dl * inv_m;
         let m = JITTER_RAYS as f64;
-        match strata {
-            // The mean variance within a cell: N_B stratified samples, one per cell, have a
-            // mean whose variance is that over N_B (falling faster than 1/N_B at an edge,
-            // which crosses few cells).
-            Some(_) => combine(within) / (m / 2.0),
-            None => {
-                let moments = [
-                    sum_sq[0] - sum[0] * sum[0] / m,
-                    sum_sq[1] - sum[1] * sum[1] / m,
-                    sum_sq[2] - sum[0] * sum[1] / m,
-                ];
-                (combine(moments) / (m - 1.0)).max(0.0)
+        // The light sample's own variance at x₀ (M samples' mean), less the 1/K of it that the
+        // rays' K-sample means already put into the spread above.
+        let light = light_var / m * inv_m * (1.0 - 1.0 / AREA_SAMPLES as f64);
+        light
+            + match strata {
+                // The mean variance within a cell: N_B stratified samples, one per cell, have a
+                // mean whose variance is that over N_B (falling faster than 1/N_B at an edge,
+                // which crosses few cells).
+                Some(_) => combine(within) / (m / 2.0),
+                None => {
+                    let moments = [
+                        sum_sq[0] - sum[0] * sum[0] / m,
+                        sum_sq[1] - sum[1] * sum[1] / m,
+                        sum_sq[2] - sum[0] * sum[1] / m,
+                    ];
+                    (combine(moments) / (m - 1.0)).max(0.0)
+                }
             }
-        }
     }
 }
 
@@ -482,6 +514,18 @@ fn direction(
         l0_w += c * w;
         l0_w0_sq += c * (1.0 - w) * (1.0 - w);
     }
+    // The area lights' one-bounce paths, each light sample weighted as its own path.
+    let mut area = AreaMoments::default();
+    if scene.has_emission() {
+        area = area_moments(scene, (&sh1, wo1), rng, |wi| {
+            if per_light {
+                let one = mix.path_pair(x0, &x1, (v, dist2), Arrival::Area(wi), pair);
+                weigher.weight(&one).w1
+            } else {
+                w_direct
+            }
+        });
+    }
     // The model's L_d and b at x₁ towards x₀ (the weights read theirs, in `pair`).
     let (ld, b) = mix.model_lookup(cache, &x1, wo1);
     let f = luminance(s.f) as f64;
@@ -490,10 +534,52 @@ fn direction(
     // E = f·cos/p, the camera path's weight after the scattering at x₀.
     let e = f * cos / pdf;
     Some(Direction {
-        value: e * (l0_w + ld * w_merge),
-        photons_x0: (l0_w0_sq + ld * (1.0 - w_merge).powi(2)) * f * f * cos / pdf,
+        value: e * (l0_w + area.weighted + ld * w_merge),
+        photons_x0: (l0_w0_sq + area.unweighted_sq + ld * (1.0 - w_merge).powi(2)) * f * f * cos
+            / pdf,
         photons_x1: w_merge * w_merge * e * e * b,
+        light_var: e * e * area.variance,
     })
+}
+
+/// The area lights' direct light at a vertex from [`AREA_SAMPLES`] light samples as the
+/// renderer draws them (one sample of `Scene::direct_area_sample` without MIS, shadow ray
+/// included), each of value c (luminance, W·m⁻²·sr⁻¹) weighted by w = `weight`(its unit
+/// direction to the light).
+#[derive(Clone, Copy, Debug, Default)]
+struct AreaMoments {
+    /// Mean of w·c, W·m⁻²·sr⁻¹.
+    weighted: f64,
+    /// Mean of (1 − w)²·c, W·m⁻²·sr⁻¹.
+    unweighted_sq: f64,
+    /// Unbiased variance of one sample's w·c, W²·m⁻⁴·sr⁻².
+    variance: f64,
+}
+
+/// [`AreaMoments`] at `sh` towards the unit direction `wo`, numbers from `rng`.
+fn area_moments(
+    scene: &bdpm_scene::Scene,
+    (sh, wo): (&Shading, Vec3),
+    rng: &mut Rng,
+    weight: impl Fn(Vec3) -> f64,
+) -> AreaMoments {
+    let k = AREA_SAMPLES as f64;
+    let (mut sum, mut sum_sq, mut rest) = (0.0, 0.0, 0.0);
+    for _ in 0..AREA_SAMPLES {
+        let Some((c, wi)) = scene.direct_area_sample(sh, wo, rng.uniform3(), false) else {
+            continue;
+        };
+        let c = luminance(c) as f64;
+        let w = weight(wi);
+        sum += w * c;
+        sum_sq += (w * c) * (w * c);
+        rest += (1.0 - w) * (1.0 - w) * c;
+    }
+    AreaMoments {
+        weighted: sum / k,
+        unweighted_sq: rest / k,
+        variance: ((sum_sq - sum * sum / k) / (k - 1.0)).max(0.0),
+    }
 }
 
 /// [`direction`] for a v that meets mirrors or glass before a non-delta x₁: the render weighs
@@ -518,14 +604,20 @@ fn chain_direction(
     let l0: f64 = (0..scene.lights().len())
         .map(|l| luminance(scene.direct_from_masked(&sh1, wo1, l, x1.lights)) as f64)
         .sum();
+    let area = if scene.has_emission() {
+        area_moments(scene, (&sh1, wo1), rng, |_| 1.0)
+    } else {
+        AreaMoments::default()
+    };
     let (ld, b) = mix.model_lookup(cache, &x1, wo1);
     let w = mix.chain_w1(x0);
     let (f, cos, pdf) = (luminance(s.f) as f64, s.wi.z as f64, s.pdf as f64);
     let e = f * cos / pdf;
-    let l = beta * (l0 + ld);
+    let l = beta * (l0 + area.weighted + ld);
     Some(Direction {
         value: e * w * l,
         photons_x0: (1.0 - w).powi(2) * l * f * f * cos / pdf,
         photons_x1: w * w * e * e * beta * beta * b,
+        light_var: (e * w * beta).powi(2) * area.variance,
     })
 }

@@ -488,6 +488,97 @@ pub fn cosine_hemisphere(u: [f32; 2]) -> Vec3 {
     Vec3::new(d.x, d.y, z)
 }
 
+/// The most emitters that get a visibility bit in a [`crate::WeightVertex`]'s `lights` (after
+/// the point lights' bits, within [`crate::MASKED_LIGHTS`]): each costs a shadow ray per weight
+/// vertex (every camera x₁ and every stored photon vertex), so a mesh light of many triangles
+/// is seen by the weights through its first few alone.
+pub const MASKED_EMITTERS: usize = 8;
+
+impl Scene {
+    /// The emitters with a visibility bit in a weight vertex's `lights` and the bit of the first:
+    /// (first bit, count). The bits follow the point lights' (the first
+    /// min(point lights, [`crate::MASKED_LIGHTS`]) bits), so a scene without emission has none.
+    #[inline]
+    pub fn masked_emitters(&self) -> (usize, usize) {
+        let first = self.lights().len().min(crate::MASKED_LIGHTS);
+        let count = self
+            .emitters
+            .list
+            .len()
+            .min(MASKED_EMITTERS)
+            .min(crate::MASKED_LIGHTS - first);
+        (first, count)
+    }
+
+    /// The emitters' visibility bits at `sh` (see [`Self::masked_emitters`]): bit set iff the
+    /// centroid of the emitter's triangle lies above `sh`, emits towards it and is not
+    /// blocked. 0 without emission. One shadow ray per masked emitter, the weights' stand-in for
+    /// the area light's visible fraction (method-notes.md, "Area lights: the ingredients").
+    pub fn visible_emitter_mask(&self, sh: &Shading) -> u32 {
+        let (first, count) = self.masked_emitters();
+        let mut mask = 0;
+        for (k, e) in self.emitters.list.iter().take(count).enumerate() {
+            let centre = self.emitter_centroid(e);
+            let n = self.geometry.normal(e.prim);
+            let to_sh = sh.p - centre;
+            let facing = n.dot(to_sh);
+            if facing == 0.0 || (!e.two_sided && facing < 0.0) {
+                continue;
+            }
+            // Pushed off the triangle towards sh, as the light sample's shadow ray does.
+            let side = if facing > 0.0 { 1.0 } else { -1.0 };
+            let at = PointLight {
+                position: centre + n * (side * self.geometry.spawn_offset(e.prim)),
+                flux: Vec3::ZERO,
+            };
+            if self.light_visible(sh, &at) {
+                mask |= 1 << (first + k);
+            }
+        }
+        mask
+    }
+
+    /// The area lights' direct light leaving the weight vertex at `p` (unit normal `n`) as the
+    /// weights read it from the visibility bits `lights`, W·m⁻²·sr⁻¹ per channel, with the BDF
+    /// value `f` (sr⁻¹ per channel) given the unit direction ωᵢ to an emitter's centroid: per
+    /// visible masked emitter Le·f·cos θᵢ·A·|cos θₑ|/(d² + A/π), the centroid's point-light
+    /// term with d² kept above A/π (the on-axis irradiance of a disk of area A is
+    /// π·Le·A/(π·d² + A), so the term stays finite on the emitter and is exact there for a disk).
+    /// A deterministic function of the vertex, so both techniques read the same number.
+    pub fn emitters_masked_sum(
+        &self,
+        (p, n, lights): (Vec3, Vec3, u32),
+        f: impl Fn(Vec3) -> Vec3,
+    ) -> Vec3 {
+        let (first, count) = self.masked_emitters();
+        let mut sum = Vec3::ZERO;
+        for (k, e) in self.emitters.list.iter().take(count).enumerate() {
+            if lights & (1 << (first + k)) == 0 {
+                continue;
+            }
+            let to = self.emitter_centroid(e) - p;
+            let d2 = to.length_squared();
+            if d2 <= 0.0 {
+                continue;
+            }
+            let wi = to / d2.sqrt();
+            let cos = n.dot(wi);
+            let cos_e = self.geometry.normal(e.prim).dot(wi).abs();
+            if cos > 0.0 {
+                let g = cos * e.area * cos_e / (d2 + e.area * std::f32::consts::FRAC_1_PI);
+                sum += f(wi) * e.radiance * g;
+            }
+        }
+        sum
+    }
+
+    /// The centroid of emitter `e`'s triangle, m.
+    fn emitter_centroid(&self, e: &Emitter) -> Vec3 {
+        let [a, b, c] = self.geometry.vertices(e.prim);
+        (a + b + c) / 3.0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -663,6 +754,40 @@ mod tests {
                 se < 0.01 * exact,
                 "the test could not fail: {se} against {exact}"
             );
+        }
+    }
+
+    /// The weights' stand-in for the area lights' direct light (each visible emitter's
+    /// centroid as a point light, [`Scene::emitters_masked_sum`] through `direct_masked`)
+    /// against its expectation by light sampling, at floor points where the emitters subtend
+    /// a few degrees (within 5 %); every emitter's bit is set there, and a vertex whose bits
+    /// are cleared sees no area light.
+    #[test]
+    fn the_weights_area_light_stand_in_is_close_to_the_sampled_direct_light() {
+        let s = scene(0.0);
+        assert_eq!(s.masked_emitters(), (0, 4));
+        let wo = Vec3::new(0.0, 1.0, -1.0).normalize();
+        for p in [Vec3::new(0.3, 0.0, 0.2), Vec3::new(-0.8, 0.0, -0.5)] {
+            let hit = s
+                .geometry
+                .intersect(p + Vec3::Y * 0.1, -Vec3::Y, 1.0)
+                .unwrap();
+            let sh = s.shade(&hit, wo);
+            let v = s.weight_vertex(&sh);
+            assert_eq!(v.lights, 0b1111, "at {p}");
+            let stand_in = luminance(s.direct_masked(&v, wo)) as f64;
+            let mut rng = Rng::new(7, Domain::Other, [0; 3]);
+            let n = 200_000;
+            let sampled = (0..n)
+                .map(|_| luminance(s.direct_area(&sh, wo, rng.uniform3(), false)) as f64)
+                .sum::<f64>()
+                / n as f64;
+            assert!(
+                (stand_in / sampled - 1.0).abs() < 0.05,
+                "at {p}: {stand_in} against {sampled}"
+            );
+            let dark = crate::WeightVertex { lights: 0, ..v };
+            assert_eq!(s.direct_masked(&dark, wo), Vec3::ZERO);
         }
     }
 

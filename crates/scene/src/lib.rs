@@ -40,8 +40,8 @@ pub use camera::Camera;
 pub use delta::{DeltaStep, DeltaWalk, MAX_DELTA_CHAIN};
 pub use emission_texture::{EMISSION_PICK_FLOOR, EmissionTextures};
 pub use emitters::{
-    Emitter, EmitterPhoton, EmitterSample, SPHERICAL_MAX, SPHERICAL_MIN, cosine_hemisphere,
-    power_heuristic,
+    Emitter, EmitterPhoton, EmitterSample, MASKED_EMITTERS, SPHERICAL_MAX, SPHERICAL_MIN,
+    cosine_hemisphere, power_heuristic,
 };
 pub use texture::{SceneTextures, TexelImage, Texture, TextureError, Wrap, srgb_to_linear};
 // The plain data the photon tracer, the cache and the weights share lives in bdpm-core.

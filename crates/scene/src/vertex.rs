@@ -18,13 +18,17 @@ impl Scene {
     }
 
     /// Visibility bits of the first [`MASKED_LIGHTS`] lights from `sh` (bit `l` iff
-    /// [`Scene::light_visible`]): one shadow ray per light on the lit side.
+    /// [`Scene::light_visible`]): one shadow ray per light on the lit side; then, in a scene
+    /// with emission, the emitters' bits ([`Scene::visible_emitter_mask`]).
     pub fn visible_light_mask(&self, sh: &Shading) -> u32 {
         let mut mask = 0;
         for (l, light) in self.lights.iter().enumerate().take(MASKED_LIGHTS) {
             if self.light_visible(sh, light) {
                 mask |= 1 << l;
             }
+        }
+        if self.has_emission() {
+            mask |= self.visible_emitter_mask(sh);
         }
         mask
     }
@@ -44,6 +48,9 @@ impl Scene {
                 mask |= 1 << l;
             }
         }
+        if self.has_emission() {
+            mask |= self.visible_emitter_mask(sh);
+        }
         mask
     }
 
@@ -54,7 +61,8 @@ impl Scene {
 
     /// L₀ leaving `v` towards the unit direction `wo` (W·m⁻²·sr⁻¹ per channel), from the
     /// vertex's stored visibility bits and its geometric-normal frame: the same evaluation for
-    /// camera and photon vertices. Lights beyond [`MASKED_LIGHTS`] do not contribute.
+    /// camera and photon vertices. Lights beyond [`MASKED_LIGHTS`] do not contribute. Area
+    /// lights contribute through their own bits ([`Scene::emitters_masked_sum`]).
     pub fn direct_masked(&self, v: &WeightVertex, wo: Vec3) -> Vec3 {
         if v.lights == 0 || v.n.dot(wo) <= 0.0 {
             return Vec3::ZERO;
@@ -68,11 +76,21 @@ impl Scene {
                 return Vec3::ZERO;
             }
             let f = bdf.kd() * std::f32::consts::FRAC_1_PI;
-            return self.masked_lights_sum(v, |wi| if wi.is_finite() { f } else { Vec3::ZERO });
+            let f = |wi: Vec3| if wi.is_finite() { f } else { Vec3::ZERO };
+            let points = self.masked_lights_sum(v, f);
+            if !self.has_emission() {
+                return points;
+            }
+            return points + self.emitters_masked_sum((v.p, v.n, v.lights), f);
         }
         let frame = Frame::from_normal(v.n);
         let wo_l = frame.to_local(wo);
-        self.masked_lights_sum(v, |wi| bdf.eval(wo_l, frame.to_local(wi)))
+        let f = |wi: Vec3| bdf.eval(wo_l, frame.to_local(wi));
+        let points = self.masked_lights_sum(v, f);
+        if !self.has_emission() {
+            return points;
+        }
+        points + self.emitters_masked_sum((v.p, v.n, v.lights), f)
     }
 
     /// Σ f(ωᵢ)·I·cos/d² over the lights whose bit `v` holds and that lie above its normal, with
