@@ -56,7 +56,7 @@ of (I - R)^2 / (R^2 + 1e-4 R_mean^2)) against the reference, over all pixels and
 pixels whose camera rays first hit a non-delta surface (ptracer leaves the others black).
 
 Needs (not project dependencies): `pip install mitsuba numpy OpenEXR`; the llvm variant needs
-libLLVM (DRJIT_LIBLLVM_PATH, e.g. /usr/lib/x86_64-linux-gnu/libLLVM-19.so), else
+libLLVM (DRJIT_LIBLLVM_PATH; without it the newest /usr/lib/*-linux-gnu/libLLVM-N.so), else
 `--variant scalar_rgb`.
 
 Usage:
@@ -472,9 +472,13 @@ def save_png(mi, img, filename):
 def setup_mitsuba(args):
     """Imports Mitsuba with the chosen variant and thread count."""
     if args.variant.startswith("llvm") and "DRJIT_LIBLLVM_PATH" not in os.environ:
-        cand = "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"
-        if os.path.exists(cand):
-            os.environ["DRJIT_LIBLLVM_PATH"] = cand
+        # The distribution's newest libLLVM (Debian ships it versioned: libLLVM-19.so, -15.so).
+        import glob
+        import re
+        found = glob.glob("/usr/lib/*-linux-gnu/libLLVM-*.so") + glob.glob("/usr/lib/libLLVM-*.so")
+        key = lambda p: [int(n) for n in re.findall(r"\d+", os.path.basename(p))]
+        if found:
+            os.environ["DRJIT_LIBLLVM_PATH"] = max(found, key=key)
     import drjit as dr
     import mitsuba as mi
     mi.set_variant(args.variant)

@@ -1,12 +1,12 @@
 //! The BDPM mix of method.md §2: direct light at x₀, photons merged at x₀ weighted per photon
 //! by 1 − w₁(x₀, y_p), and the camera's second vertex x₁ weighted by w₁(x₀, x₁), taken in
 //! batches of camera samples ([`Mix::sample_batch`]).
-use bdpm_bdf::{Transport, luminance};
-use bdpm_geometry::Rng;
+use bdpm_bdf::{BdfSample, Transport, luminance};
+use bdpm_geometry::{Hit, Rng};
 use bdpm_mis::{Pair, Weigher};
 use bdpm_photon::{PhotonMap, PhotonQuery};
-use bdpm_scene::{Shading, WeightVertex};
-use glam::Vec3;
+use bdpm_scene::{Scene, Shading, WeightVertex};
+use glam::{DVec3, Vec3};
 
 use crate::correction::CandidateSums;
 use crate::direct::emitted_and_area;
@@ -203,14 +203,20 @@ impl<'a> Mix<'a> {
         let cam = &scene.camera();
         let dir = cam.ray_direction(job.x, job.y);
         let (sh0, u, beta) = self.camera_x0(dir, &mut job.rng);
+        // x₀'s area-light sample is weighed against BDD=1's BDF ray where the mode traces it
+        // (docs/method-notes.md, "Area lights: MIS at x₀").
+        let mis = self.needs.second_vertex;
         let direct = sh0.as_ref().map_or(Vec3::ZERO, |sh| {
             let mut l0 = scene.direct(sh, u);
             if scene.has_emission() {
-                l0 += emitted_and_area(scene, sh, u, job.rng.uniform3());
+                l0 += emitted_and_area(scene, sh, u, job.rng.uniform3(), mis);
             }
             beta.map_or(l0, |b| b * l0)
         });
-        slot.out.techniques.direct = match plan.direct_extra(job.k) {
+        let extra = plan.direct_extra(job.k);
+        // The number of points whose L₀ the direct term averages (`direct_boost`).
+        let m = extra.as_ref().map_or(1, |e| e.count + 1);
+        slot.out.techniques.direct = match extra {
             // The mean of L₀ over the sample's point and the further ones, whether or not
             // the sample's own ray meets anything.
             Some(mut extra) => extra.mean_with(scene, direct),
@@ -233,10 +239,10 @@ impl<'a> Mix<'a> {
             slot.second = self.start_second(
                 &x0,
                 map,
-                (bdf_u, r, &mut job.rng),
+                (bdf_u, r, m, &mut job.rng),
                 weights,
                 &mut slot.query1,
-                &mut slot.out.pilot,
+                &mut slot.out,
             );
         }
         slot.x0 = Some(x0);
@@ -266,10 +272,10 @@ impl<'a> Mix<'a> {
         &self,
         x0: &FirstVertex<'_>,
         map: &PhotonMap,
-        (u, r, rng): ([f32; 3], f32, &mut Rng),
+        (u, r, m, rng): ([f32; 3], f32, u32, &mut Rng),
         (weigher, stats): (&Weigher, &mut WeightStats),
         query: &mut PhotonQuery,
-        pilot: &mut CandidateSums,
+        out: &mut SampleOut,
     ) -> Option<Second> {
         let scene = self.scene;
         let s = x0.bdf.sample_at(&x0.out, u)?;
@@ -283,7 +289,10 @@ impl<'a> Mix<'a> {
         // A mirror or glass between x₀ and x₁: through it, with the weight of such paths.
         if scene.is_delta(hit1.material) {
             let through = (s.weight, v, r);
-            return self.second_through_delta(x0, map, through, rng, query, pilot);
+            return self.second_through_delta(x0, map, through, rng, query, &mut out.pilot);
+        }
+        if scene.has_emission() {
+            out.techniques.direct += emitter_hit_at_x1(scene, x0, &s, &hit1, m);
         }
         // Started before the shadow ray and the weight's inputs, which hide its first fetch.
         map.restart_query_within(query, hit1.p, r);
@@ -334,7 +343,7 @@ impl<'a> Mix<'a> {
             };
             direct_weighted += c * w as f32;
             if self.pilot {
-                pilot.add(f64::from(luminance(s.weight * c)), w, true);
+                out.pilot.add(f64::from(luminance(s.weight * c)), w, true);
             }
         }
         if scene.has_emission() {
@@ -343,7 +352,7 @@ impl<'a> Mix<'a> {
                 direct_raw += c;
                 direct_weighted += c * w as f32;
                 if self.pilot {
-                    pilot.add(f64::from(luminance(s.weight * c)), w, true);
+                    out.pilot.add(f64::from(luminance(s.weight * c)), w, true);
                 }
             }
         }
@@ -540,4 +549,26 @@ impl<'a> Mix<'a> {
         out.techniques.x0_raw = (raw * k).as_dvec3();
         out.techniques.x0_weighted = (weighted * k).as_dvec3();
     }
+}
+
+/// The BDF ray from x₀ to x₁ as the second strategy of x₀'s area-light direct term: Le at x₁
+/// (an emitter seen from x₀) times x₀'s f·cos/p, weighted by the power heuristic against
+/// x₀'s light sample (which took the complementary weight, `Scene::direct_area` with MIS),
+/// through the mirrors and glass before x₀, and divided by the `m` points whose L₀ the
+/// direct term averages (only the sample's own light sample is weighed against this ray),
+/// W·m⁻²·sr⁻¹. 0 where x₁ emits nothing towards x₀.
+fn emitter_hit_at_x1(
+    scene: &Scene,
+    x0: &FirstVertex<'_>,
+    s: &BdfSample,
+    hit1: &Hit,
+    m: u32,
+) -> DVec3 {
+    let le = scene.emitted_mis(x0.sh.p, s.pdf, hit1.prim, hit1.p, hit1.uv);
+    if le == Vec3::ZERO {
+        return DVec3::ZERO;
+    }
+    let c = s.weight * le;
+    let c = x0.beta.map_or(c, |b| b * c);
+    c.as_dvec3() / f64::from(m)
 }

@@ -79,18 +79,24 @@ pub(crate) fn direct_through(
             let mut l0 = scene.direct(&w.sh, w.wo);
             if scene.has_emission() {
                 let u = [uniform(), uniform(), uniform()];
-                l0 += emitted_and_area(scene, &w.sh, w.wo, u);
+                l0 += emitted_and_area(scene, &w.sh, w.wo, u, false);
             }
             if w.vertices == 0 { l0 } else { w.beta * l0 }
         })
 }
 
 /// What area lights add to L₀ at a camera path's x₀ (`sh`, seen along `wo`), W·m⁻²·sr⁻¹: the
-/// radiance x₀ emits itself and one light sample of the emitters (light sampling alone: the
-/// estimators that call this weigh no BDF ray against it; docs/method-notes.md, "Area
-/// lights").
-pub(crate) fn emitted_and_area(scene: &Scene, sh: &Shading, wo: Vec3, u: [f32; 3]) -> Vec3 {
-    scene.emitted(sh.prim, sh.bary, wo) + scene.direct_area(sh, wo, u, false)
+/// radiance x₀ emits itself and one light sample of the emitters, weighted by the power
+/// heuristic against a BDF ray from x₀ with `mis` (the caller then adds that ray's hits on
+/// emitters), else light sampling alone (docs/method-notes.md, "Area lights: MIS at x₀").
+pub(crate) fn emitted_and_area(
+    scene: &Scene,
+    sh: &Shading,
+    wo: Vec3,
+    u: [f32; 3],
+    mis: bool,
+) -> Vec3 {
+    scene.emitted(sh.prim, sh.bary, wo) + scene.direct_area(sh, wo, u, mis)
 }
 
 /// The four fixed points of a pixel where L₀ is probed (offsets in the pixel, [0, 1)²).
