@@ -282,7 +282,7 @@ impl Renderer<'_> {
             None => ((sum_sq - sum * sum / n) / (n - 1.0)).max(0.0),
         };
         let jitter = if s.pixel_jitter {
-            self.jitter_variance(cache, &x0, (x, y)) / n_b
+            self.jitter_variance(cache, &x0, (x, y), mix.needs.second_vertex) / n_b
         } else {
             0.0
         };
@@ -332,11 +332,13 @@ impl Renderer<'_> {
     /// that noise as variation over the pixel (in the sphere furnace, ten times the true
     /// jitter variance). Indirect light varies little within a pixel on one surface; across
     /// an edge to another surface, its change is real and the cache's value there is used.
+    /// `mis`: the mode weighs x₀'s area-light sample against BDD=1's BDF ray.
     fn jitter_variance(
         &self,
         cache: &RadianceCache,
         centre: &FirstVertex<'_>,
         (x, y): (u32, u32),
+        mis: bool,
     ) -> f64 {
         let scene = self.scene();
         let cam = &scene.camera();
@@ -373,7 +375,7 @@ impl Renderer<'_> {
                     let mut direct = luminance(scene.direct(&sh, u)) as f64;
                     if scene.has_emission() {
                         // x₀'s own Le and its area-light sample, as the renderer's direct term.
-                        let area = area_moments(scene, (&sh, u), &mut rng, |_| 1.0);
+                        let area = x0_area_moments(scene, (&sh, u), &mut rng, mis);
                         direct +=
                             luminance(scene.emitted(sh.prim, sh.bary, u)) as f64 + area.weighted;
                         light_var += beta * beta * area.variance;
@@ -578,6 +580,49 @@ fn area_moments(
     AreaMoments {
         weighted: sum / k,
         unweighted_sq: rest / k,
+        variance: ((sum_sq - sum * sum / k) / (k - 1.0)).max(0.0),
+    }
+}
+
+/// [`AreaMoments`] (weights 1) of x₀'s area-light direct term as the renderer estimates it: with
+/// `mis`, per draw one light sample weighted by the power heuristic plus one BDF ray whose hit
+/// on an emitter (not through mirrors or glass) takes the complementary weight, as
+/// `emitter_hit_at_x1` adds it; without, the light sample alone ([`area_moments`]).
+fn x0_area_moments(
+    scene: &bdpm_scene::Scene,
+    (sh, wo): (&Shading, Vec3),
+    rng: &mut Rng,
+    mis: bool,
+) -> AreaMoments {
+    if !mis {
+        return area_moments(scene, (sh, wo), rng, |_| 1.0);
+    }
+    let k = AREA_SAMPLES as f64;
+    let bdf = scene.bdf_at(sh);
+    let out = bdf.outgoing(sh.frame.to_local(wo));
+    let (mut sum, mut sum_sq) = (0.0, 0.0);
+    for _ in 0..AREA_SAMPLES {
+        let light = scene.direct_area_sample(sh, wo, rng.uniform3(), true);
+        let mut c = light.map_or(0.0, |(c, _)| luminance(c) as f64);
+        let hit = bdf.sample_at(&out, rng.uniform3()).and_then(|s| {
+            let v = sh.frame.to_world(s.wi);
+            let hit = (sh.ng.dot(v) > 0.0).then(|| {
+                scene
+                    .geometry()
+                    .intersect(scene.spawn(sh, v), v, f32::INFINITY)
+            })??;
+            (!scene.is_delta(hit.material)).then_some((s, hit))
+        });
+        if let Some((s, hit)) = hit {
+            let le = scene.emitted_mis(sh.p, s.pdf, hit.prim, hit.p, hit.uv);
+            c += luminance(s.weight * le) as f64;
+        }
+        sum += c;
+        sum_sq += c * c;
+    }
+    AreaMoments {
+        weighted: sum / k,
+        unweighted_sq: 0.0,
         variance: ((sum_sq - sum * sum / k) / (k - 1.0)).max(0.0),
     }
 }
