@@ -71,13 +71,15 @@ rows = [l.split() for l in open(sys.argv[1]) if l.strip()]
 by = {}
 for c, b, s, rmse, rel, wall in rows:
     by.setdefault(c, []).append((float(rmse), float(rel), float(wall)))
-peers = [c for c in by if c.startswith("mitsuba")] or ["path"]
-best = min(statistics.median(r[0] for r in by[c]) for c in peers)
+# The yardstick: Mitsuba's best, else bdpm's `path`, else none (e.g. --configs defaults alone).
+peers = [c for c in by if c.startswith("mitsuba")] or [c for c in by if c == "path"]
+best = min((statistics.median(r[0] for r in by[c]) for c in peers), default=None)
 name = "Mitsuba's best" if peers != ["path"] else "bdpm's path"
 print(f"budget {rows[0][1]} s, medians of {len(rows) // len(by)} runs; rel. RMSE in %:")
 for c, v in by.items():
     m = statistics.median(r[0] for r in v)
     print(f"  {c:16s} rel. RMSE {m:.3f}  relMSE {statistics.median(r[1] for r in v):.3e}"
-          f"  wall {statistics.median(r[2] for r in v):.1f} s  {m / best:.2f}x {name}")
+          f"  wall {statistics.median(r[2] for r in v):.1f} s"
+          + (f"  {m / best:.2f}x {name}" if best else ""))
 PY
 done

@@ -282,7 +282,10 @@ fn solid_angle_and_area_sampling_agree_near_a_small_light() {
         let film = render(&scene, &with_mode(&settings, mode, 128, 4, 20_000));
         let (within, diff, se) = bdpm_suite::films_agree(&film, &reference, 4.0);
         eprintln!("{mode:>6}: within {within:.4}, mean {diff:+.4} ± {se:.4}");
-        if !(within >= 0.98 && diff.abs() < 4.0 * se && se < 0.01) {
+        // 0.015: `path` here has 0.0124 with a pixel's channels taken as fully correlated
+        // (`bdpm_suite::films_agree`); the cap of 0.01 was set on the smaller standard error
+        // that summed them as independent.
+        if !(within >= 0.98 && diff.abs() < 4.0 * se && se < 0.015) {
             failures.push(format!("{mode}: within {within}, mean {diff:+} ± {se}"));
         }
     }
@@ -430,4 +433,67 @@ fn a_textured_emitter_seen_directly_and_lighting_a_floor_is_exact() {
         }
     }
     assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// `direct_boost` in a scene with area lights (the integrator's `direct` module): every pixel
+/// that the light's outline crosses (found here independently: a 16 × 16 lattice of camera
+/// rays per pixel, some of whose first hits emit and some not, at least 2 of each) takes more
+/// than one direct-light sample per camera sample, and those pixels' summed per-pass variance
+/// falls at least 3-fold against one direct-light sample. Before the 5 × 5 probe lattice, the
+/// four probes at the pixel's quarter centres missed the outline where it passed outside them.
+#[test]
+fn the_light_s_outline_takes_more_direct_light_samples() {
+    let (scene, settings) = load("cornell-box.toml", 64, 64);
+    let cam = scene.camera();
+    let emits = |x: f32, y: f32| {
+        let hit = scene.walk_to_non_delta(
+            cam.position(),
+            cam.ray_direction(x, y),
+            bdpm_bdf::Transport::Radiance,
+            || 0.5,
+        );
+        hit.is_some_and(|w| scene.emitted(w.sh.prim, w.sh.bary, w.wo).max_element() > 0.0)
+    };
+    let outline: Vec<(u32, u32)> = (0..64 * 64)
+        .map(|i| (i % 64, i / 64))
+        .filter(|&(x, y)| {
+            let n = (0..256)
+                .filter(|k| {
+                    let (dx, dy) = ((k % 16) as f32 + 0.5, (k / 16) as f32 + 0.5);
+                    emits(x as f32 + dx / 16.0, y as f32 + dy / 16.0)
+                })
+                .count();
+            (2..=254).contains(&n)
+        })
+        .collect();
+    assert!(outline.len() >= 8, "the light's outline: {outline:?}");
+    let mut s = with_mode(&settings, "optimal-path", 32, 4, 20_000);
+    s.direct_boost = 16;
+    let renderer = bdpm_integrator::Renderer::new(&scene, &s).unwrap_or_else(|e| panic!("{e}"));
+    let direct = renderer.direct_samples().expect("the outline is boosted");
+    let missed: Vec<_> = outline
+        .iter()
+        .filter(|&&(x, y)| direct.at(x, y) == 1)
+        .collect();
+    eprintln!(
+        "{} outline pixels, {} boosted in all, missed {missed:?}",
+        outline.len(),
+        direct.boosted()
+    );
+    assert!(
+        missed.is_empty(),
+        "outline pixels with one sample: {missed:?}"
+    );
+    let variance = |film: &bdpm_integrator::Film| -> f64 {
+        let v = film.pass_variance();
+        outline
+            .iter()
+            .map(|&(x, y)| bdpm_bdf::luminance(v[(y * 64 + x) as usize].as_vec3()) as f64)
+            .sum()
+    };
+    let boosted = variance(&bdpm_suite::render_with(&renderer));
+    s.direct_boost = 1;
+    let plain = variance(&render(&scene, &s));
+    eprintln!("outline per-pass variance {boosted:.4e}, one sample {plain:.4e}");
+    assert!(boosted * 3.0 < plain, "{boosted:.4e} against {plain:.4e}");
 }

@@ -15,12 +15,11 @@ const RES: u32 = 16;
 
 /// Passes when ≥ 99% of pixel channels agree within 4σ and the image means agree within 1% or
 /// 4 standard errors, whichever is larger, with that standard error below `se_cap` so that the
-/// test can fail.
+/// test can fail (the caps of 0.005 were 0.003 on the standard error that took a pixel's channels as
+/// independent, √3-fold too small in a grey scene: `bdpm_suite::films_agree`).
 fn agree(name: &str, film: &Film, reference: &Film, se_cap: f64) -> Result<(), String> {
     let (within, mean_diff, mean_se) = films_agree(film, reference, 4.0);
-    eprintln!(
-        "{name:>40}: within 4σ {within:.4}, image mean {mean_diff:+.4} (naive SE {mean_se:.4})"
-    );
+    eprintln!("{name:>40}: within 4σ {within:.4}, image mean {mean_diff:+.4} (SE {mean_se:.4})");
     if within >= 0.99 && mean_diff.abs() < (4.0 * mean_se).max(0.01) && mean_se < se_cap {
         Ok(())
     } else {
@@ -62,7 +61,7 @@ fn caustic_ring_balance_agrees_with_light() {
         &s,
         ("balance", 48, 32, 200_000),
         ("light", 32, 1, 400_000),
-        0.003,
+        0.005,
     )
     .unwrap();
 }
@@ -144,7 +143,7 @@ fn textured_box_balance_agrees_with_light() {
         &s,
         ("balance", 64, 32, 100_000),
         ("light", 16, 1, 400_000),
-        0.003,
+        0.005,
     )
     .unwrap();
 }
