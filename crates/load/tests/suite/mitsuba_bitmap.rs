@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use bdpm_load::{LoadOptions, MemoryLimit, load_scene, load_scene_with};
-use bdpm_scene::srgb8_to_linear;
+use bdpm_scene::{Wrap, srgb8_to_linear};
 use glam::{Vec2, Vec3};
 
 /// A scene file `scene.xml` in `dir` around `body` (a camera and a point light), with the
@@ -67,10 +67,12 @@ fn png_reflectance_reads_through_ply_and_obj_texture_coordinates() {
     std::fs::write(dir.path().join("t.png"), png([[255, 128, 0], [10, 20, 30]])).unwrap();
     std::fs::write(dir.path().join("t.ply"), PLY).unwrap();
     std::fs::write(dir.path().join("t.obj"), OBJ).unwrap();
+    // The PLY's texture nested, the OBJ's a reference to a top-level one of the same file.
     let bsdf = r#"<bsdf type="diffuse"><texture name="reflectance" type="bitmap"><string name="filename" value="t.png"/><string name="wrap_mode" value="clamp"/></texture></bsdf>"#;
     let body = format!(
         r#"<shape type="ply"><string name="filename" value="t.ply"/>{bsdf}</shape>
-<shape type="obj"><string name="filename" value="t.obj"/>{bsdf}</shape>"#
+<texture type="bitmap" id="tex"><string name="filename" value="t.png"/></texture>
+<shape type="obj"><string name="filename" value="t.obj"/><bsdf type="diffuse"><ref name="reflectance" id="tex"/></bsdf></shape>"#
     );
     let loaded = load_scene(&write_scene(dir.path(), &body)).unwrap_or_else(|e| panic!("{e}"));
     let s = &loaded.scene;
@@ -80,6 +82,12 @@ fn png_reflectance_reads_through_ply_and_obj_texture_coordinates() {
     let lin = |c: [u8; 3]| Vec3::from(c.map(srgb8_to_linear));
     assert_eq!(t.texel(0, 0), lin([255, 128, 0]));
     assert_eq!(t.texel(1, 0), lin([10, 20, 30]));
+    let u = s
+        .texture(s.geometry().material(1))
+        .expect("textured by reference");
+    assert!(std::sync::Arc::ptr_eq(t.image(), u.image()));
+    assert_eq!(t.wraps(), (Wrap::ClampToEdge, Wrap::ClampToEdge));
+    assert_eq!(u.wraps(), (Wrap::Repeat, Wrap::Repeat));
     assert_eq!(
         s.materials()[s.geometry().material(0) as usize].bdf.kd(),
         Vec3::ONE
