@@ -64,10 +64,15 @@ impl Images {
 /// (the naming file's directory, then the `<path>`s), the memory account, the images so far
 /// and the list of files the scene reads (for its identity).
 pub(crate) struct Loader<'a> {
+    /// The directory of the file that names the bitmap.
     pub(crate) dir: &'a Path,
+    /// The `<path>` directories, searched after `dir`.
     pub(crate) search: &'a [PathBuf],
+    /// The loader's memory account: the texels kept are added to it.
     pub(crate) budget: &'a mut Budget,
+    /// The images decoded so far and the top-level textures.
     pub(crate) images: &'a mut Images,
+    /// The files the scene reads; each bitmap file joins them.
     pub(crate) files: &'a mut Vec<PathBuf>,
 }
 
@@ -150,6 +155,7 @@ impl Loader<'_> {
         self.budget
             .check(held, len, "the bitmap file's bytes")
             .map_err(|m| format!("reading it {m}"))?;
+        // The loader's bound for one binary file (a glTF file's), 2 GiB.
         let bytes = crate::files::read_regular(path, MAX_GLTF_BYTES, "bitmap")
             .map_err(|e| e.to_string())?;
         let held = held + bytes.len() as u64;
@@ -290,13 +296,19 @@ fn decode_exr(bytes: &[u8], budget: &Budget, held: u64) -> Result<Decoded, Strin
 /// (glTF's default) if it fits, else one factor for the three channels, else one per channel
 /// (a channel that is 0 everywhere takes the largest of the others').
 fn factorise(texels: &[Vec3]) -> Option<(Vec<u8>, Vec3)> {
+    // A channel of more than 256 distinct values is no set of codes; one channel's values
+    // at a time, so that the scratch is 4 bytes a texel.
     let channel = |k: usize| {
         let mut v: Vec<f32> = texels.iter().map(|t| t[k]).collect();
         v.sort_unstable_by(f32::total_cmp);
         v.dedup();
-        v
+        if v.len() > 256 {
+            return None;
+        }
+        v.shrink_to_fit();
+        Some(v)
     };
-    let values = [channel(0), channel(1), channel(2)];
+    let values = [channel(0)?, channel(1)?, channel(2)?];
     let mut all: Vec<f32> = values.concat();
     all.sort_unstable_by(f32::total_cmp);
     all.dedup();
