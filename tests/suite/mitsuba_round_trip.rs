@@ -3,9 +3,9 @@
 //! with the TOML file's settings, to the same image bits as the TOML file: the Gaussian
 //! lobe's stand-in comes back as the same kd, gr and Δ, the camera from the look-at inputs
 //! the export writes, the lights from intensities written with the digits that bring the
-//! flux back, area lights from the `<emitter type="area">` in their shape. The one exception
-//! is refused: glTF textures, exported as EXR bitmaps, which the import does not read
-//! (docs/scene-format.md, "Import from Mitsuba 3").
+//! flux back, area lights from the `<emitter type="area">` in their shape, glTF textures
+//! (exported as EXR bitmaps of linear texels × factor) from the bitmaps as their 8-bit sRGB
+//! codes and factors (docs/scene-format.md, "Import from Mitsuba 3").
 
 use std::path::{Path, PathBuf};
 
@@ -60,13 +60,10 @@ fn round_trip(path: &Path, dir: &Path) -> Result<bdpm_load::LoadedScene, String>
     load_scene(&dir.join(bdpm_export::SCENE_FILE)).map_err(|e| e.to_string())
 }
 
-/// Scenes whose export the import refuses, with the element: bdpm-export writes glTF
-/// base-colour textures as EXR bitmaps, which the import does not read (docs/scene-format.md).
-const REFUSED: [(&str, &str); 2] = [
-    ("textured-box.toml", "<texture type=\"bitmap\">"),
-    // Its sign's emissive texture exports as a bitmap radiance, which the import refuses too.
-    ("emissive-room.toml", "<texture type=\"bitmap\">"),
-];
+/// Scenes whose export the import refuses, with the element: none since the import reads
+/// `<texture type="bitmap">` (the glTF textures of textured-box.toml and emissive-room.toml
+/// come back as their 8-bit codes and factors, docs/scene-format.md).
+const REFUSED: [(&str, &str); 0] = [];
 
 /// Scenes whose export is lossy by a documented mapping, rendered and reported but not
 /// required to keep their bits: Mitsuba 3's area emitter has no two-sided form
@@ -100,6 +97,12 @@ fn differences(a: &bdpm_scene::Scene, b: &bdpm_scene::Scene) -> (Vec<&'static st
     };
     if emitting(a) != emitting(b) {
         differ.push("emitting triangles' vertices");
+    }
+    if textured(a, false) != textured(b, false) {
+        differ.push("base-colour textures or their texture coordinates");
+    }
+    if textured(a, true) != textured(b, true) {
+        differ.push("emissive textures or their texture coordinates");
     }
     let key = |s: &bdpm_scene::Scene| {
         let g = s.geometry();
@@ -143,6 +146,41 @@ fn differences(a: &bdpm_scene::Scene, b: &bdpm_scene::Scene) -> (Vec<&'static st
         differ.push("materials");
     }
     (differ, worst)
+}
+
+/// Every textured triangle (base colour, or `emissive`) as bits, sorted: its vertices, its
+/// texture coordinates, its texture's size and the texels it samples (not the wrap modes:
+/// Mitsuba has one for both axes, docs/scene-format.md)
+/// (a texture-coordinate or texel that did not come back shows here, not only in a render).
+fn textured(s: &bdpm_scene::Scene, emissive: bool) -> Vec<Vec<u32>> {
+    let g = s.geometry();
+    let mut out: Vec<Vec<u32>> = (0..g.triangle_count() as u32)
+        .filter_map(|t| {
+            let m = g.material(t);
+            let (texture, uv) = if emissive {
+                (s.emission_texture(m)?, s.emission_texcoords(t)?)
+            } else {
+                (s.texture(m)?, s.texcoords(t)?)
+            };
+            let (w, h) = texture.size();
+            let mut key: Vec<u32> = g
+                .vertices(t)
+                .iter()
+                .flat_map(|p| p.to_array())
+                .map(f32::to_bits)
+                .collect();
+            key.extend(uv.iter().flat_map(|p| p.to_array()).map(f32::to_bits));
+            key.extend([w, h]);
+            for y in 0..h {
+                for x in 0..w {
+                    key.extend(texture.texel(x, y).to_array().map(f32::to_bits));
+                }
+            }
+            Some(key)
+        })
+        .collect();
+    out.sort_unstable();
+    out
 }
 
 /// The largest |a − b|/max(|a|, |b|) over two renders' values (as [`bits`] gives them).

@@ -68,11 +68,13 @@ pub(crate) fn header(bytes: &[u8]) -> Result<Header, String> {
     })
 }
 
-fn is_png(bytes: &[u8]) -> bool {
+/// Whether `bytes` start with the PNG signature.
+pub(crate) fn is_png(bytes: &[u8]) -> bool {
     bytes.starts_with(b"\x89PNG\r\n\x1a\n")
 }
 
-fn is_jpeg(bytes: &[u8]) -> bool {
+/// Whether `bytes` start with a JPEG SOI marker.
+pub(crate) fn is_jpeg(bytes: &[u8]) -> bool {
     bytes.starts_with(&[0xFF, 0xD8, 0xFF])
 }
 

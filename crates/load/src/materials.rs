@@ -109,6 +109,12 @@ impl Materials {
         self.list[m as usize].emits()
     }
 
+    /// Whether material `m` has a base-colour texture and whether it has an emissive one.
+    pub(crate) fn textured(&self, m: u32) -> (bool, bool) {
+        let has = |list: &[Option<Arc<Texture>>]| list.get(m as usize).is_some_and(Option::is_some);
+        (has(&self.textures), has(&self.emission_textures))
+    }
+
     /// Gives material `m` a base-colour texture.
     pub(crate) fn set_texture(&mut self, m: u32, texture: Arc<Texture>) {
         let m = m as usize;

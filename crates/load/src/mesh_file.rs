@@ -1,4 +1,5 @@
-//! OBJ and PLY mesh files → triangles with optional per-vertex normals, one material.
+//! OBJ and PLY mesh files → triangles with optional per-vertex normals and texture
+//! coordinates, one material.
 //!
 //! The crates parse (`tobj` for OBJ, `ply-rs-bw` for PLY); this module checks what they give:
 //! finite coordinates, indices in range, at least one face. Polygons are split into fans
@@ -9,7 +10,7 @@ use std::io::{BufRead, BufReader, Read as _};
 use std::path::Path;
 
 use bdpm_geometry::{Geometry, TriangleMesh};
-use glam::{Mat3, Mat4, Vec3};
+use glam::{Mat3, Mat4, Vec2, Vec3};
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{ElementDef, Property, PropertyAccess, PropertyType};
 
@@ -70,6 +71,9 @@ struct RawMesh {
     positions: Vec<[f32; 3]>,
     /// One per position, or empty.
     normals: Vec<[f32; 3]>,
+    /// Texture coordinates as the file writes them (OBJ `vt`, PLY `u v` and its synonyms),
+    /// one per position, or empty.
+    texcoords: Vec<[f32; 2]>,
     /// Triangles, already split into fans.
     triangles: Vec<[u32; 3]>,
 }
@@ -84,6 +88,19 @@ pub(crate) fn load_mesh_file(
     material: u32,
     held: &Held<'_>,
 ) -> Result<TriangleMesh, LoadError> {
+    load_mesh_file_uv(origin, format, post, material, held).map(|(mesh, _)| mesh)
+}
+
+/// [`load_mesh_file`] with the texture coordinates of each vertex of the mesh, as the file
+/// writes them (no flip of v: that is the caller's convention), or empty when the file has
+/// none. A file where some vertices have them and others not gives (0, 0) to the others.
+pub(crate) fn load_mesh_file_uv(
+    origin: &MeshOrigin<'_>,
+    format: MeshFormat,
+    post: Mat4,
+    material: u32,
+    held: &Held<'_>,
+) -> Result<(TriangleMesh, Vec<Vec2>), LoadError> {
     let file = open_regular(origin.path, MAX_MESH_FILE_BYTES, format.name())
         .map_err(|e| origin.err(e.to_string()))?;
     let reader = BufReader::new(file.take(MAX_MESH_FILE_BYTES + 1));
@@ -96,11 +113,12 @@ pub(crate) fn load_mesh_file(
         raw.positions.len(),
         !raw.normals.is_empty(),
         raw.triangles.len(),
-    );
+    ) + (raw.texcoords.len() * size_of::<Vec2>()) as u64;
     held.budget
         .check(held.bytes, needs, "its vertices and triangles")
         .map_err(|m| origin.err(format!("keeping it {m}")))?;
-    Ok(place(raw, post, material))
+    let texcoords = raw.texcoords.iter().map(|&t| Vec2::from(t)).collect();
+    Ok((place(raw, post, material), texcoords))
 }
 
 /// Bytes of a mesh of `vertices` (with normals or not) and `triangles` as the scene keeps it.
@@ -132,6 +150,16 @@ fn check_raw(origin: &MeshOrigin<'_>, raw: &RawMesh) -> Result<(), LoadError> {
     {
         return Err(origin.err(format!(
             "the normal of vertex {k}, {n:?}, is not finite (NaN or infinite)"
+        )));
+    }
+    if let Some((k, t)) = raw
+        .texcoords
+        .iter()
+        .enumerate()
+        .find(|(_, t)| !t.iter().all(|c| c.is_finite()))
+    {
+        return Err(origin.err(format!(
+            "the texture coordinates of vertex {k}, {t:?}, are not finite (NaN or infinite)"
         )));
     }
     let count = raw.positions.len();
@@ -248,10 +276,26 @@ fn read_obj<R: std::io::Read>(
     .map_err(|e| origin.err(format!("line {}: {e}", counted.line())))?;
     let mut raw = RawMesh::default();
     let smooth = !models.is_empty() && models.iter().all(|m| !m.mesh.normals.is_empty());
+    let textured = models.iter().any(|m| !m.mesh.texcoords.is_empty());
     for model in &models {
         append_obj_model(origin, &model.mesh, smooth, &mut raw)?;
+        if textured {
+            append_obj_texcoords(&model.mesh, &mut raw);
+        }
     }
     Ok(raw)
+}
+
+/// Appends one tobj model's texture coordinates (`vt`, one pair per vertex with
+/// `single_index`) to `raw`, (0, 0) for each vertex of a model without them.
+fn append_obj_texcoords(mesh: &tobj::Mesh, raw: &mut RawMesh) {
+    let count = mesh.positions.len() / 3;
+    if mesh.texcoords.len() == 2 * count {
+        raw.texcoords
+            .extend(mesh.texcoords.chunks_exact(2).map(|c| [c[0], c[1]]));
+    } else {
+        raw.texcoords.extend(std::iter::repeat_n([0.0; 2], count));
+    }
 }
 
 /// Appends one tobj model's vertices and faces (split into fans) to `raw`.
@@ -299,12 +343,23 @@ fn append_obj_model(
 
 // ---- PLY
 
-/// One PLY vertex: `x`, `y`, `z`, and `nx`, `ny`, `nz` when the file has them.
+/// One PLY vertex: `x`, `y`, `z`, and `nx`, `ny`, `nz` and texture coordinates when the
+/// file has them.
 #[derive(Default)]
 struct PlyVertex {
     p: [f64; 3],
     n: [f64; 3],
+    uv: [f64; 2],
 }
+
+/// The names of a PLY vertex's texture coordinates, as Mitsuba's reader takes them (u, v
+/// first).
+const PLY_TEXCOORDS: [[&str; 2]; 4] = [
+    ["u", "v"],
+    ["s", "t"],
+    ["texture_u", "texture_v"],
+    ["texture_s", "texture_t"],
+];
 
 /// One PLY face: its `vertex_indices` (or `vertex_index`) list. Negative indices are kept
 /// as such, to be reported.
@@ -365,6 +420,8 @@ impl PropertyAccess for PlyVertex {
             "nx" => &mut self.n[0],
             "ny" => &mut self.n[1],
             "nz" => &mut self.n[2],
+            "u" | "s" | "texture_u" | "texture_s" => &mut self.uv[0],
+            "v" | "t" | "texture_v" | "texture_t" => &mut self.uv[1],
             _ => return ply_rs_bw::ply::PropertyAccessResult::Ignored,
         };
         // The header check has made sure these are scalars.
@@ -397,6 +454,7 @@ struct PlyLayout {
     vertices: usize,
     faces: usize,
     normals: bool,
+    texcoords: bool,
 }
 
 /// The vertex and face elements' counts and properties, refused when a needed property is
@@ -419,6 +477,9 @@ fn ply_layout(
         )));
     }
     let normals = ["nx", "ny", "nz"].into_iter().all(has_scalar);
+    let texcoords = PLY_TEXCOORDS
+        .iter()
+        .any(|pair| pair.iter().all(|n| has_scalar(n)));
     let faces = match find("face") {
         None => 0,
         Some(face) => {
@@ -439,6 +500,7 @@ fn ply_layout(
         vertices: vertex.count,
         faces,
         normals,
+        texcoords,
     })
 }
 
@@ -474,6 +536,11 @@ fn read_ply<R: std::io::Read>(
     }
     // At least one triangle per face, and the per-triangle data and BVH they will take.
     let needs = raw_mesh_bytes(layout.vertices, layout.normals, layout.faces)
+        + if layout.texcoords {
+            (layout.vertices * size_of::<Vec2>()) as u64
+        } else {
+            0
+        }
         + Geometry::planned_bytes(layout.faces).total()
         + Geometry::build_transient_bytes(layout.faces);
     held.budget
@@ -489,9 +556,7 @@ fn read_ply<R: std::io::Read>(
     let mut raw = RawMesh::default();
     for (name, def) in elements {
         match name.as_str() {
-            "vertex" => {
-                read_ply_vertices(origin, &mut reader, def, &header, layout.normals, &mut raw)?
-            }
+            "vertex" => read_ply_vertices(origin, &mut reader, def, &header, &layout, &mut raw)?,
             "face" => read_ply_faces(origin, &mut reader, def, &header, &mut raw)?,
             _ if raw.triangles.is_empty() || raw.positions.is_empty() => {
                 let _ = Parser::<PlyIgnored>::new()
@@ -510,7 +575,7 @@ fn read_ply_vertices<R: BufRead>(
     reader: &mut Reader<R>,
     def: &ElementDef,
     header: &ply_rs_bw::ply::Header,
-    normals: bool,
+    layout: &PlyLayout,
     raw: &mut RawMesh,
 ) -> Result<(), LoadError> {
     if def.count > u32::MAX as usize {
@@ -521,8 +586,11 @@ fn read_ply_vertices<R: BufRead>(
         .map_err(|e| ply_error(origin, "vertex", &e))?;
     // f64 values beyond the f32 range become infinite here, and are refused as such.
     raw.positions = vertices.iter().map(|v| v.p.map(|c| c as f32)).collect();
-    if normals {
+    if layout.normals {
         raw.normals = vertices.iter().map(|v| v.n.map(|c| c as f32)).collect();
+    }
+    if layout.texcoords {
+        raw.texcoords = vertices.iter().map(|v| v.uv.map(|c| c as f32)).collect();
     }
     Ok(())
 }

@@ -43,7 +43,9 @@ pub use emitters::{
     Emitter, EmitterPhoton, EmitterSample, MASKED_EMITTERS, SPHERICAL_MAX, SPHERICAL_MIN,
     cosine_hemisphere, power_heuristic,
 };
-pub use texture::{SceneTextures, TexelImage, Texture, TextureError, Wrap, srgb_to_linear};
+pub use texture::{
+    SceneTextures, TexelImage, Texture, TextureError, Wrap, srgb_to_linear, srgb8_to_linear,
+};
 // The plain data the photon tracer, the cache and the weights share lives in bdpm-core.
 pub use bdpm_core::{MASKED_LIGHTS, PointLight, Shading, WeightVertex};
 

@@ -256,6 +256,13 @@ pub struct SceneTextures {
     pub texcoords: Vec<[Vec2; 3]>,
 }
 
+/// The linear value bdpm reads for the 8-bit sRGB code `code`: the very number an
+/// [`TexelImage::srgb8`] texel of that code samples to (one entry of the decoding table), so
+/// that importers can find the codes behind linear values written out from it.
+pub fn srgb8_to_linear(code: u8) -> f32 {
+    SRGB8_TO_LINEAR[code as usize]
+}
+
 /// sRGB-encoded value in [0, 1] → linear (IEC 61966-2-1), as glTF asks of base-colour images.
 pub fn srgb_to_linear(c: f32) -> f32 {
     if c <= 0.04045 {

@@ -1,14 +1,18 @@
 //! Mitsuba BSDFs as bdpm materials (docs/scene-format.md, "Import from Mitsuba 3"): the exact
 //! ones (`diffuse`, `conductor`, `dielectric`, `twosided`, `blendbsdf` of those), the
 //! approximated ones with a warning saying how (`roughconductor`, `roughplastic`, `plastic`,
-//! the maps of `bumpmap` and `normalmap`), and refusals for the rest.
+//! the maps of `bumpmap` and `normalmap`), and refusals for the rest. A diffuse reflectance
+//! may be a bitmap texture (`bitmap`): kd = its factor × the texture, as for glTF.
 
 use std::collections::HashMap;
+use std::sync::Arc;
 
 use bdpm_bdf::{Bdf, Dielectric, Material, Mirror};
+use bdpm_scene::Texture;
 use glam::DVec3;
 use roxmltree::Node;
 
+use super::bitmap::{Bitmap, Loader};
 use super::doc::{Props, Xml, elements, property};
 use crate::LoadError;
 use crate::limits::{DELTA_MAX_DEGREES, DELTA_MIN_DEGREES};
@@ -17,11 +21,13 @@ use crate::material_types::IOR_RANGE;
 /// A BSDF as bdpm can render it, before it becomes a [`Material`].
 #[derive(Clone, Debug)]
 pub(crate) enum Bsdf {
-    /// Lambert `kd` plus a Gaussian lobe `gr` of width `delta` (radians).
+    /// Lambert `kd` (times `texture`, if any) plus a Gaussian lobe `gr` of width `delta`
+    /// (radians).
     Smooth {
         kd: DVec3,
         gr: DVec3,
         delta: Option<f64>,
+        texture: Option<Arc<Texture>>,
     },
     /// A mirror or a smooth dielectric.
     Delta(Material),
@@ -57,14 +63,16 @@ const IOR_NAMES: [(&str, f64); 23] = [
     ("diamond", 2.419),
 ];
 
-/// Reads BSDF elements: the file, the named BSDFs so far, and where warnings go.
-pub(crate) struct Reader<'r, 'x> {
+/// Reads BSDF elements: the file, the named BSDFs so far, where warnings go, and what
+/// reading a bitmap takes (`None` where no texture is read: a point light's intensity).
+pub(crate) struct Reader<'r, 'x, 'l> {
     pub(crate) x: &'r Xml<'x>,
     pub(crate) named: &'r Named,
     pub(crate) warnings: &'r mut Vec<String>,
+    pub(crate) bitmaps: Option<&'r mut Loader<'l>>,
 }
 
-impl Reader<'_, '_> {
+impl Reader<'_, '_, '_> {
     /// The BSDF of `<bsdf>` element `node`, or of `<ref id=…>` to one.
     pub(crate) fn read(&mut self, node: Node<'_, '_>) -> Result<Bsdf, LoadError> {
         if node.tag_name().name() == "ref" {
@@ -79,11 +87,15 @@ impl Reader<'_, '_> {
         let kind = self.x.need(node, "type")?;
         let p = Props::new(node);
         let out = match kind.as_str() {
-            "diffuse" => Bsdf::Smooth {
-                kd: self.colour(&p, "reflectance", DVec3::splat(0.5))?,
-                gr: DVec3::ZERO,
-                delta: None,
-            },
+            "diffuse" => {
+                let (kd, texture) = self.albedo(&p, "reflectance", DVec3::splat(0.5))?;
+                Bsdf::Smooth {
+                    kd,
+                    gr: DVec3::ZERO,
+                    delta: None,
+                    texture,
+                }
+            }
             "twosided" => self.twosided(node)?,
             "conductor" => self.conductor(&p)?,
             "dielectric" => self.dielectric(&p)?,
@@ -153,11 +165,40 @@ impl Reader<'_, '_> {
             "spectrum" => self.spectrum(n),
             "texture" | "ref" => Err(x.err(
                 n,
-                "textures are not supported by the import: give the colour as <rgb>",
+                "a texture is not supported here: bdpm reads bitmap textures as a diffuse \
+                 reflectance and as an area emitter's radiance; give the colour as <rgb>",
             )),
             other => Err(x.err(
                 n,
                 format!("<{other}> is not a colour (rgb, spectrum or float)"),
+            )),
+        }
+    }
+
+    /// A colour that may be a bitmap (a diffuse reflectance): the colour, or the bitmap's
+    /// factor and its texture.
+    fn albedo(
+        &mut self,
+        p: &Props<'_, '_>,
+        name: &str,
+        default: DVec3,
+    ) -> Result<(DVec3, Option<Arc<Texture>>), LoadError> {
+        match p.get(name) {
+            Some(n) if matches!(n.tag_name().name(), "texture" | "ref") => {
+                let b = self.bitmap(n)?;
+                Ok((b.factor, Some(b.texture)))
+            }
+            _ => Ok((self.colour(p, name, default)?, None)),
+        }
+    }
+
+    /// The bitmap of a `<texture>` (or a `<ref>` to one) element `n`.
+    pub(crate) fn bitmap(&mut self, n: Node<'_, '_>) -> Result<Bitmap, LoadError> {
+        match &mut self.bitmaps {
+            Some(loader) => loader.read(self.x, n, self.warnings),
+            None => Err(self.x.err(
+                n,
+                "a texture is not supported here: give the colour as <rgb>",
             )),
         }
     }
@@ -316,6 +357,7 @@ impl Reader<'_, '_> {
             kd: DVec3::ZERO,
             gr,
             delta: Some(delta),
+            texture: None,
         })
     }
 
@@ -324,7 +366,7 @@ impl Reader<'_, '_> {
     /// coating's normal-incidence Fresnel reflectance, width α√2; kd lowered where kd + gr
     /// would exceed 1.
     fn plastic(&mut self, p: &Props<'_, '_>, rough: bool) -> Result<Bsdf, LoadError> {
-        let kd = self.colour(p, "diffuse_reflectance", DVec3::splat(0.5))?;
+        let (kd, texture) = self.albedo(p, "diffuse_reflectance", DVec3::splat(0.5))?;
         let spec = self.colour(p, "specular_reflectance", DVec3::ONE)?;
         let n = self.ior(p, "int_ior", 1.49)? / self.ior(p, "ext_ior", 1.000277)?;
         let f0 = ((n - 1.0) / (n + 1.0)).powi(2);
@@ -336,6 +378,7 @@ impl Reader<'_, '_> {
                 kd,
                 gr: DVec3::ZERO,
                 delta: None,
+                texture,
             });
         }
         let delta = self.lobe_width(p)?;
@@ -346,6 +389,7 @@ impl Reader<'_, '_> {
             kd,
             gr,
             delta: Some(delta),
+            texture,
         })
     }
 
@@ -381,11 +425,13 @@ impl Reader<'_, '_> {
                 kd: kd_a,
                 gr: gr_a,
                 delta: d_a,
+                texture: t_a,
             },
             Bsdf::Smooth {
                 kd: kd_b,
                 gr: gr_b,
                 delta: d_b,
+                texture: t_b,
             },
         ) = (a, b)
         else {
@@ -407,11 +453,36 @@ impl Reader<'_, '_> {
             (_, true) => d_b,
             _ => None,
         };
+        // Where a side is textured, the other side's diffuse part must be zero (or weigh
+        // nothing): bdpm's kd is one factor times one texture.
+        let texture = blend_texture((&kd_a, t_a, 1.0 - w), (&kd_b, t_b, w))
+            .ok_or_else(|| self.x.err(node, "blends a textured diffuse part with another (untextured, or of another texture): bdpm's material has one reflectance texture"))?;
         Ok(Bsdf::Smooth {
             kd: kd_a * (1.0 - w) + kd_b * w,
             gr: gr_a * (1.0 - w) + gr_b * w,
             delta,
+            texture,
         })
+    }
+}
+
+/// One side of a blend: its diffuse reflectance, texture and weight.
+type Side<'a> = (&'a DVec3, Option<Arc<Texture>>, f64);
+
+/// The texture of a blend of sides `a` and `b`: `Some(None)` without one, `Some(t)` where one
+/// texture shows in the weighted diffuse part (the other side's diffuse part zero, or both
+/// sides the same image and wrap modes), `None` where two diffuse parts cannot share one.
+fn blend_texture(a: Side<'_>, b: Side<'_>) -> Option<Option<Arc<Texture>>> {
+    let shows = |s: &Side<'_>| s.2 > 0.0 && s.0.max_element() > 0.0;
+    let (sa, sb) = (shows(&a), shows(&b));
+    match (a.1.filter(|_| sa), b.1.filter(|_| sb)) {
+        (None, None) => Some(None),
+        (Some(t), None) if !sb => Some(Some(t)),
+        (None, Some(t)) if !sa => Some(Some(t)),
+        (Some(t), Some(u)) if Arc::ptr_eq(t.image(), u.image()) && t.wraps() == u.wraps() => {
+            Some(Some(t))
+        }
+        _ => None,
     }
 }
 
@@ -424,7 +495,7 @@ pub(crate) fn material(
 ) -> Result<Material, LoadError> {
     let (kd, gr, delta) = match bsdf {
         Bsdf::Delta(m) => return Ok(m.clone()),
-        Bsdf::Smooth { kd, gr, delta } => (*kd, *gr, *delta),
+        Bsdf::Smooth { kd, gr, delta, .. } => (*kd, *gr, *delta),
     };
     for (name, c) in [("reflectance", kd), ("lobe albedo", gr)] {
         if !(c.min_element() >= 0.0 && c.max_element() <= 1.0) {

@@ -5,10 +5,13 @@
 //!
 //! What maps: `<default>` and `$name`, `<path>`, `<include>`; shapes `obj`, `ply`,
 //! `rectangle`, `cube`, `sphere`, `disk`, `shapegroup`/`instance`; transforms; BSDFs
-//! (see `bsdf`); `point` emitters and `area` emitters nested in shapes; a `perspective` sensor with its film size. Everything else
+//! (see `bsdf`); `point` emitters and `area` emitters nested in shapes; `bitmap` textures as a
+//! diffuse reflectance or an area emitter's radiance (see `bitmap`), read through the mesh
+//! files' texture coordinates; a `perspective` sensor with its film size. Everything else
 //! is refused with a one-line error, or ignored with a warning where it changes nothing bdpm
 //! renders (the integrator, the sampler, the film's filter).
 
+mod bitmap;
 mod bsdf;
 mod doc;
 mod sensor;
@@ -17,12 +20,15 @@ mod transform;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use bdpm_geometry::{Geometry, TriangleMesh};
-use bdpm_scene::{PointLight, Scene, SceneTextures};
+use bdpm_scene::{EmissionTextures, PointLight, Scene, SceneTextures};
 use bdpm_settings::RenderSettings;
+use glam::Vec2;
 use roxmltree::{Document, Node};
 
+use self::bitmap::{Images, Loader};
 use self::bsdf::{Bsdf, Named, Reader};
 use self::doc::{Xml, elements};
 use crate::build::{Shapes, geometry_error, scene_error};
@@ -41,8 +47,9 @@ pub(crate) struct State {
     groups: HashMap<String, TriangleMesh>,
     materials: Materials,
     default_material: Option<u32>,
-    /// Emitting copies of materials by (material, radiance bits).
-    emitting: HashMap<(u32, [u32; 3]), u32>,
+    /// Emitting copies of materials by (material, radiance bits, the radiance texture's
+    /// address or 0).
+    emitting: HashMap<(u32, [u32; 3], usize), u32>,
     lights: Vec<PointLight>,
     shapes: Shapes,
     budget: Budget,
@@ -50,6 +57,13 @@ pub(crate) struct State {
     warnings: Vec<String>,
     files: Vec<PathBuf>,
     builtin_triangles: u64,
+    images: Images,
+}
+
+/// What reading a bitmap takes from the [`State`], and where warnings go, borrowed apart.
+pub(crate) struct Reading<'a> {
+    pub(crate) bitmaps: Loader<'a>,
+    pub(crate) warnings: &'a mut Vec<String>,
 }
 
 /// Loads the Mitsuba scene `text`, read from `display_path` in `base_dir`.
@@ -73,6 +87,7 @@ pub(crate) fn load(
         warnings: Vec::new(),
         files: Vec::new(),
         builtin_triangles: 0,
+        images: Images::default(),
     };
     st.file(text, display_path, base_dir, &HashMap::new(), 0)?;
     st.finish(display_path)
@@ -168,13 +183,21 @@ impl State {
                     self.warnings.push(x.warn(c, "a top-level BSDF without id is never used"));
                     return Ok(());
                 };
-                let (index, bsdf) = self.bsdf(x, c, &id)?;
+                let (index, bsdf) = self.bsdf(x, dir, c, &id)?;
                 self.named.insert(id, (index, bsdf));
             }
-            "texture" => self.warnings.push(x.warn(c, "textures are not supported by the import; it is ignored (a BSDF that refers to it is refused)")),
+            "texture" => {
+                let Some(id) = x.attr(c, "id")? else {
+                    self.warnings.push(x.warn(c, "a top-level texture without id is never used"));
+                    return Ok(());
+                };
+                let mut r = self.loader(dir);
+                let bitmap = r.bitmaps.read(x, c, r.warnings)?;
+                self.images.name(id, bitmap);
+            }
             "shape" => {
-                if let Some(mesh) = shape::shape(self, x, dir, c)? {
-                    self.shapes.append(&Ctx { file: x.file }, mesh)?;
+                if let Some(part) = shape::shape(self, x, dir, c)? {
+                    self.add_shape(x, c, part)?;
                 }
             }
             other => return Err(x.err(c, format!("<{other}> is not supported (bdpm reads default, path, include, integrator, sensor, emitter, bsdf, texture and shape)"))),
@@ -207,21 +230,92 @@ impl State {
         self.file(&text, &path, &sub_dir, x.defaults, depth + 1)
     }
 
-    /// A named BSDF, added to the scene's materials under its id.
+    /// The bitmap reader for files named in `dir`, and the warnings, borrowed from the state.
+    pub(crate) fn loader<'a>(&'a mut self, dir: &'a Path) -> Reading<'a> {
+        Reading {
+            bitmaps: Loader {
+                dir,
+                search: &self.search,
+                budget: &mut self.budget,
+                images: &mut self.images,
+                files: &mut self.files,
+            },
+            warnings: &mut self.warnings,
+        }
+    }
+
+    /// A named BSDF (file names in it relative to `dir`), added to the scene's materials
+    /// under its id, with its reflectance texture if it has one.
     fn bsdf(
         &mut self,
         x: &Xml<'_>,
+        dir: &Path,
         node: Node<'_, '_>,
         name: &str,
     ) -> Result<(u32, Bsdf), LoadError> {
+        let mut loader = Loader {
+            dir,
+            search: &self.search,
+            budget: &mut self.budget,
+            images: &mut self.images,
+            files: &mut self.files,
+        };
         let bsdf = Reader {
             x,
             named: &self.named,
             warnings: &mut self.warnings,
+            bitmaps: Some(&mut loader),
         }
         .read(node)?;
         let model = bsdf::material(x, node, &bsdf)?;
-        Ok((self.materials.add_delta(name.to_string(), model), bsdf))
+        let index = self.materials.add_delta(name.to_string(), model);
+        if let Bsdf::Smooth {
+            texture: Some(t), ..
+        } = &bsdf
+        {
+            self.materials.set_texture(index, Arc::clone(t));
+        }
+        Ok((index, bsdf))
+    }
+
+    /// Appends a shape's triangles, with the texture coordinates of those whose material has
+    /// a reflectance or an emissive texture (a shape without texture coordinates reads its
+    /// textures at (0, 0), warned, where Mitsuba would use its own parameterisation).
+    fn add_shape(
+        &mut self,
+        x: &Xml<'_>,
+        node: Node<'_, '_>,
+        part: shape::Part,
+    ) -> Result<(), LoadError> {
+        let shape::Part { mesh, uv } = part;
+        let before = self.shapes.mesh.indices.len();
+        let corners = |t: &[u32; 3]| match uv.is_empty() {
+            true => [Vec2::ZERO; 3],
+            false => t.map(|i| uv[i as usize]),
+        };
+        let (mut base, mut emissive) = (Vec::new(), Vec::new());
+        let mut missing = false;
+        for (t, &m) in mesh.indices.iter().zip(&mesh.materials) {
+            let (b, e) = self.materials.textured(m);
+            missing |= (b || e) && uv.is_empty();
+            base.push(if b { corners(t) } else { [Vec2::ZERO; 3] });
+            if e {
+                emissive.resize(base.len() - 1, [Vec2::ZERO; 3]);
+                emissive.push(corners(t));
+            }
+        }
+        if missing {
+            self.warnings.push(x.warn(node, "the shape has no texture coordinates: bdpm reads its textures at (0, 0) (Mitsuba uses the shape's own parameterisation); give it a mesh file with texture coordinates"));
+        }
+        self.shapes.append(&Ctx { file: x.file }, mesh)?;
+        self.shapes.texcoords.truncate(before);
+        self.shapes.texcoords.extend_from_slice(&base);
+        if !emissive.is_empty() {
+            let t = &mut self.shapes.emission_texcoords;
+            t.resize(before, [Vec2::ZERO; 3]);
+            t.extend_from_slice(&emissive);
+        }
+        Ok(())
     }
 
     /// The material of a shape ([`Self::bsdf_of_shape`]); with `emission` (the radiance of
@@ -232,29 +326,41 @@ impl State {
     fn shape_material(
         &mut self,
         x: &Xml<'_>,
+        dir: &Path,
         node: Node<'_, '_>,
-        emission: Option<glam::Vec3>,
+        emission: Option<shape::Emission>,
     ) -> Result<u32, LoadError> {
-        let (m, own) = self.bsdf_of_shape(x, node)?;
-        let Some(le) = emission else {
+        let (m, own) = self.bsdf_of_shape(x, dir, node)?;
+        let Some((le, texture)) = emission else {
             return Ok(m);
         };
-        if own {
+        let target = if own {
             self.materials.set_emission(m, le, false);
-            return Ok(m);
+            m
+        } else {
+            let address = texture.as_ref().map_or(0, |t| Arc::as_ptr(t) as usize);
+            let key = (m, le.to_array().map(f32::to_bits), address);
+            if let Some(&copy) = self.emitting.get(&key) {
+                return Ok(copy);
+            }
+            let copy = self.materials.add_emitting_copy(m, le);
+            self.emitting.insert(key, copy);
+            copy
+        };
+        if let Some(t) = texture {
+            self.materials.set_emission_texture(target, t);
         }
-        let key = (m, le.to_array().map(f32::to_bits));
-        if let Some(&copy) = self.emitting.get(&key) {
-            return Ok(copy);
-        }
-        let copy = self.materials.add_emitting_copy(m, le);
-        self.emitting.insert(key, copy);
-        Ok(copy)
+        Ok(target)
     }
 
     /// The material of a shape: its nested `<bsdf>` (then `true`: the shape's own) or
     /// `<ref id=…>`, else Mitsuba's default (diffuse of reflectance 0.5).
-    fn bsdf_of_shape(&mut self, x: &Xml<'_>, node: Node<'_, '_>) -> Result<(u32, bool), LoadError> {
+    fn bsdf_of_shape(
+        &mut self,
+        x: &Xml<'_>,
+        dir: &Path,
+        node: Node<'_, '_>,
+    ) -> Result<(u32, bool), LoadError> {
         let Some(b) = elements(node).find(|c| {
             c.tag_name().name() == "bsdf"
                 || (c.tag_name().name() == "ref" && c.attribute("name").is_none_or(|n| n == "bsdf"))
@@ -269,6 +375,7 @@ impl State {
                     kd: glam::DVec3::splat(0.5),
                     gr: glam::DVec3::ZERO,
                     delta: None,
+                    texture: None,
                 },
             )?;
             let m = self
@@ -285,7 +392,7 @@ impl State {
             };
         }
         let name = format!("line {}", doc::line(b));
-        Ok((self.bsdf(x, b, &name)?.0, true))
+        Ok((self.bsdf(x, dir, b, &name)?.0, true))
     }
 
     fn resolve(&self, dir: &Path, name: &str) -> PathBuf {
@@ -319,8 +426,14 @@ impl State {
             )
             .map_err(|m| ctx.bad("shape", format!("building the scene's {n} triangles {m}")))?;
         let Shapes {
-            mesh, texcoords, ..
+            mesh,
+            texcoords,
+            mut emission_texcoords,
+            ..
         } = self.shapes;
+        if !emission_texcoords.is_empty() {
+            emission_texcoords.resize(mesh.indices.len(), [Vec2::ZERO; 3]);
+        }
         let geometry = Geometry::new(mesh).map_err(|e| geometry_error(&ctx, e, 0))?;
         let report = LoadReport {
             triangles: geometry.triangle_count(),
@@ -329,12 +442,19 @@ impl State {
             lights: self.lights.len(),
             gltf_files: self.files,
             import_warnings: self.warnings,
+            textures: self.images.count(),
             ..LoadReport::default()
         };
         let light_count = self.lights.len();
-        let (materials, base_colour) = self.materials.into_parts();
+        let mut materials = self.materials;
+        let emission = EmissionTextures {
+            textures: materials.take_emission_textures(),
+            texcoords: emission_texcoords,
+        };
+        let (materials, base_colour) = materials.into_parts();
         let scene = Scene::new(geometry, materials, self.lights, sensor.camera)
             .and_then(|s| s.with_textures(SceneTextures { base_colour, texcoords }))
+            .and_then(|s| s.with_emission_textures(emission))
             .map_err(|e| match e {
                 bdpm_scene::SceneError::NoLight if light_count == 0 => ctx.bad("emitter", "the scene has no light: add an <emitter type=\"point\">, or an <emitter type=\"area\"> with a positive radiance inside a <shape>"),
                 other => scene_error(&ctx, other, light_count),

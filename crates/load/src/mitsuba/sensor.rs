@@ -1,10 +1,13 @@
 //! The `<sensor>` (a pinhole camera and its film) and `<emitter>`s: point lights map, an area
 //! emitter gives its shape's radiance, everything else is refused.
 
-use bdpm_scene::{Camera, PointLight};
+use std::sync::Arc;
+
+use bdpm_scene::{Camera, PointLight, Texture};
 use glam::{DMat4, DVec3, Vec3};
 use roxmltree::Node;
 
+use super::bitmap::Loader;
 use super::bsdf::{Named, Reader};
 use super::doc::{Props, Xml, elements};
 use super::transform;
@@ -240,14 +243,31 @@ pub(crate) fn emitter(
 }
 
 /// The radiance Le (W·m⁻²·sr⁻¹ per channel) of an `<emitter type="area">` nested in a
-/// shape: `radiance` as `<rgb>`, `<float>` or a `<spectrum>` (Mitsuba's default 1); a texture
-/// or a spectrum from a file is refused.
+/// shape: `radiance` as `<rgb>`, `<float>` or a `<spectrum>` (Mitsuba's default 1), or a
+/// bitmap (then Le is its factor, and the texture is returned beside it: Le × texture); a
+/// spectrum from a file is refused.
 pub(crate) fn area_radiance(
     x: &Xml<'_>,
     node: Node<'_, '_>,
     warnings: &mut Vec<String>,
-) -> Result<DVec3, LoadError> {
+    bitmaps: &mut Loader<'_>,
+) -> Result<(DVec3, Option<Arc<Texture>>), LoadError> {
     let p = Props::new(node);
+    if let Some(n) = p
+        .get("radiance")
+        .filter(|n| matches!(n.tag_name().name(), "texture" | "ref"))
+    {
+        let named = Named::new();
+        let b = Reader {
+            x,
+            named: &named,
+            warnings,
+            bitmaps: Some(bitmaps),
+        }
+        .bitmap(n)?;
+        p.unread(x, "<emitter type=\"area\">", warnings);
+        return Ok((b.factor, Some(b.texture)));
+    }
     let radiance = emitted(x, &p, "radiance", warnings)?;
     if !radiance.as_vec3().is_finite() {
         return Err(x.err(
@@ -256,7 +276,7 @@ pub(crate) fn area_radiance(
         ));
     }
     p.unread(x, "<emitter type=\"area\">", warnings);
-    Ok(radiance)
+    Ok((radiance, None))
 }
 
 /// An emitter's colour property `name` (Mitsuba's default 1 in every channel), refused where
@@ -272,6 +292,7 @@ fn emitted(
         x,
         named: &named,
         warnings,
+        bitmaps: None,
     }
     .colour(p, name, DVec3::ONE)?;
     if c.min_element() < 0.0 {

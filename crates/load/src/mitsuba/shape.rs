@@ -1,18 +1,32 @@
 //! `<shape>`s as triangle meshes: `obj` and `ply` files through the loader's mesh reader,
 //! Mitsuba's built-in `rectangle`, `cube`, `sphere` and `disk` tessellated, `shapegroup`
 //! and `instance`; `flip_normals` and `face_normals`; a nested `<emitter type="area">` makes
-//! the shape's material emit.
+//! the shape's material emit. Mesh files keep their texture coordinates, in Mitsuba's
+//! convention (row 0 of an image at v = 0, as in bdpm; an OBJ's `vt` flipped to 1 − v, a
+//! PLY's kept, unless `flip_tex_coords` says otherwise).
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use bdpm_geometry::TriangleMesh;
-use glam::{DMat3, DMat4, DVec3, Vec3};
+use bdpm_scene::Texture;
+use glam::{DMat3, DMat4, DVec3, Vec2, Vec3};
 use roxmltree::Node;
 
 use super::doc::{Props, Xml, elements};
 use super::{State, sensor, transform};
 use crate::LoadError;
-use crate::mesh_file::{Held, MeshFormat, MeshOrigin, load_mesh_file};
+use crate::mesh_file::{Held, MeshFormat, MeshOrigin, load_mesh_file_uv};
+
+/// A shape's triangles and the texture coordinates of each of its vertices (empty where the
+/// shape has none: built-in shapes, instances, mesh files without them).
+pub(crate) struct Part {
+    pub(crate) mesh: TriangleMesh,
+    pub(crate) uv: Vec<Vec2>,
+}
+
+/// An area emitter's radiance and its bitmap texture, if it has one (Le = radiance × texture).
+pub(crate) type Emission = (Vec3, Option<Arc<Texture>>);
 
 /// Geodesic frequency of a `sphere`: 20·16² = 5120 triangles, the scene file's default.
 pub(crate) const SPHERE_FREQUENCY: u32 = crate::limits::SPHERE_SUBDIVISIONS_DEFAULT;
@@ -26,9 +40,9 @@ pub(crate) fn shape(
     x: &Xml<'_>,
     dir: &Path,
     node: Node<'_, '_>,
-) -> Result<Option<TriangleMesh>, LoadError> {
+) -> Result<Option<Part>, LoadError> {
     let kind = x.need(node, "type")?;
-    let emission = attached_emitter(st, x, node, &kind)?;
+    let emission = attached_emitter(st, x, dir, node, &kind)?;
     if kind == "shapegroup" {
         let id = x.need(node, "id")?;
         let mut group = TriangleMesh::default();
@@ -36,8 +50,8 @@ pub(crate) fn shape(
             if let Some(e) = emitter_of(c) {
                 return Err(x.err(e, "an emitter in a shapegroup is not supported: Mitsuba's instances cannot replicate emitters; attach it to a shape outside the group"));
             }
-            if let Some(m) = shape(st, x, dir, c)? {
-                append(&mut group, m);
+            if let Some(part) = shape(st, x, dir, c)? {
+                append(&mut group, part.mesh);
             }
         }
         st.groups.insert(id, group);
@@ -45,14 +59,17 @@ pub(crate) fn shape(
     }
     let p = Props::new(node);
     let to_world = transform::to_world(x, &p)?;
+    let mut uv = Vec::new();
     let mut mesh = match kind.as_str() {
         "instance" => instance(st, x, node, to_world)?,
         "obj" | "ply" => {
-            let material = st.shape_material(x, node, emission)?;
-            file_mesh(st, x, dir, &p, &kind, to_world, material)?
+            let material = st.shape_material(x, dir, node, emission)?;
+            let (mesh, texcoords) = file_mesh(st, x, dir, &p, &kind, to_world, material)?;
+            uv = texcoords;
+            mesh
         }
         "rectangle" | "cube" | "sphere" | "disk" => {
-            let material = st.shape_material(x, node, emission)?;
+            let material = st.shape_material(x, dir, node, emission)?;
             builtin(x, &p, &kind, to_world.unwrap_or(DMat4::IDENTITY), material, &mut st.builtin_triangles)?
         }
         "serialized" => return Err(x.err(node, "Mitsuba's serialized meshes are not supported: convert the mesh to PLY (e.g. load it in Mitsuba and write it with Mesh.write_ply)")),
@@ -66,7 +83,7 @@ pub(crate) fn shape(
     }
     p.unread(x, &format!("<shape type=\"{kind}\">"), &mut st.warnings);
     check(x, node, &mesh)?;
-    Ok(Some(mesh))
+    Ok(Some(Part { mesh, uv }))
 }
 
 /// The `<emitter>` element nested in `node`, if any.
@@ -74,15 +91,16 @@ fn emitter_of<'a, 'i>(node: Node<'a, 'i>) -> Option<Node<'a, 'i>> {
     elements(node).find(|c| c.tag_name().name() == "emitter")
 }
 
-/// The radiance (W·m⁻²·sr⁻¹ per channel) of the area emitter nested in shape `node` of type
-/// `kind`, if it has one; another emitter type, or an emitter on a `shapegroup` or an
-/// `instance` (which Mitsuba refuses too), is an error.
+/// The radiance (W·m⁻²·sr⁻¹ per channel, with its texture) of the area emitter nested in
+/// shape `node` of type `kind`, if it has one; another emitter type, or an emitter on a
+/// `shapegroup` or an `instance` (which Mitsuba refuses too), is an error.
 fn attached_emitter(
     st: &mut State,
     x: &Xml<'_>,
+    dir: &Path,
     node: Node<'_, '_>,
     kind: &str,
-) -> Result<Option<Vec3>, LoadError> {
+) -> Result<Option<Emission>, LoadError> {
     let Some(e) = emitter_of(node) else {
         return Ok(None);
     };
@@ -90,9 +108,11 @@ fn attached_emitter(
         return Err(x.err(e, format!("an emitter on a {kind} is not supported: Mitsuba's instances cannot replicate emitters; attach it to each shape")));
     }
     match x.attr(e, "type")?.as_deref() {
-        Some("area") => Ok(Some(
-            sensor::area_radiance(x, e, &mut st.warnings)?.as_vec3(),
-        )),
+        Some("area") => {
+            let mut loader = st.loader(dir);
+            let (le, texture) = sensor::area_radiance(x, e, loader.warnings, &mut loader.bitmaps)?;
+            Ok(Some((le.as_vec3(), texture)))
+        }
         _ => Err(x.err(
             e,
             "only an area emitter can be attached to a shape (bdpm's emitting surfaces are Lambert emitters)",
@@ -100,7 +120,9 @@ fn attached_emitter(
     }
 }
 
-/// An `obj` or `ply` file, placed by `to_world`.
+/// An `obj` or `ply` file, placed by `to_world`, and its vertices' texture coordinates:
+/// v flipped to 1 − v where `flip_tex_coords` is true (Mitsuba's default for OBJ files, whose
+/// `vt` has v up, not for PLY files), so that row 0 of an image is at v = 0 as in bdpm.
 fn file_mesh(
     st: &mut State,
     x: &Xml<'_>,
@@ -109,7 +131,7 @@ fn file_mesh(
     kind: &str,
     to_world: Option<DMat4>,
     material: u32,
-) -> Result<TriangleMesh, LoadError> {
+) -> Result<(TriangleMesh, Vec<Vec2>), LoadError> {
     let node = p.node();
     let name = x
         .string(p, "filename")?
@@ -135,16 +157,15 @@ fn file_mesh(
         bytes: st.budget.textures() + st.shapes.bytes(),
     };
     let post = to_world.unwrap_or(DMat4::IDENTITY).as_mat4();
-    let mesh = load_mesh_file(&origin, format, post, material, &held)?;
+    let (mesh, mut uv) = load_mesh_file_uv(&origin, format, post, material, &held)?;
     st.files.push(path);
-    // Mitsuba reads texture coordinates and OBJ groups bdpm does not need.
-    p.ignore(&[
-        "flip_tex_coords",
-        "maximum_area_lights",
-        "vertex_count",
-        "face_count",
-    ]);
-    Ok(mesh)
+    if x.boolean(p, "flip_tex_coords", format == MeshFormat::Obj)? {
+        // In f32, as Mitsuba flips them.
+        uv.iter_mut().for_each(|t| t.y = 1.0 - t.y);
+    }
+    // Mitsuba's limits and counts of OBJ groups change nothing bdpm renders.
+    p.ignore(&["maximum_area_lights", "vertex_count", "face_count"]);
+    Ok((mesh, uv))
 }
 
 /// A `shapegroup`'s triangles placed by an `instance`'s `to_world`.

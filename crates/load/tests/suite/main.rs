@@ -10,6 +10,7 @@ mod gltf_emission;
 mod gltf_materials;
 mod mesh_files;
 mod mitsuba;
+mod mitsuba_bitmap;
 mod round4;
 mod scenes;
 mod shapes;

@@ -352,7 +352,7 @@ fn bad_input_is_a_one_line_error_naming_file_line_and_element() {
         (
             r#"<shape type="rectangle"><emitter type="area"><texture name="radiance" type="bitmap"/></emitter></shape>"#,
             "<texture type=\"bitmap\">",
-            "textures are not supported",
+            "missing <string name=\"filename\">",
         ),
         (
             r#"<shape type="rectangle"><emitter type="area"><spectrum name="radiance" filename="d65.spd"/></emitter></shape>"#,
