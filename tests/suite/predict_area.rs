@@ -22,17 +22,16 @@ fn pearson(a: &[f64], b: &[f64]) -> f64 {
 
 /// Passes of the measured V. The glossy surfaces make BDD=1's light sample at x₁ a rare-event
 /// estimate (the sample lands in a 1.5° lobe that reflects the light); with few passes a
-/// pixel's measured V usually misses those events and lies far below its expectation, the
-/// model's (docs/results.md, "Area lights: the noise model and the weights").
-const PASSES: u32 = 128;
+/// pixel's measured V usually misses those events and lies below its expectation, the
+/// model's (docs/results.md, "Area lights: the noise model and the weights"). The block median
+/// of predicted/measured V falls with the passes while the prediction stays the same: 1.68 at
+/// 128, 1.22 at 256, 1.18 at 384, 1.11 at 512, 1.14 at 1024 (correlation of ln V 0.81, 0.78,
+/// 0.81, 0.84, 0.87): 512 is the fewest that meets the bar with some margin.
+const PASSES: u32 = 512;
 
 /// Per 8×8 block: the predicted image-mean V against the measured one from [`PASSES`] passes
-/// of 4 samples and 10⁵ photons at 64², for `optimal-path`, the default mode. The issue's bar
-/// (block median 0.8–1.25, correlation of ln V ≥ 0.8) is NOT met here: the median is 1.68 and
-/// the correlation 0.81 (docs/results.md, "Area lights: the noise model and the weights"). What
-/// this asserts is a guard against losing the area light from the model: median within
-/// 0.8–2 and correlation ≥ 0.75 (with L₀ = 0 at every vertex, as before the model saw area
-/// lights, the prediction lies far below the measurement).
+/// of 4 samples and 10⁵ photons at 64², for `optimal-path`, the default mode: issue 46's bar,
+/// block median within 0.8–1.25 and correlation of ln V ≥ 0.8 (measured 1.11 and 0.84).
 #[test]
 fn predict_sees_the_area_light_on_the_glossy_box() {
     let side = 64u32;
@@ -76,9 +75,9 @@ fn predict_sees_the_area_light_on_the_glossy_box() {
             ratios[ratios.len() - 1]
         );
         assert!(
-            (0.8..=2.0).contains(&median),
+            (0.8..=1.25).contains(&median),
             "{mode}: block median {median}"
         );
-        assert!(correlation >= 0.75, "{mode}: correlation {correlation}");
+        assert!(correlation >= 0.8, "{mode}: correlation {correlation}");
     }
 }
