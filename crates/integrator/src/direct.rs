@@ -17,7 +17,7 @@
 //! over the pixel (their standard deviation, W·m⁻²·sr⁻¹), and M = ⌊s / (2·s_rms)⌋ clamped to
 //! [1, M_max], with s_rms the root mean square of s over the image. In a scene with area
 //! lights a 5 × 5 lattice with the pixel's corners replaces the four points, which miss half
-//! the emitters' outlines, and the scale is 1·s_rms ([`THRESHOLD_AREA`]). M ∝ s is the
+//! the emitters' outlines, and the scale is 1·s_rms (`THRESHOLD_AREA`). M ∝ s is the
 //! allocation that minimises Σ Jₚ/Mₚ for a given number of samples Σ Mₚ when a pixel's L₀ noise is
 //! Jₚ ∝ sₚ²; the scale 2·s_rms keeps the cost bounded whatever the scene: M > 1 needs
 //! s ≥ 4·s_rms, which at most P/16 of the P pixels have, and Σ (M − 1) ≤ Σ s/(2·s_rms) ≤ P/2
