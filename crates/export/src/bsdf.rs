@@ -8,7 +8,7 @@
 
 use bdpm_bdf::{Bdf, Material as Model};
 use bdpm_scene::{Material, Texture, Wrap};
-use glam::Vec3;
+use glam::DVec3;
 
 use crate::xml::Element;
 
@@ -100,10 +100,13 @@ fn smooth(
         Some(_) => gr.max_element() / (gr.max_element() + kd.max_element()),
         None => 0.0,
     };
+    // Kept in f64 and written with f64's digits where it is no f32: the import's kd·(1 − w)
+    // then rounds to kd's own f32 (an f32 here lost its last bit on one of
+    // scenes/cornell-box-glossy.toml's walls).
     let diffuse_scale = if weight < 1.0 {
-        (kd / (1.0 - weight)).as_vec3()
+        kd / (1.0 - weight)
     } else {
-        Vec3::ZERO
+        DVec3::ZERO
     };
     let (diffuse, image) = diffuse(index, name, diffuse_scale, texture, warnings)?;
     let Some(delta) = lobe else {
@@ -114,7 +117,7 @@ fn smooth(
         .string("distribution", "beckmann")
         .float("alpha", alpha)
         .string("material", "none")
-        .rgb("specular_reflectance", (gr / weight).as_vec3());
+        .rgb("specular_reflectance", gr / weight);
     warnings.push(format!(
         "material '{name}': Mitsuba has no Gaussian lobe; written as a stand-in, blendbsdf \
          (weight {weight:.4}) of diffuse and a Beckmann roughconductor of alpha {alpha:.5} \
@@ -135,7 +138,7 @@ fn smooth(
 fn diffuse(
     index: u32,
     name: &str,
-    kd: Vec3,
+    kd: DVec3,
     texture: Option<&Texture>,
     warnings: &mut Vec<String>,
 ) -> Result<(Element, Option<Image>), String> {
@@ -145,7 +148,7 @@ fn diffuse(
     };
     let path = format!("textures/{}.exr", id(index));
     let bitmap = bitmap(texture, "reflectance", &path, name, warnings);
-    let bytes = crate::image::exr(texture, kd)?;
+    let bytes = crate::image::exr(texture, kd.as_vec3())?;
     Ok((element.child(bitmap), Some((path, bytes))))
 }
 

@@ -3,7 +3,7 @@
 
 use std::fmt::Write as _;
 
-use glam::Vec3;
+use glam::DVec3;
 use quick_xml::Writer;
 use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, BytesText, Event};
 
@@ -75,9 +75,11 @@ impl Element {
         self.child(named("boolean", name).attr("value", value.to_string()))
     }
 
-    /// `<rgb name=".." value="r, g, b"/>`.
-    pub(crate) fn rgb(self, name: &str, value: Vec3) -> Element {
-        self.child(named("rgb", name).attr("value", triple(value)))
+    /// `<rgb name=".." value="r, g, b"/>`, each value with the digits of [`num`]: an f32's
+    /// shortest where it is one, else an f64's (a value the export computed, such as the lobe
+    /// stand-in's kd/(1 − w), comes back exactly when the import undoes it in f64).
+    pub(crate) fn rgb(self, name: &str, value: impl Into<DVec3>) -> Element {
+        self.child(named("rgb", name).attr("value", triple(value.into())))
     }
 
     /// The document: an XML declaration, a comment, then this element.
@@ -146,10 +148,10 @@ pub(crate) fn num(value: f64) -> String {
 }
 
 /// "x, y, z".
-pub(crate) fn triple(v: Vec3) -> String {
+pub(crate) fn triple(v: impl Into<DVec3>) -> String {
     let mut s = String::new();
-    for (i, c) in v.to_array().into_iter().enumerate() {
-        let _ = write!(s, "{}{}", if i > 0 { ", " } else { "" }, num(f64::from(c)));
+    for (i, c) in v.into().to_array().into_iter().enumerate() {
+        let _ = write!(s, "{}{}", if i > 0 { ", " } else { "" }, num(c));
     }
     s
 }
@@ -171,6 +173,6 @@ mod tests {
         );
         assert!(text.contains("<!-- a - - b -->"), "{text}");
         assert_eq!(num(0.1f32 as f64), "0.1");
-        assert_eq!(triple(Vec3::new(1.0, 0.5, -2.0)), "1, 0.5, -2");
+        assert_eq!(triple(glam::Vec3::new(1.0, 0.5, -2.0)), "1, 0.5, -2");
     }
 }
