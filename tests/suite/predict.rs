@@ -59,6 +59,85 @@ pub(crate) fn measured_group_variances(
         .collect()
 }
 
+/// The noise model against the measurement per 8 × 8-pixel block of a `side` × `side` render:
+/// the median, least and largest of the blocks' predicted/measured image-mean V and the
+/// correlation of ln V over blocks (the bars of issues 45 and 46: median in 0.8–1.25,
+/// correlation ≥ 0.8). Pixels predicted non-finite are left out of their block's mean.
+pub(crate) struct BlockAgreement {
+    pub(crate) median: f64,
+    pub(crate) min: f64,
+    pub(crate) max: f64,
+    pub(crate) correlation: f64,
+}
+
+impl BlockAgreement {
+    /// Prints the four numbers for `what` (scene and mode) and asserts the issues' bars.
+    pub(crate) fn report_and_assert_bars(&self, what: &str) {
+        let Self {
+            median,
+            min,
+            max,
+            correlation,
+        } = self;
+        eprintln!(
+            "{what}: 8x8 blocks predicted/measured median {median:.3} [min {min:.3}, max \
+             {max:.3}], correlation of ln V {correlation:.3}"
+        );
+        assert!(
+            (0.8..=1.25).contains(median),
+            "{what}: block median {median}"
+        );
+        assert!(*correlation >= 0.8, "{what}: correlation {correlation}");
+    }
+}
+
+/// [`BlockAgreement`] of `renderer`'s prediction `predicted` (per pixel) against its measured
+/// per-pass variance ([`measured_group_variances`]).
+pub(crate) fn block_agreement(
+    renderer: &Renderer<'_>,
+    predicted: &[f64],
+    side: u32,
+) -> BlockAgreement {
+    let blocks_per_row = side.div_ceil(8) as usize;
+    let group: Vec<usize> = (0..(side * side) as usize)
+        .map(|i| (i / side as usize / 8) * blocks_per_row + (i % side as usize) / 8)
+        .collect();
+    let groups = blocks_per_row * blocks_per_row;
+    let measured = measured_group_variances(renderer, &group, groups);
+    let mut sums = vec![(0.0, 0usize); groups];
+    for (i, v) in predicted.iter().enumerate() {
+        if v.is_finite() {
+            sums[group[i]].0 += v;
+            sums[group[i]].1 += 1;
+        }
+    }
+    let (mut ratios, mut lp, mut lm) = (Vec::new(), Vec::new(), Vec::new());
+    for (g, (sum, count)) in sums.iter().enumerate() {
+        let pred = sum / *count as f64;
+        let meas = measured[g].0;
+        ratios.push(pred / meas);
+        lp.push(pred.ln());
+        lm.push(meas.ln());
+    }
+    ratios.sort_by(f64::total_cmp);
+    BlockAgreement {
+        median: ratios[ratios.len() / 2],
+        min: ratios[0],
+        max: ratios[ratios.len() - 1],
+        correlation: pearson(&lp, &lm),
+    }
+}
+
+/// Pearson correlation of two equally long samples.
+fn pearson(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len() as f64;
+    let (ma, mb) = (a.iter().sum::<f64>() / n, b.iter().sum::<f64>() / n);
+    let cov: f64 = a.iter().zip(b).map(|(x, y)| (x - ma) * (y - mb)).sum();
+    let va: f64 = a.iter().map(|x| (x - ma).powi(2)).sum();
+    let vb: f64 = b.iter().map(|y| (y - mb).powi(2)).sum();
+    cov / (va * vb).sqrt()
+}
+
 /// Photons of the noise model's cache in these tests (`bdpm predict` takes
 /// `MODEL_CACHE_PHOTONS`, made for 256² renders of the Cornell box): enough for the furnace's
 /// closed form within its 3 % and for the small images here, in a fraction of the time.
