@@ -28,7 +28,9 @@ for p in sys.argv[2:]:
 if len(sys.argv) == 4:
     a, b = read(sys.argv[2]), read(sys.argv[3])
     mask = [i for i in range(len(ref)) if a[i] != b[i] and ref[i] > 1e-3 * m]
-    for p in sys.argv[2:]:
+    if not mask:
+        print("A and B have the same means in every pixel")
+    for p in sys.argv[2:] if mask else []:
         v = [x * x for x in read(p, 'noise.')]
         rel = sum(v[i] / ref[i] ** 2 for i in mask) / len(mask)
         tot = sum(v[i] for i in mask) / sum(ref[i] ** 2 for i in mask)

@@ -348,7 +348,11 @@ impl<'a> Mix<'a> {
         }
         if scene.has_emission() {
             let at = (&sh1, &x1, v, dist2);
-            if let Some((c, w)) = self.area_at_x1(x0, at, pair, rng, (weigher, stats)) {
+            for (c, w) in self
+                .area_at_x1(x0, at, pair, rng, (weigher, stats))
+                .into_iter()
+                .flatten()
+            {
                 direct_raw += c;
                 direct_weighted += c * w as f32;
                 if self.pilot {
@@ -369,10 +373,11 @@ impl<'a> Mix<'a> {
         })
     }
 
-    /// The one-bounce paths light→x₁→x₀ from the area lights: one light sample at x₁ (seen
-    /// from x₀ along `v`, |x₁ − x₀|² = `dist2`), its raw value and its value weighted by w₁ of
-    /// the path (`Arrival::Area`, as the photon side gives the same path): (value, w₁),
-    /// None where the sample brings nothing.
+    /// The one-bounce paths light→x₁→x₀ from the area lights (x₁ seen from x₀ along `v`,
+    /// |x₁ − x₀|² = `dist2`): at a glossy x₁ by two strategies, one light sample and one BDF
+    /// ray weighted against each other by the power heuristic as in `path`, at a Lambert x₁
+    /// by the light sample alone (docs/method-notes.md, "Area lights: MIS at x₁"), each with its raw value and w₁ of its own path (`Arrival::Area`,
+    /// as the photon side gives the same path); None where a strategy brings nothing.
     fn area_at_x1(
         &self,
         x0: &FirstVertex<'_>,
@@ -380,15 +385,15 @@ impl<'a> Mix<'a> {
         pair: Pair,
         rng: &mut Rng,
         (weigher, stats): (&Weigher, &mut WeightStats),
-    ) -> Option<(Vec3, f64)> {
-        let (c, wi) = self
-            .scene
-            .direct_area_sample(sh1, -v, rng.uniform3(), false)?;
-        let w = self.fixed_w1.unwrap_or_else(|| {
-            let one = self.path_pair(x0, x1, (v, dist2), Arrival::Area(wi), pair);
-            self.w1(&one, weigher, stats)
-        });
-        Some((c, w))
+    ) -> [Option<(Vec3, f64)>; 2] {
+        area_samples_at_x1(self.scene, sh1, -v, rng).map(|sample| {
+            let (c, wi) = sample?;
+            let w = self.fixed_w1.unwrap_or_else(|| {
+                let one = self.path_pair(x0, x1, (v, dist2), Arrival::Area(wi), pair);
+                self.w1(&one, weigher, stats)
+            });
+            Some((c, w))
+        })
     }
 
     /// BDD=1 through the delta vertices the direction `v` sampled at x₀ (with weight `e`,
@@ -418,7 +423,8 @@ impl<'a> Mix<'a> {
         map.restart_query_within(query, sh1.p, r);
         let mut direct_raw = scene.direct(&sh1, walk.wo);
         if scene.has_emission() {
-            direct_raw += scene.direct_area(&sh1, walk.wo, rng.uniform3(), false);
+            let area = area_samples_at_x1(scene, &sh1, walk.wo, rng);
+            direct_raw += area.into_iter().flatten().map(|(c, _)| c).sum::<Vec3>();
         }
         let weight = e * walk.beta;
         if self.pilot && direct_raw != Vec3::ZERO {
@@ -571,4 +577,30 @@ fn emitter_hit_at_x1(
     let c = s.weight * le;
     let c = x0.beta.map_or(c, |b| b * c);
     c.as_dvec3() / f64::from(m)
+}
+
+/// x₁'s area-light direct term towards `wo` by its strategies, each (value W·m⁻²·sr⁻¹, unit
+/// direction to the light) or None: at a glossy x₁ one light sample and one BDF ray weighted
+/// against each other by the power heuristic (`Scene::direct_area_sample` with MIS,
+/// `Scene::emitter_hit_by_bdf`), at a Lambert x₁ the light sample alone, whose BDF ray seldom
+/// meets a light (on Mitsuba's box it cost 15 % of a pass for no variance; docs/results.md,
+/// "Area lights: MIS at x₁").
+fn area_samples_at_x1(
+    scene: &Scene,
+    sh1: &Shading,
+    wo: Vec3,
+    rng: &mut Rng,
+) -> [Option<(Vec3, Vec3)>; 2] {
+    let mis = x1_weighs_bdf(scene, sh1);
+    let light = scene.direct_area_sample(sh1, wo, rng.uniform3(), mis);
+    let bdf = mis
+        .then(|| scene.emitter_hit_by_bdf(sh1, wo, rng.uniform3()))
+        .flatten();
+    [light, bdf]
+}
+
+/// Whether x₁'s area-light sample is weighed against a BDF ray (a glossy x₁) or taken alone (a
+/// Lambert one): [`area_samples_at_x1`], and `predict`'s model of it.
+pub(crate) fn x1_weighs_bdf(scene: &Scene, sh1: &Shading) -> bool {
+    !scene.bdf_at(sh1).is_lambert()
 }

@@ -48,8 +48,9 @@
 //! w_ob = w_m = w and both readings coincide.
 //!
 //! **Area lights.** Direct light from emitting triangles is one light sample per camera sample
-//! at x₁ (BDD=1) and at x₀ (M with `direct_boost`). The model draws [`AREA_SAMPLES`] such
-//! samples per vertex: their mean joins L₀ (at x₁ each sample weighted by its own path's w₁,
+//! at x₁ (BDD=1) and at x₀ (M with `direct_boost`), weighed against a BDF ray at x₀ (where the
+//! mode traces BDD=1) and at a glossy x₁. The model draws [`AREA_SAMPLES`] such samples per
+//! vertex, the BDF rays included: their mean joins L₀ (at x₁ each sample weighted by its own path's w₁,
 //! at x₀ with x₀'s own Le), and the variance of one sample is added to T1 (at x₁, times E²)
 //! and to T_jitter (at x₀, over M), less the 1/K of it that the K-sample means already carry
 //! into the sample variances. A scene without emission draws none.
@@ -62,6 +63,7 @@ use bdpm_mis::{Heuristic, Weigher, effective_samples};
 use bdpm_scene::Shading;
 use glam::Vec3;
 
+use crate::bdpm::x1_weighs_bdf;
 use crate::inputs::Arrival;
 use rayon::prelude::*;
 
@@ -375,7 +377,7 @@ impl Renderer<'_> {
                     let mut direct = luminance(scene.direct(&sh, u)) as f64;
                     if scene.has_emission() {
                         // x₀'s own Le and its area-light sample, as the renderer's direct term.
-                        let area = x0_area_moments(scene, (&sh, u), &mut rng, mis);
+                        let area = area_moments(scene, (&sh, u), &mut rng, mis, |_| 1.0);
                         direct +=
                             luminance(scene.emitted(sh.prim, sh.bary, u)) as f64 + area.weighted;
                         light_var += beta * beta * area.variance;
@@ -519,7 +521,9 @@ fn direction(
     // The area lights' one-bounce paths, each light sample weighted as its own path.
     let mut area = AreaMoments::default();
     if scene.has_emission() {
-        area = area_moments(scene, (&sh1, wo1), rng, |wi| {
+        // BDD=1's glossy x₁ weighs its light sample against a BDF ray, a Lambert one does not.
+        let mis = x1_weighs_bdf(scene, &sh1);
+        area = area_moments(scene, (&sh1, wo1), rng, mis, |wi| {
             if per_light {
                 let one = mix.path_pair(x0, &x1, (v, dist2), Arrival::Area(wi), pair);
                 weigher.weight(&one).w1
@@ -544,9 +548,9 @@ fn direction(
     })
 }
 
-/// The area lights' direct light at a vertex from [`AREA_SAMPLES`] light samples as the
-/// renderer draws them (one sample of `Scene::direct_area_sample` without MIS, shadow ray
-/// included), each of value c (luminance, W·m⁻²·sr⁻¹) weighted by w = `weight`(its unit
+/// The area lights' direct light at a vertex from [`AREA_SAMPLES`] draws as the renderer
+/// takes its one ([`area_moments`]: a light sample, with or without MIS against a BDF ray),
+/// each strategy's value c (luminance, W·m⁻²·sr⁻¹) weighted by w = `weight`(its unit
 /// direction to the light).
 #[derive(Clone, Copy, Debug, Default)]
 struct AreaMoments {
@@ -558,71 +562,38 @@ struct AreaMoments {
     variance: f64,
 }
 
-/// [`AreaMoments`] at `sh` towards the unit direction `wo`, numbers from `rng`.
+/// [`AreaMoments`] at `sh` towards the unit direction `wo`, numbers from `rng`: with `mis`,
+/// per draw one light sample weighted by the power heuristic plus one BDF ray whose hit on an
+/// emitter takes the complementary weight (`Scene::emitter_hit_by_bdf`), as the renderer's x₀
+/// in every mode that traces BDD=1 and its glossy x₁ take them; without, the light sample alone.
+/// Each strategy's value is weighted by `weight`(its unit direction to the light).
 fn area_moments(
     scene: &bdpm_scene::Scene,
     (sh, wo): (&Shading, Vec3),
     rng: &mut Rng,
+    mis: bool,
     weight: impl Fn(Vec3) -> f64,
 ) -> AreaMoments {
     let k = AREA_SAMPLES as f64;
     let (mut sum, mut sum_sq, mut rest) = (0.0, 0.0, 0.0);
     for _ in 0..AREA_SAMPLES {
-        let Some((c, wi)) = scene.direct_area_sample(sh, wo, rng.uniform3(), false) else {
-            continue;
-        };
-        let c = luminance(c) as f64;
-        let w = weight(wi);
-        sum += w * c;
-        sum_sq += (w * c) * (w * c);
-        rest += (1.0 - w) * (1.0 - w) * c;
+        let light = scene.direct_area_sample(sh, wo, rng.uniform3(), mis);
+        let bdf = mis
+            .then(|| scene.emitter_hit_by_bdf(sh, wo, rng.uniform3()))
+            .flatten();
+        let mut draw = 0.0;
+        for (c, wi) in [light, bdf].into_iter().flatten() {
+            let c = luminance(c) as f64;
+            let w = weight(wi);
+            draw += w * c;
+            rest += (1.0 - w) * (1.0 - w) * c;
+        }
+        sum += draw;
+        sum_sq += draw * draw;
     }
     AreaMoments {
         weighted: sum / k,
         unweighted_sq: rest / k,
-        variance: ((sum_sq - sum * sum / k) / (k - 1.0)).max(0.0),
-    }
-}
-
-/// [`AreaMoments`] (weights 1) of x₀'s area-light direct term as the renderer estimates it: with
-/// `mis`, per draw one light sample weighted by the power heuristic plus one BDF ray whose hit
-/// on an emitter (not through mirrors or glass) takes the complementary weight, as
-/// `emitter_hit_at_x1` adds it; without, the light sample alone ([`area_moments`]).
-fn x0_area_moments(
-    scene: &bdpm_scene::Scene,
-    (sh, wo): (&Shading, Vec3),
-    rng: &mut Rng,
-    mis: bool,
-) -> AreaMoments {
-    if !mis {
-        return area_moments(scene, (sh, wo), rng, |_| 1.0);
-    }
-    let k = AREA_SAMPLES as f64;
-    let bdf = scene.bdf_at(sh);
-    let out = bdf.outgoing(sh.frame.to_local(wo));
-    let (mut sum, mut sum_sq) = (0.0, 0.0);
-    for _ in 0..AREA_SAMPLES {
-        let light = scene.direct_area_sample(sh, wo, rng.uniform3(), true);
-        let mut c = light.map_or(0.0, |(c, _)| luminance(c) as f64);
-        let hit = bdf.sample_at(&out, rng.uniform3()).and_then(|s| {
-            let v = sh.frame.to_world(s.wi);
-            let hit = (sh.ng.dot(v) > 0.0).then(|| {
-                scene
-                    .geometry()
-                    .intersect(scene.spawn(sh, v), v, f32::INFINITY)
-            })??;
-            (!scene.is_delta(hit.material)).then_some((s, hit))
-        });
-        if let Some((s, hit)) = hit {
-            let le = scene.emitted_mis(sh.p, s.pdf, hit.prim, hit.p, hit.uv);
-            c += luminance(s.weight * le) as f64;
-        }
-        sum += c;
-        sum_sq += c * c;
-    }
-    AreaMoments {
-        weighted: sum / k,
-        unweighted_sq: 0.0,
         variance: ((sum_sq - sum * sum / k) / (k - 1.0)).max(0.0),
     }
 }
@@ -650,7 +621,8 @@ fn chain_direction(
         .map(|l| luminance(scene.direct_from_masked(&sh1, wo1, l, x1.lights)) as f64)
         .sum();
     let area = if scene.has_emission() {
-        area_moments(scene, (&sh1, wo1), rng, |_| 1.0)
+        let mis = x1_weighs_bdf(scene, &sh1);
+        area_moments(scene, (&sh1, wo1), rng, mis, |_| 1.0)
     } else {
         AreaMoments::default()
     };

@@ -400,6 +400,34 @@ impl Scene {
         c.is_finite().then_some((c, wi))
     }
 
+    /// The BDF-sampled strategy of the area lights' direct light at `sh` towards `wo` (numbers
+    /// `u`): one direction from the BDF, its ray traced, and where the ray's first hit is an
+    /// emitter seen from its emitting side, f·cos/p·Le weighted by the power heuristic against
+    /// [`Self::direct_area`]'s light sample (W·m⁻²·sr⁻¹), with the unit direction. The two
+    /// together (`direct_area` with `mis`) estimate the direct light unbiasedly. `None` where the
+    /// sample brings nothing: no direction, a ray below the geometric surface, a hit that is
+    /// not an emitter, or a mirror or glass (an emitter behind one is not direct light).
+    pub fn emitter_hit_by_bdf(&self, sh: &Shading, wo: Vec3, u: [f32; 3]) -> Option<(Vec3, Vec3)> {
+        let bdf = self.bdf_at(sh);
+        let s = bdf.sample_at(&bdf.outgoing(sh.frame.to_local(wo)), u)?;
+        let wi = sh.frame.to_world(s.wi);
+        if sh.ng.dot(wi) <= 0.0 {
+            return None;
+        }
+        let hit = self
+            .geometry
+            .intersect(self.spawn(sh, wi), wi, f32::INFINITY)?;
+        if self.is_delta(hit.material) {
+            return None;
+        }
+        let le = self.emitted_mis(sh.p, s.pdf, hit.prim, hit.p, hit.uv);
+        if le == Vec3::ZERO {
+            return None;
+        }
+        let c = s.weight * le;
+        c.is_finite().then_some((c, wi))
+    }
+
     /// Radiance emitted by the triangle of a BDF sample's hit (`prim`, at `p`, barycentric
     /// point `bary`) back towards the vertex `from` it was sampled at with solid-angle density
     /// `pdf_bdf` (sr⁻¹), weighted by the power heuristic against [`Self::direct_area`]'s light
