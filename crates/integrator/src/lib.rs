@@ -25,6 +25,7 @@ mod mix;
 mod pass;
 pub mod path;
 mod paths;
+pub mod photon_spread;
 mod plan;
 pub mod predict;
 pub mod prepare;

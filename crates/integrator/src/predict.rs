@@ -69,6 +69,7 @@ use rayon::prelude::*;
 
 use crate::error::RenderError;
 use crate::mix::{FirstVertex, Mix};
+use crate::photon_spread::photon_power_spread;
 use crate::render::Renderer;
 use crate::sampler::{direction_strata, in_cell, pixel_strata, random_cell};
 use crate::table::{footprint_overlap, pixel_walk};
@@ -180,10 +181,11 @@ impl Renderer<'_> {
         mix.needs.direct_at_x1 = true;
         let s = self.settings();
         let (w, hgt) = (s.width as usize, s.height as usize);
+        let kappa = photon_power_spread(self.scene(), s.seed);
         let mut terms = vec![None; w * hgt];
         terms.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
             for (x, out) in row.iter_mut().enumerate() {
-                *out = self.pixel_terms(&mix, cache, x as u32, y as u32);
+                *out = self.pixel_terms(&mix, (cache, kappa), x as u32, y as u32);
             }
         });
         let pick = |f: fn(&Terms) -> f64| -> Vec<f64> {
@@ -206,7 +208,13 @@ impl Renderer<'_> {
 
     /// The terms of pixel (x, y), or None if its centre sees no surface facing the camera
     /// (through mirrors and glass, on their more probable branches: [`pixel_walk`]).
-    fn pixel_terms(&self, mix: &Mix<'_>, cache: &RadianceCache, x: u32, y: u32) -> Option<Terms> {
+    fn pixel_terms(
+        &self,
+        mix: &Mix<'_>,
+        (cache, kappa): (&RadianceCache, f64),
+        x: u32,
+        y: u32,
+    ) -> Option<Terms> {
         let scene = self.scene();
         let s = self.settings();
         let pixel = y as u64 * s.width as u64 + x as u64;
@@ -274,8 +282,8 @@ impl Renderer<'_> {
         }
         let n = rays as f64;
         let b = mix.pixel_budget(None, scale);
-        // α = Φ/(N_F·S), W·m⁻², S the pixel's.
-        let alpha = b.flux / (b.photons * b.merge_area);
+        // α = Φ/(N_F·S), W·m⁻², S the pixel's, times κ for the photons' unequal powers.
+        let alpha = b.flux / (b.photons * b.merge_area) * kappa;
         // The variance of one sample's BDD=1 value: the sample variance (unbiased, divisor
         // N − 1) for independent directions; for stratified ones the mean variance within a
         // cell, since the mean of N_B samples, one per cell, has variance Σ σ²_cell/N_B².
