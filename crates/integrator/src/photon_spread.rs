@@ -5,7 +5,7 @@
 //! it survives with the largest channel of the albedo and divides by it, so after a bounce on
 //! a coloured surface a photon's luminance is lum(kd)/max(kd) of what it was (0.83 on Mitsuba's
 //! warm white, 0.27 on its red wall), and a radiance ℓ is carried by more, dimmer photons, whose
-//! kernel estimate is less noisy: its variance is ∝ Σ P² = ℓ·E_ℓ[P], not ℓ·Φ/N_F.
+//! kernel estimate is less noisy: its variance is ∝ Σ P² = ℓ·E_ℓ\[P\], not ℓ·Φ/N_F.
 use bdpm_bdf::luminance;
 use bdpm_core::Domain;
 use bdpm_photon::{MAX_DEPTH, TraceOptions, trace_photons};
