@@ -376,8 +376,9 @@ impl<'a> Mix<'a> {
     /// The one-bounce paths light→x₁→x₀ from the area lights (x₁ seen from x₀ along `v`,
     /// |x₁ − x₀|² = `dist2`): at a glossy x₁ by two strategies, one light sample and one BDF
     /// ray weighted against each other by the power heuristic as in `path`, at a Lambert x₁
-    /// by the light sample alone (docs/method-notes.md, "Area lights: MIS at x₁"), each with its raw value and w₁ of its own path (`Arrival::Area`,
-    /// as the photon side gives the same path); None where a strategy brings nothing.
+    /// by the light sample alone (docs/method-notes.md, "Area lights: MIS at x₁"), each with
+    /// its raw value and w₁ of its own path (`Arrival::Area`, as the photon side gives the
+    /// same path); None where a strategy brings nothing.
     fn area_at_x1(
         &self,
         x0: &FirstVertex<'_>,
@@ -583,8 +584,8 @@ fn emitter_hit_at_x1(
 /// direction to the light) or None: at a glossy x₁ one light sample and one BDF ray weighted
 /// against each other by the power heuristic (`Scene::direct_area_sample` with MIS,
 /// `Scene::emitter_hit_by_bdf`), at a Lambert x₁ the light sample alone, whose BDF ray seldom
-/// meets a light (on Mitsuba's box it cost 15 % of a pass for no variance; docs/results.md,
-/// "Area lights: MIS at x₁").
+/// meets a light (on Mitsuba's box it cost about 15 % of a pass, in one run, for no variance;
+/// docs/results.md, "Area lights: MIS at x₁").
 fn area_samples_at_x1(
     scene: &Scene,
     sh1: &Shading,
