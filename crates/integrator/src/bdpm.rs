@@ -309,8 +309,8 @@ impl<'a> Mix<'a> {
         let dist2 = (x1.p - x0.sh.p).length_squared();
 
         // One-bounce paths light→x₁→x₀, light by light (their balance weights differ).
-        let mut direct_raw = Vec3::ZERO;
-        let mut direct_weighted = Vec3::ZERO;
+        // (raw, weighted by w₁) sums of their values.
+        let mut direct = (Vec3::ZERO, Vec3::ZERO);
         let per_light = self.needs.densities;
         let w_const = if per_light {
             0.0
@@ -334,30 +334,19 @@ impl<'a> Mix<'a> {
             if c == Vec3::ZERO {
                 continue;
             }
-            direct_raw += c;
             let w = if per_light {
                 let one = self.path_pair(x0, &x1, (v, dist2), Arrival::Light(l), pair);
                 self.w1(&one, weigher, stats)
             } else {
                 w_direct
             };
-            direct_weighted += c * w as f32;
-            if self.pilot {
-                out.pilot.add(f64::from(luminance(s.weight * c)), w, true);
-            }
+            self.add_one_bounce(&mut direct, (c, w), s.weight, &mut out.pilot);
         }
         if scene.has_emission() {
             let at = (&sh1, &x1, v, dist2);
-            for (c, w) in self
-                .area_at_x1(x0, at, pair, rng, (weigher, stats))
-                .into_iter()
-                .flatten()
-            {
-                direct_raw += c;
-                direct_weighted += c * w as f32;
-                if self.pilot {
-                    out.pilot.add(f64::from(luminance(s.weight * c)), w, true);
-                }
+            let area = self.area_at_x1(x0, at, pair, rng, (weigher, stats));
+            for cw in area.into_iter().flatten() {
+                self.add_one_bounce(&mut direct, cw, s.weight, &mut out.pilot);
             }
         }
         Some(Second {
@@ -368,9 +357,25 @@ impl<'a> Mix<'a> {
             pair,
             w_const,
             weight: s.weight,
-            direct_raw,
-            direct_weighted,
+            direct_raw: direct.0,
+            direct_weighted: direct.1,
         })
+    }
+
+    /// Adds a one-bounce path's value `c` (W·m⁻²·sr⁻¹) at x₁ with its weight `w` to the
+    /// (raw, weighted) sums `direct`, and to `corrected-balance`'s pilot with x₀'s f·cos/p `e`.
+    fn add_one_bounce(
+        &self,
+        direct: &mut (Vec3, Vec3),
+        (c, w): (Vec3, f64),
+        e: Vec3,
+        pilot: &mut CandidateSums,
+    ) {
+        direct.0 += c;
+        direct.1 += c * w as f32;
+        if self.pilot {
+            pilot.add(f64::from(luminance(e * c)), w, true);
+        }
     }
 
     /// The one-bounce paths light→x₁→x₀ from the area lights (x₁ seen from x₀ along `v`,

@@ -185,7 +185,7 @@ impl Renderer<'_> {
         let mut terms = vec![None; w * hgt];
         terms.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
             for (x, out) in row.iter_mut().enumerate() {
-                *out = self.pixel_terms(&mix, (cache, kappa), x as u32, y as u32);
+                *out = self.pixel_terms(&mix, (cache, kappa), (x as u32, y as u32));
             }
         });
         let pick = |f: fn(&Terms) -> f64| -> Vec<f64> {
@@ -212,8 +212,7 @@ impl Renderer<'_> {
         &self,
         mix: &Mix<'_>,
         (cache, kappa): (&RadianceCache, f64),
-        x: u32,
-        y: u32,
+        (x, y): (u32, u32),
     ) -> Option<Terms> {
         let scene = self.scene();
         let s = self.settings();
@@ -221,7 +220,6 @@ impl Renderer<'_> {
         let centre = (x as f32 + 0.5, y as f32 + 0.5);
         let walk = pixel_walk(scene, centre)?;
         let x0 = mix.first_vertex_shaded(walk.sh, walk.wo)?;
-
         let n_b = s.spp as f64;
         // The pixel's radius (`adaptive_radius`): its merges, S, N_eff and weights are its own.
         let scale = mix.radius_scale(x, y);
