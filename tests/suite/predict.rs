@@ -73,16 +73,6 @@ pub(crate) struct BlockAgreement {
 impl BlockAgreement {
     /// Prints the four numbers for `what` (scene and mode) and asserts the issues' bars.
     pub(crate) fn report_and_assert_bars(&self, what: &str) {
-        self.report_and_assert(what, 0.8..=1.25);
-    }
-
-    /// [`Self::report_and_assert_bars`] with the block median's range `median_range` instead
-    /// of the issues' 0.8–1.25 (the correlation's bar, ≥ 0.8, unchanged).
-    pub(crate) fn report_and_assert(
-        &self,
-        what: &str,
-        median_range: std::ops::RangeInclusive<f64>,
-    ) {
         let Self {
             median,
             min,
@@ -94,7 +84,7 @@ impl BlockAgreement {
              {max:.3}], correlation of ln V {correlation:.3}"
         );
         assert!(
-            median_range.contains(median),
+            (0.8..=1.25).contains(median),
             "{what}: block median {median}"
         );
         assert!(*correlation >= 0.8, "{what}: correlation {correlation}");

@@ -47,6 +47,10 @@ pub(crate) enum Arrival<'m> {
     /// `predict`'s stand-in for the light paths it does not follow: arriving along x₁'s
     /// normal, with f₁ at x₁ replaced by the cache's average over arrivals, b/L_d.
     Modelled,
+    /// `predict`'s sampled arrival of a merge path at x₁ along the unit direction (pointing
+    /// away from x₁), for weights that read the photon's own f₁: f₁ and the densities as for a
+    /// photon from there, without `camis`'s β (no stored light path to walk).
+    Sampled(Vec3),
 }
 
 /// `camis` stops walking a light path once its β has fallen below this fraction of the camera
@@ -174,11 +178,7 @@ impl<'a> Mix<'a> {
                     pair.path.emission_density = 0.0;
                 }
             }
-            Arrival::Vertex {
-                vertices,
-                from,
-                incoming,
-            } => {
+            Arrival::Vertex { incoming, .. } | Arrival::Sampled(incoming) => {
                 pair.path.kind = PathKind::Merge;
                 if self.needs.x1_scattering {
                     pair.path.x1_scattering = self.x1_scattering(x1, incoming, v);
@@ -187,7 +187,10 @@ impl<'a> Mix<'a> {
                     let (pc, pl) = self.densities(x0, x1, v, dist2, incoming);
                     pair.path.camera_density = pc;
                     pair.path.light_density = pl;
-                    if self.needs.light_suffix {
+                    // A sampled arrival has no stored light path to walk for `camis`'s β.
+                    if let Arrival::Vertex { vertices, from, .. } = arrival
+                        && self.needs.light_suffix
+                    {
                         pair.path.light_suffix = self.light_suffix(vertices, x0, x1, from, pc);
                     }
                 }

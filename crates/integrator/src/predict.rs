@@ -47,6 +47,15 @@
 //! weight) and w²b → w_m²·b (b comes from the merge photons at x₁ only). For every other mode
 //! w_ob = w_m = w and both readings coincide.
 //!
+//! **`optimal-path`** weighs each merge photon by its own f₁ at x₁ (the BDF of x₁ from the
+//! photon's arrival towards x₀). At a glossy x₁ the model draws [`ARRIVAL_SAMPLES`] arrivals ω₂
+//! from x₁'s BDF, finds the radiance ℓ that reaches x₁ along each after at least one bounce
+//! (the light's direct light at the next non-delta vertex plus the cache's L_d there), and
+//! takes the merge paths' w, (1 − w)² and w² as averages under f₁·ℓ·cos (for L_d: BDD=1's
+//! mean, the merges at x₀) and under f₁²·ℓ·cos (for b: the merges at x₁); the cache's L_d and
+//! b keep their magnitudes. Elsewhere the cell's average f₁ = b/L_d stands for every arrival,
+//! which is `optimal-split`'s weight.
+//!
 //! **Area lights.** Direct light from emitting triangles is one light sample per camera sample
 //! at x₁ (BDD=1) and at x₀ (M with `direct_boost`), weighed against a BDF ray at x₀ (where the
 //! mode traces BDD=1) and at a glossy x₁. The model draws [`AREA_SAMPLES`] such samples per
@@ -494,9 +503,7 @@ fn direction(
     let dist2 = (x1.p - x0.sh.p).length_squared();
     let needs = weigher.heuristic().needs();
     let per_light = needs.densities;
-    // The longer paths' weight for the model's stand-in light path (`optimal-path` weighs each
-    // photon by its own f₁ at x₁; the model has only the cell's average, which makes it
-    // `optimal-split`).
+    // The longer paths' weight for the model's stand-in light path.
     let merge = mix.path_pair(x0, &x1, (v, dist2), Arrival::Modelled, pair);
     let w_merge = weigher.weight(&merge).w1;
     // Weights that tell one-bounce paths from merge paths (`optimal-split`, `optimal-path`).
@@ -540,17 +547,113 @@ fn direction(
     }
     // The model's L_d and b at x₁ towards x₀ (the weights read theirs, in `pair`).
     let (ld, b) = mix.model_lookup(cache, &x1, wo1);
+    // `optimal-path` weighs each photon by its own f₁ at x₁: at a glossy x₁ its merge paths'
+    // weights are averaged over sampled arrivals; elsewhere one weight stands for them all.
+    let per_arrival = |incoming| {
+        let path = mix.path_pair(x0, &x1, (v, dist2), Arrival::Sampled(incoming), pair);
+        weigher.weight(&path).w1
+    };
+    let merge_w = (needs.x1_scattering && x1_weighs_bdf(scene, &sh1))
+        .then(|| arrival_moments(mix, cache, &sh1, wo1, rng, per_arrival))
+        .flatten()
+        .unwrap_or(MergeWeights::one(w_merge));
     let f = luminance(s.f) as f64;
     let cos = s.wi.z as f64;
     let pdf = s.pdf as f64;
     // E = f·cos/p, the camera path's weight after the scattering at x₀.
     let e = f * cos / pdf;
     Some(Direction {
-        value: e * (l0_w + area.weighted + ld * w_merge),
-        photons_x0: (l0_w0_sq + area.unweighted_sq + ld * (1.0 - w_merge).powi(2)) * f * f * cos
+        value: e * (l0_w + area.weighted + ld * merge_w.mean),
+        photons_x0: (l0_w0_sq + area.unweighted_sq + ld * merge_w.complement_sq) * f * f * cos
             / pdf,
-        photons_x1: w_merge * w_merge * e * e * b,
+        photons_x1: merge_w.square_b * e * e * b,
         light_var: e * e * area.variance,
+    })
+}
+
+/// Arrival directions per glossy x₁ with which the model resolves `optimal-path`'s per-photon
+/// weights (8 keeps their averages' noise below that of the pixel's 64 directions).
+pub const ARRIVAL_SAMPLES: u32 = 8;
+
+/// The merge paths' weight w₁ at x₁ averaged over their arrivals: under L_d's density
+/// (f₁·ℓ·cos) for BDD=1's mean and the merges at x₀, under b's (f₁²·ℓ·cos) for the merges at
+/// x₁ (dimensionless).
+#[derive(Clone, Copy, Debug)]
+struct MergeWeights {
+    /// E[w] under f₁·ℓ·cos.
+    mean: f64,
+    /// E[(1 − w)²] under f₁·ℓ·cos.
+    complement_sq: f64,
+    /// E[w²] under f₁²·ℓ·cos.
+    square_b: f64,
+}
+
+impl MergeWeights {
+    /// One weight for every arrival.
+    fn one(w: f64) -> Self {
+        Self {
+            mean: w,
+            complement_sq: (1.0 - w) * (1.0 - w),
+            square_b: w * w,
+        }
+    }
+}
+
+/// [`MergeWeights`] at x₁ (`sh1`, towards x₀ along the unit `wo1`) from [`ARRIVAL_SAMPLES`]
+/// BDF-sampled arrivals ω₂, each weighted by `weight`(ω₂) and by the radiance ℓ that arrives
+/// along it after at least one bounce (the light's direct light at the next non-delta vertex y
+/// plus the cache's L_d there, through mirrors and glass; y's own Le is a one-bounce path at x₁,
+/// which the light sample takes). None where no arrival finds light.
+fn arrival_moments(
+    mix: &Mix<'_>,
+    cache: &RadianceCache,
+    sh1: &Shading,
+    wo1: Vec3,
+    rng: &mut Rng,
+    weight: impl Fn(Vec3) -> f64,
+) -> Option<MergeWeights> {
+    let scene = mix.scene;
+    let bdf = scene.bdf_at(sh1);
+    let out = bdf.outgoing(sh1.frame.to_local(wo1));
+    // Σ f₁ℓcos/p, Σ f₁²ℓcos/p, and their sums weighted by w, (1 − w)², w².
+    let (mut ld, mut b, mut mean, mut complement, mut square) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for _ in 0..ARRIVAL_SAMPLES {
+        let Some(s) = bdf.sample_at(&out, rng.uniform3()) else {
+            continue;
+        };
+        let wi = sh1.frame.to_world(s.wi);
+        if s.pdf <= 0.0 || sh1.ng.dot(wi) <= 0.0 {
+            continue;
+        }
+        let Some(walk) =
+            scene.walk_to_non_delta(scene.spawn(sh1, wi), wi, Transport::Radiance, || {
+                rng.uniform()
+            })
+        else {
+            continue;
+        };
+        let (sh, u) = (walk.sh, walk.wo);
+        let mut l = scene.direct(&sh, u);
+        if scene.has_emission() {
+            l += scene
+                .direct_area_sample(&sh, u, rng.uniform3(), false)
+                .map_or(Vec3::ZERO, |(c, _)| c);
+        }
+        let l = luminance(walk.beta * l) as f64
+            + cache.lookup(sh.prim, sh.p, u).0 as f64 * luminance(walk.beta) as f64;
+        let f1 = luminance(s.f) as f64;
+        let g = f1 * s.wi.z as f64 / s.pdf as f64 * l;
+        let w = weight(wi);
+        ld += g;
+        b += f1 * g;
+        mean += w * g;
+        complement += (1.0 - w) * (1.0 - w) * g;
+        square += w * w * f1 * g;
+    }
+    (ld > 0.0 && b > 0.0).then(|| MergeWeights {
+        mean: mean / ld,
+        complement_sq: complement / ld,
+        square_b: square / b,
     })
 }
 
