@@ -32,9 +32,9 @@ pub(crate) enum Arrival<'m> {
     Light(usize),
     /// Straight from a point of an area light, arriving at x₁ along the unit direction
     /// (pointing away from x₁): the camera side's light sample, or a photon's recorded
-    /// direction at its first vertex. `camis`'s light-end factor is not read for these paths
-    /// (their emission density would need the point on the light, which a photon does not
-    /// keep): it is 0 on both sides alike, so the weights stay a partition.
+    /// direction at its first vertex. The point on the light, which a photon does not keep,
+    /// is found again by tracing back along it ([`bdpm_scene::Scene::area_light_end`]), on both sides
+    /// alike, for the emission density of the balance-type weights.
     Area(Vec3),
     /// Scattered at the light-path vertex `vertices[from]` (x₂; the vertices stored path by
     /// path, as [`PhotonMap::vertices`] holds them) and arriving at x₁ along `incoming` (unit,
@@ -175,7 +175,7 @@ impl<'a> Mix<'a> {
                     let (pc, pl) = self.densities(x0, x1, v, dist2, incoming);
                     pair.path.camera_density = pc;
                     pair.path.light_density = pl;
-                    pair.path.emission_density = 0.0;
+                    pair.path.emission_density = self.area_emission_density(x1, incoming);
                 }
             }
             Arrival::Vertex { incoming, .. } | Arrival::Sampled(incoming) => {
@@ -385,8 +385,16 @@ impl<'a> Mix<'a> {
                 return beta;
             }
             if y.depth == 0 && y.light == AREA_LIGHT {
-                // As Arrival::Area: no light-end factor for area lights.
-                return 0.0;
+                // The density of y from its point on the light, and of that point (SeeSharp's
+                // second factor of A for a vertex sampled on an emitter).
+                let (p, n, prim) = (y.at.p, y.at.n, y.at.prim);
+                return self
+                    .scene
+                    .area_light_end(p, n, prim, y.incoming)
+                    .map_or(0.0, |end| {
+                        beta * acceptance_probability(end.vertex_density, area)
+                            * acceptance_probability(end.position_density, area)
+                    });
             }
             if y.depth == 0 {
                 let emission = self.emission_density(y.light as usize, &y.at);
@@ -407,6 +415,23 @@ impl<'a> Mix<'a> {
     /// at its first vertex is the emitted ray's, which the camera side does not have).
     fn light_direction(&self, light: usize, at: Vec3) -> Vec3 {
         (self.scene.lights()[light].position - at).normalize_or_zero()
+    }
+
+    /// [`Self::emission_density`] of a one-bounce path from an area light, arriving at x₁ along
+    /// the unit `incoming`, m⁻²·sr: the photon's density of x₁ (the point on the light, and x₁
+    /// from it) over BDD=1's light-sample density of that point, both in area measure at the
+    /// light, so that the balance-type weights compare p_C(x₀→x₁)·p_ls with the photon's
+    /// p(point)·p(x₁)·p_L(x₁→x₀)·S·N_F; their common cos θₗ/d² cancels. 0 where the point is
+    /// not found or no light sample reaches it (BDD=1 then takes the path).
+    fn area_emission_density(&self, x1: &WeightVertex, incoming: Vec3) -> f64 {
+        let Some(end) = self.scene.area_light_end(x1.p, x1.n, x1.prim, incoming) else {
+            return 0.0;
+        };
+        if end.light_sample_density <= 0.0 {
+            return 0.0;
+        }
+        let cos1 = x1.n.dot(incoming).abs() as f64;
+        end.position_density * cos1 / (std::f64::consts::PI * end.light_sample_density)
     }
 
     /// Emission density p_L(light→x₁) in area measure (choice of light included).

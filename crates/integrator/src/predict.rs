@@ -580,11 +580,11 @@ pub const ARRIVAL_SAMPLES: u32 = 8;
 /// x₁ (dimensionless).
 #[derive(Clone, Copy, Debug)]
 struct MergeWeights {
-    /// E[w] under f₁·ℓ·cos.
+    /// The mean of w under f₁·ℓ·cos.
     mean: f64,
-    /// E[(1 − w)²] under f₁·ℓ·cos.
+    /// The mean of (1 − w)² under f₁·ℓ·cos.
     complement_sq: f64,
-    /// E[w²] under f₁²·ℓ·cos.
+    /// The mean of w² under f₁²·ℓ·cos.
     square_b: f64,
 }
 

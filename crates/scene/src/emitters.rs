@@ -234,6 +234,39 @@ impl Scene {
         }
     }
 
+    /// The point on an area light that a light path arriving at its first vertex y (position
+    /// `p`, unit geometric normal `n`, triangle `prim`) along the unit direction `incoming`
+    /// (pointing from y towards the light) left from, found by tracing back along `incoming`,
+    /// and its densities. Both techniques of a path can find it: a photon keeps its arrival
+    /// direction, a light sample or a BDF ray has its own. `None` where the ray meets no
+    /// emitter, or an emitter's back.
+    pub fn area_light_end(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        prim: u32,
+        incoming: Vec3,
+    ) -> Option<AreaLightEnd> {
+        let side = if n.dot(incoming) >= 0.0 { 1.0 } else { -1.0 };
+        let origin = p + n * (side * self.geometry.spawn_offset(prim));
+        let hit = self.geometry.intersect(origin, incoming, f32::INFINITY)?;
+        let e = self.emitter_of(hit.prim)?;
+        let cos_l = self.geometry.normal(hit.prim).dot(-incoming);
+        if cos_l == 0.0 || (!e.two_sided && cos_l < 0.0) {
+            return None;
+        }
+        let index = self.emitters.of_prim[hit.prim as usize] as usize;
+        let sides = if e.two_sided { 2.0 } else { 1.0 };
+        let pick = self.light_probability(self.lights().len() + index) as f64;
+        let d2 = (hit.p - p).length_squared() as f64;
+        let cos_y = n.dot(incoming).abs() as f64;
+        Some(AreaLightEnd {
+            position_density: pick / (e.area as f64 * sides),
+            vertex_density: cos_l.abs() as f64 / std::f64::consts::PI * cos_y / d2,
+            light_sample_density: self.emitter_pdf(p, hit.prim, hit.p) as f64,
+        })
+    }
+
     /// The emitter on triangle `prim`, if it emits.
     pub(crate) fn emitter_of(&self, prim: u32) -> Option<&Emitter> {
         let i = *self.emitters.of_prim.get(prim as usize)?;
@@ -522,6 +555,21 @@ pub fn cosine_hemisphere(u: [f32; 2]) -> Vec3 {
 /// is seen by the weights through its first few alone.
 pub const MASKED_EMITTERS: usize = 8;
 
+/// Where a light path from the area lights began, seen from its first vertex y
+/// ([`Scene::area_light_end`]): the densities that the balance-type weights and `camis` read
+/// for the path's light end.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AreaLightEnd {
+    /// Density of the emitted point on the lights, m⁻²: its emitter's probability among all
+    /// lights over the emitter's area, halved for a two-sided emitter (the photon tracer's).
+    pub position_density: f64,
+    /// Density of y given that point, m⁻²: cos θₗ/π · |cos θ_y|/d² (cosine emission).
+    pub vertex_density: f64,
+    /// Solid-angle density at y with which a light sample yields that point, sr⁻¹
+    /// ([`Scene::emitter_pdf`]).
+    pub light_sample_density: f64,
+}
+
 impl Scene {
     /// The emitters with a visibility bit in a weight vertex's `lights` and the bit of the first:
     /// (first bit, count). The bits follow the point lights' (the first
@@ -622,6 +670,56 @@ mod tests {
     /// of flux `point` unless it is zero.
     fn scene(point: f32) -> Scene {
         scene_with_lamp_at(point, 1.0)
+    }
+
+    #[test]
+    fn a_light_path_s_area_light_end_is_found_and_weighed() {
+        // From the floor point y straight up into the lamp (Le = (1, 2, 3), 0.08 m² facing
+        // down, one-sided) and slanted to another of its points; the panel (Le = 5, 0.04 m²,
+        // two-sided) makes the choice of light. The photon tracer picks a triangle by flux
+        // luminance, so the density of a lamp point is lum(Le_lamp)/Σ lum(Le)·A·sides.
+        let s = scene(0.0);
+        let lum = |v: Vec3| 0.2126 * v.x as f64 + 0.7152 * v.y as f64 + 0.0722 * v.z as f64;
+        let total = lum(Vec3::new(1.0, 2.0, 3.0)) * 0.08 + lum(Vec3::splat(5.0)) * 0.04 * 2.0;
+        let position = lum(Vec3::new(1.0, 2.0, 3.0)) / total;
+        let y = Vec3::new(0.05, 0.0, 0.02);
+        let floor = s.geometry().intersect(y + Vec3::Y, -Vec3::Y, 2.0).unwrap();
+        for target in [Vec3::new(0.05, 1.0, 0.02), Vec3::new(0.15, 1.0, 0.08)] {
+            let to = target - floor.p;
+            let incoming = to.normalize();
+            let end = s
+                .area_light_end(floor.p, floor.ng, floor.prim, incoming)
+                .expect("the lamp is straight above");
+            let cos = incoming.y as f64;
+            let d2 = to.length_squared() as f64;
+            assert!(
+                (end.position_density / position - 1.0).abs() < 1e-5,
+                "{end:?}"
+            );
+            let vertex = cos * cos / (std::f64::consts::PI * d2);
+            assert!((end.vertex_density / vertex - 1.0).abs() < 1e-4, "{end:?}");
+            let hit = floor.p + incoming * (1.0 / incoming.y);
+            let prim = s
+                .geometry()
+                .intersect(floor.p + Vec3::Y * 1e-3, incoming, 2.0)
+                .unwrap()
+                .prim;
+            let pdf = s.emitter_pdf(floor.p, prim, hit) as f64;
+            assert!(
+                (end.light_sample_density / pdf - 1.0).abs() < 1e-4,
+                "{end:?} vs {pdf}"
+            );
+        }
+        // Past the lamp: nothing; from above the lamp: its back.
+        let away = Vec3::new(1.0, 1.0, 1.0).normalize();
+        assert!(
+            s.area_light_end(floor.p, floor.ng, floor.prim, away)
+                .is_none()
+        );
+        assert!(
+            s.area_light_end(Vec3::new(0.0, 2.0, 0.0), Vec3::Y, floor.prim, -Vec3::Y)
+                .is_none()
+        );
     }
 
     /// [`scene`] with the lamp at height `h` (m).

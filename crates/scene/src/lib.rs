@@ -40,8 +40,8 @@ pub use camera::Camera;
 pub use delta::{DeltaStep, DeltaWalk, MAX_DELTA_CHAIN};
 pub use emission_texture::{EMISSION_PICK_FLOOR, EmissionTextures};
 pub use emitters::{
-    Emitter, EmitterPhoton, EmitterSample, MASKED_EMITTERS, SPHERICAL_MAX, SPHERICAL_MIN,
-    cosine_hemisphere, power_heuristic,
+    AreaLightEnd, Emitter, EmitterPhoton, EmitterSample, MASKED_EMITTERS, SPHERICAL_MAX,
+    SPHERICAL_MIN, cosine_hemisphere, power_heuristic,
 };
 pub use texture::{
     SceneTextures, TexelImage, Texture, TextureError, Wrap, srgb_to_linear, srgb8_to_linear,
