@@ -17,7 +17,11 @@
 //! over the pixel (their standard deviation, W·m⁻²·sr⁻¹), and M = ⌊s / (2·s_rms)⌋ clamped to
 //! [1, M_max], with s_rms the root mean square of s over the image. In a scene with area
 //! lights a 5 × 5 lattice with the pixel's corners replaces the four points, which miss half
-//! the emitters' outlines, and the scale is 1·s_rms (`THRESHOLD_AREA`). M ∝ s is the
+//! the emitters' outlines, and the scale is 1·s_rms (`THRESHOLD_AREA`). There L₀ at a point
+//! is itself an estimate (one light sample, at a glossy surface weighed against a BDF ray of
+//! its own), so each probe draws its sample from a stream fixed by the pixel and the spread
+//! takes in the estimate's own variance: the light's reflection in a glossy wall, where the
+//! estimate is noisy though L₀ varies little over the pixel, is boosted too. M ∝ s is the
 //! allocation that minimises Σ Jₚ/Mₚ for a given number of samples Σ Mₚ when a pixel's L₀ noise is
 //! Jₚ ∝ sₚ²; the scale 2·s_rms keeps the cost bounded whatever the scene: M > 1 needs
 //! s ≥ 4·s_rms, which at most P/16 of the P pixels have, and Σ (M − 1) ≤ Σ s/(2·s_rms) ≤ P/2
@@ -28,7 +32,9 @@
 //! variance layer stays exact.
 
 use bdpm_bdf::{Transport, luminance};
-use bdpm_geometry::Rng;
+use bdpm_geometry::{Domain, Rng};
+
+use crate::bdpm::x1_weighs_bdf;
 use bdpm_scene::{Scene, Shading};
 use bdpm_settings::RenderSettings;
 use glam::{DVec3, Vec3};
@@ -80,11 +86,30 @@ pub(crate) fn direct_through(
         .map_or(Vec3::ZERO, |w| {
             let mut l0 = scene.direct(&w.sh, w.wo);
             if scene.has_emission() {
-                let u = [uniform(), uniform(), uniform()];
-                l0 += emitted_and_area(scene, &w.sh, w.wo, u, false);
+                l0 += area_estimate(scene, &w.sh, w.wo, &mut uniform);
             }
             if w.vertices == 0 { l0 } else { w.beta * l0 }
         })
+}
+
+/// One estimate of what area lights add to L₀ at `sh` seen along `wo` (W·m⁻²·sr⁻¹): the
+/// radiance it emits and one light sample, which at a glossy surface is weighed by the power
+/// heuristic against a BDF ray of its own whose hit on an emitter takes the complementary
+/// weight, as at x₁ (`x1_weighs_bdf`). A glossy lobe narrower than the light's image makes
+/// the light sample alone a rare event there: on scenes/cornell-box-glossy.toml the light's
+/// reflections in the walls held 40 % of the default mode's error at equal time
+/// (docs/results.md, "Area lights: the light's reflections").
+fn area_estimate(scene: &Scene, sh: &Shading, wo: Vec3, uniform: &mut impl FnMut() -> f32) -> Vec3 {
+    let mis = x1_weighs_bdf(scene, sh);
+    let u = [uniform(), uniform(), uniform()];
+    let mut l = emitted_and_area(scene, sh, wo, u, mis);
+    if mis {
+        let u = [uniform(), uniform(), uniform()];
+        if let Some((c, _)) = scene.emitter_hit_by_bdf(sh, wo, u) {
+            l += c;
+        }
+    }
+    l
 }
 
 /// What area lights add to L₀ at a camera path's x₀ (`sh`, seen along `wo`), W·m⁻²·sr⁻¹: the
@@ -181,15 +206,20 @@ impl DirectSamples {
 /// probe that meets nothing counts as 0): the four [`PROBES`], or in a scene with area
 /// lights the [`LATTICE`]² lattice of [`lattice_probes`].
 fn spread(scene: &Scene, x: u32, y: u32) -> f64 {
-    // A fixed branch through glass: the probes use no random numbers.
-    let probe = |[dx, dy]: [f32; 2]| {
-        luminance(direct_through(scene, x as f32 + dx, y as f32 + dy, || 0.5)) as f64
-    };
     if scene.has_emission() {
-        std_dev(lattice_probes().map(probe))
-    } else {
-        std_dev(PROBES.map(probe))
+        // An area light's sample is an estimate with a variance of its own, which the spread
+        // takes in: every probe draws its light sample (and its branch through glass) from a
+        // stream fixed by the pixel alone, so M still depends on the scene alone.
+        let mut rng = Rng::new(0, Domain::DirectSamples, [u64::MAX, x as u64, y as u64]);
+        return std_dev(lattice_probes().map(|[dx, dy]| {
+            let l0 = direct_through(scene, x as f32 + dx, y as f32 + dy, || rng.uniform());
+            luminance(l0) as f64
+        }));
     }
+    // A fixed branch through glass: the probes use no random numbers.
+    std_dev(PROBES.map(|[dx, dy]: [f32; 2]| {
+        luminance(direct_through(scene, x as f32 + dx, y as f32 + dy, || 0.5)) as f64
+    }))
 }
 
 /// Probes per side of a pixel in a scene with area lights.
