@@ -9,7 +9,7 @@ use bdpm_scene::{Scene, Shading, WeightVertex};
 use glam::{DVec3, Vec3};
 
 use crate::correction::CandidateSums;
-use crate::direct::emitted_and_area;
+use crate::direct::{emitted_and_area, x1_weighs_bdf};
 use crate::estimates::{Techniques, WeightStats};
 use crate::inputs::Arrival;
 use crate::mix::{DeltaChain, FirstVertex, Mix};
@@ -603,10 +603,4 @@ fn area_samples_at_x1(
         .then(|| scene.emitter_hit_by_bdf(sh1, wo, rng.uniform3()))
         .flatten();
     [light, bdf]
-}
-
-/// Whether x₁'s area-light sample is weighed against a BDF ray (a glossy x₁) or taken alone (a
-/// Lambert one): [`area_samples_at_x1`], and `predict`'s model of it.
-pub(crate) fn x1_weighs_bdf(scene: &Scene, sh1: &Shading) -> bool {
-    !scene.bdf_at(sh1).is_lambert()
 }

@@ -33,8 +33,6 @@
 
 use bdpm_bdf::{Transport, luminance};
 use bdpm_geometry::{Domain, Rng};
-
-use crate::bdpm::x1_weighs_bdf;
 use bdpm_scene::{Scene, Shading};
 use bdpm_settings::RenderSettings;
 use glam::{DVec3, Vec3};
@@ -97,7 +95,7 @@ pub(crate) fn direct_through(
 /// heuristic against a BDF ray of its own whose hit on an emitter takes the complementary
 /// weight, as at x₁ (`x1_weighs_bdf`). A glossy lobe narrower than the light's image makes
 /// the light sample alone a rare event there: on scenes/cornell-box-glossy.toml the light's
-/// reflections in the walls held 40 % of the default mode's error at equal time
+/// reflection in the back wall held a fifth of the default mode's squared error at equal time
 /// (docs/results.md, "Area lights: the light's reflections").
 fn area_estimate(scene: &Scene, sh: &Shading, wo: Vec3, uniform: &mut impl FnMut() -> f32) -> Vec3 {
     let mis = x1_weighs_bdf(scene, sh);
@@ -124,6 +122,13 @@ pub(crate) fn emitted_and_area(
     mis: bool,
 ) -> Vec3 {
     scene.emitted(sh.prim, sh.bary, wo) + scene.direct_area(sh, wo, u, mis)
+}
+
+/// Whether an area-light sample at `sh1` is weighed against a BDF ray (a glossy surface) or
+/// taken alone (a Lambert one): at x₁ (`area_samples_at_x1` in crate::bdpm, and `predict`'s
+/// model of it) and at the further direct-light points of a glossy x₀ ([`area_estimate`]).
+pub(crate) fn x1_weighs_bdf(scene: &Scene, sh1: &Shading) -> bool {
+    !scene.bdf_at(sh1).is_lambert()
 }
 
 /// The four fixed points of a pixel where L₀ is probed (offsets in the pixel, [0, 1)²).

@@ -72,7 +72,7 @@ use bdpm_mis::{Heuristic, Weigher, effective_samples};
 use bdpm_scene::Shading;
 use glam::Vec3;
 
-use crate::bdpm::x1_weighs_bdf;
+use crate::direct::x1_weighs_bdf;
 use crate::inputs::Arrival;
 use rayon::prelude::*;
 
