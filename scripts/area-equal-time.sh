@@ -4,7 +4,7 @@
 # settings), the file's settings in `balance` and `camis`, bdpm's `path`, and Mitsuba 3's
 # `path` and `ptracer` (scripts/mitsuba-equal-time.py: the scene through `bdpm export`), each
 # for SECONDS of render time at 2 threads, and compares each image with a long Mitsuba `path`
-# reference (`bdpm compare`: rel. RMSE and relMSE over every pixel and channel). Prints one line
+# reference (`bdpm compare`: rel. RMSE and relMSE of every pixel's luminance). Prints one line
 # per render and the medians per configuration; run it alone on the machine (timings).
 #   scripts/area-equal-time.sh [-o DIR] [--scene S.toml] [--seconds "20 60"] [--repeats N]
 #                              [--resolution PX] [--reference REF.exr] [--reference-seconds S]
