@@ -484,18 +484,46 @@ fn the_light_s_outline_takes_more_direct_light_samples() {
         missed.is_empty(),
         "outline pixels with one sample: {missed:?}"
     );
-    let variance = |film: &bdpm_integrator::Film| -> f64 {
-        let v = film.pass_variance();
-        outline
-            .iter()
-            .map(|&(x, y)| bdpm_bdf::luminance(v[(y * 64 + x) as usize].as_vec3()) as f64)
-            .sum()
-    };
+    let variance = |film: &bdpm_integrator::Film| summed_pass_variance(film, &outline, 64);
     let boosted = variance(&bdpm_suite::render_with(&renderer));
     s.direct_boost = 1;
     let plain = variance(&render(&scene, &s));
     eprintln!("outline per-pass variance {boosted:.4e}, one sample {plain:.4e}");
     assert!(boosted * 3.0 < plain, "{boosted:.4e} against {plain:.4e}");
+}
+
+/// The per-pass variance of `film`'s luminance summed over `pixels` of an image `width` wide.
+fn summed_pass_variance(film: &bdpm_integrator::Film, pixels: &[(u32, u32)], width: u32) -> f64 {
+    let v = film.pass_variance();
+    pixels
+        .iter()
+        .map(|&(x, y)| bdpm_bdf::luminance(v[(y * width + x) as usize].as_vec3()) as f64)
+        .sum()
+}
+
+/// The point where the ray from `origin` along `dir` meets the scene, if it is glossy: its
+/// shading and the mirror direction of `dir` about its normal.
+fn glossy_mirror(
+    scene: &bdpm_scene::Scene,
+    origin: glam::Vec3,
+    dir: glam::Vec3,
+) -> Option<(bdpm_scene::Shading, glam::Vec3)> {
+    let hit = scene.geometry().intersect(origin, dir, f32::INFINITY)?;
+    let sh = scene.shade(&hit, -dir);
+    if scene.bdf_at(&sh).is_lambert() {
+        return None;
+    }
+    let n = sh.frame.n;
+    let mirror = 2.0 * n.dot(-dir) * n + dir;
+    Some((sh, mirror))
+}
+
+/// Whether the ray from `sh` along `dir` meets an emitter.
+fn meets_emitter(scene: &bdpm_scene::Scene, sh: &bdpm_scene::Shading, dir: glam::Vec3) -> bool {
+    scene
+        .geometry()
+        .intersect(scene.spawn(sh, dir), dir, f32::INFINITY)
+        .is_some_and(|h| scene.emitted(h.prim, h.uv, -dir).max_element() > 0.0)
 }
 
 /// The light's reflection in the glossy back wall of the glossy box: its pixels take more
@@ -507,23 +535,8 @@ fn the_light_s_glossy_reflection_takes_more_direct_light_samples() {
     let cam = scene.camera();
     // Pixels whose centre sees a glossy surface reflecting the emitter in its mirror direction.
     let reflects_light = |x: f32, y: f32| {
-        let dir = cam.ray_direction(x, y);
-        let Some(hit) = scene
-            .geometry()
-            .intersect(cam.position(), dir, f32::INFINITY)
-        else {
-            return false;
-        };
-        let sh = scene.shade(&hit, -dir);
-        if scene.bdf_at(&sh).is_lambert() {
-            return false;
-        }
-        let n = sh.frame.n;
-        let mirror = 2.0 * n.dot(-dir) * n + dir;
-        scene
-            .geometry()
-            .intersect(scene.spawn(&sh, mirror), mirror, f32::INFINITY)
-            .is_some_and(|h| scene.emitted(h.prim, h.uv, -mirror).max_element() > 0.0)
+        glossy_mirror(&scene, cam.position(), cam.ray_direction(x, y))
+            .is_some_and(|(sh, mirror)| meets_emitter(&scene, &sh, mirror))
     };
     let pixels: Vec<(u32, u32)> = (0..64 * 64)
         .map(|i| (i % 64, i / 64))
@@ -537,13 +550,7 @@ fn the_light_s_glossy_reflection_takes_more_direct_light_samples() {
         .direct_samples()
         .expect("the reflection is boosted");
     let boosted = pixels.iter().filter(|&&(x, y)| direct.at(x, y) > 1).count();
-    let variance = |film: &bdpm_integrator::Film| -> f64 {
-        let v = film.pass_variance();
-        pixels
-            .iter()
-            .map(|&(x, y)| bdpm_bdf::luminance(v[(y * 64 + x) as usize].as_vec3()) as f64)
-            .sum()
-    };
+    let variance = |film: &bdpm_integrator::Film| summed_pass_variance(film, &pixels, 64);
     let with_boost = variance(&bdpm_suite::render_with(&renderer));
     s.direct_boost = 1;
     let plain = variance(&render(&scene, &s));
@@ -559,5 +566,76 @@ fn the_light_s_glossy_reflection_takes_more_direct_light_samples() {
     assert!(
         with_boost * 2.0 < plain,
         "{with_boost:.4e} against {plain:.4e}"
+    );
+}
+
+/// The light's reflection in the back wall seen in the glossy side walls (camera → side wall →
+/// back wall → light, BDD=1's one-bounce paths at a glossy x₁; pixels with a point of a 4 × 4
+/// grid whose mirror path twice reflected meets the light): those pixels take more than
+/// one x₁ per camera sample (crate::one_bounce), and where they take one direct-light sample
+/// (so that only x₁'s count differs) their per-pass variance falls by more than half. The
+/// image agrees pixel by pixel with the render that takes one x₁ everywhere.
+#[test]
+fn the_light_s_double_glossy_reflection_takes_more_x1() {
+    let (scene, settings) = load("cornell-box-glossy.toml", 64, 64);
+    let cam = scene.camera();
+    let twice_reflected = |x: f32, y: f32| {
+        let Some((sh0, v0)) = glossy_mirror(&scene, cam.position(), cam.ray_direction(x, y)) else {
+            return false;
+        };
+        glossy_mirror(&scene, scene.spawn(&sh0, v0), v0)
+            .is_some_and(|(sh1, v1)| meets_emitter(&scene, &sh1, v1))
+    };
+    let pixels: Vec<(u32, u32)> = (0..64 * 64)
+        .map(|i| (i % 64, i / 64))
+        .filter(|&(x, y)| {
+            (0..16).any(|k| {
+                let (dx, dy) = ((k % 4) as f32 + 0.5, (k / 4) as f32 + 0.5);
+                twice_reflected(x as f32 + dx / 4.0, y as f32 + dy / 4.0)
+            })
+        })
+        .collect();
+    assert!(pixels.len() >= 8, "the double reflection: {pixels:?}");
+    let mut s = with_mode(&settings, "optimal-path", 32, 4, 20_000);
+    s.direct_boost = 16;
+    let renderer = bdpm_integrator::Renderer::new(&scene, &s).unwrap_or_else(|e| panic!("{e}"));
+    let n = renderer
+        .one_bounce_samples()
+        .expect("the double reflection takes more x1");
+    let m = |x, y| renderer.direct_samples().map_or(1, |d| d.at(x, y));
+    let boosted = pixels.iter().filter(|&&(x, y)| n.at(x, y) > 1).count();
+    let only_x1: Vec<(u32, u32)> = pixels
+        .iter()
+        .copied()
+        .filter(|&(x, y)| n.at(x, y) > 1 && m(x, y) == 1)
+        .collect();
+    let with_boost = bdpm_suite::render_with(&renderer);
+    s.direct_boost = 1;
+    let plain = render(&scene, &s);
+    let (v_boost, v_plain) = (
+        summed_pass_variance(&with_boost, &only_x1, 64),
+        summed_pass_variance(&plain, &only_x1, 64),
+    );
+    let (within, diff, se) = bdpm_suite::films_agree(&with_boost, &plain, 4.0);
+    eprintln!(
+        "{} double-reflection pixels, {boosted} take more x1, {} of them one direct sample: \
+         per-pass variance {v_boost:.4e} against {v_plain:.4e}; images within {within:.4}, \
+         mean {diff:+.4} ± {se:.4}",
+        pixels.len(),
+        only_x1.len()
+    );
+    assert!(
+        boosted * 2 >= pixels.len(),
+        "{boosted} of {} boosted",
+        pixels.len()
+    );
+    assert!(only_x1.len() >= 4, "{only_x1:?}");
+    assert!(
+        v_boost * 2.0 < v_plain,
+        "{v_boost:.4e} against {v_plain:.4e}"
+    );
+    assert!(
+        within >= 0.98 && diff.abs() < 4.0 * se,
+        "{within} {diff} {se}"
     );
 }

@@ -2,6 +2,7 @@
 //! by 1 − w₁(x₀, y_p), and the camera's second vertex x₁ weighted by w₁(x₀, x₁), taken in
 //! batches of camera samples ([`Mix::sample_batch`]).
 use bdpm_bdf::{BdfSample, Transport, luminance};
+use bdpm_cache::CacheSlot;
 use bdpm_geometry::{Hit, Rng};
 use bdpm_mis::{Pair, Weigher};
 use bdpm_photon::{PhotonMap, PhotonQuery};
@@ -9,10 +10,11 @@ use bdpm_scene::{Scene, Shading, WeightVertex};
 use glam::{DVec3, Vec3};
 
 use crate::correction::CandidateSums;
-use crate::direct::{emitted_and_area, x1_weighs_bdf};
+use crate::direct::emitted_and_area;
 use crate::estimates::{Techniques, WeightStats};
 use crate::inputs::Arrival;
 use crate::mix::{DeltaChain, FirstVertex, Mix};
+use crate::one_bounce::{area_samples_at_x1, chain_direct};
 use crate::plan::PixelPlan;
 
 /// Camera samples that [`Mix::sample_batch`] takes together: enough for each sample's
@@ -236,14 +238,22 @@ impl<'a> Mix<'a> {
         if self.needs.second_vertex {
             let drawn = job.rng.uniform3();
             let bdf_u = job.bdf.unwrap_or(drawn);
+            let n = self.one_bounce_samples(&x0, plan.one_bounce);
+            let share = 1.0 / n as f32;
+            let (weigher, stats) = weights;
             slot.second = self.start_second(
                 &x0,
                 map,
-                (bdf_u, r, m, &mut job.rng),
-                weights,
+                (bdf_u, r, m, share, &mut job.rng),
+                (weigher, &mut *stats),
                 &mut slot.query1,
                 &mut slot.out,
             );
+            for _ in 1..n {
+                let u = job.rng.uniform3();
+                let (weights, out) = ((weigher, &mut *stats), &mut slot.out);
+                self.one_bounce_again(&x0, (u, share), &mut job.rng, weights, out);
+            }
         }
         slot.x0 = Some(x0);
     }
@@ -272,7 +282,7 @@ impl<'a> Mix<'a> {
         &self,
         x0: &FirstVertex<'_>,
         map: &PhotonMap,
-        (u, r, m, rng): ([f32; 3], f32, u32, &mut Rng),
+        (u, r, m, share, rng): ([f32; 3], f32, u32, f32, &mut Rng),
         (weigher, stats): (&Weigher, &mut WeightStats),
         query: &mut PhotonQuery,
         out: &mut SampleOut,
@@ -288,7 +298,7 @@ impl<'a> Mix<'a> {
             .intersect(scene.spawn(&x0.sh, v), v, f32::INFINITY)?;
         // A mirror or glass between x₀ and x₁: through it, with the weight of such paths.
         if scene.is_delta(hit1.material) {
-            let through = (s.weight, v, r);
+            let through = (s.weight, v, r, share);
             return self.second_through_delta(x0, map, through, rng, query, &mut out.pilot);
         }
         if scene.has_emission() {
@@ -302,12 +312,115 @@ impl<'a> Mix<'a> {
         if let (Some(cache), Some(slot)) = (self.cache, slot) {
             cache.prefetch(slot);
         }
-        let sh1 = scene.shade(&hit1, wo1);
-        let x1 = scene.weight_vertex(&sh1);
-        let lights = x1.lights;
+        let (sh1, x1, pair, dist2) = self.x1_from(x0, (&hit1, v), slot);
+        let at = (&sh1, &x1, v, dist2, pair);
+        let e = (s.weight, share);
+        let (direct, w_const) = self.one_bounce(x0, at, e, rng, (weigher, stats), &mut out.pilot);
+        Some(Second {
+            sh1,
+            x1,
+            v,
+            dist2,
+            pair,
+            w_const,
+            weight: s.weight,
+            direct_raw: direct.0 * share,
+            direct_weighted: direct.1 * share,
+        })
+    }
+
+    /// How many x₁ a camera sample takes for BDD=1's one-bounce paths light→x₁→x₀ at `x0`:
+    /// its pixel's allocation `n` (crate::one_bounce) at a glossy x₀, else 1. Only scenes with
+    /// area lights and glossy surfaces allocate more than one.
+    pub(crate) fn one_bounce_samples(&self, x0: &FirstVertex<'_>, n: u32) -> u32 {
+        if n > 1 && !x0.bdf.is_lambert() { n } else { 1 }
+    }
+
+    /// A further x₁ for BDD=1's one-bounce paths at `x0` (numbers `u` at x₀, the estimate's
+    /// share 1/n of the camera sample's n): its one-bounce paths, through the mirrors and glass
+    /// before it where there are any, added to the sample's BDD=1 output `out` with their
+    /// weights w₁. No gather and no emitter hit: those the sample's own x₁ estimates.
+    fn one_bounce_again(
+        &self,
+        x0: &FirstVertex<'_>,
+        (u, share): ([f32; 3], f32),
+        rng: &mut Rng,
+        (weigher, stats): (&Weigher, &mut WeightStats),
+        out: &mut SampleOut,
+    ) {
+        let scene = self.scene;
+        let Some(s) = x0.bdf.sample_at(&x0.out, u) else {
+            return;
+        };
+        let v = x0.sh.frame.to_world(s.wi);
+        if x0.sh.ng.dot(v) <= 0.0 {
+            return;
+        }
+        let origin = scene.spawn(&x0.sh, v);
+        let Some(hit1) = scene.geometry().intersect(origin, v, f32::INFINITY) else {
+            return;
+        };
+        let (raw, weighted) = if scene.is_delta(hit1.material) {
+            let w = self.chain_w1(x0);
+            let walk = (w > 0.0)
+                .then(|| scene.walk_to_non_delta(origin, v, Transport::Radiance, || rng.uniform()))
+                .flatten();
+            let Some(walk) = walk else {
+                return;
+            };
+            let raw = walk.beta * chain_direct(scene, &walk.sh, walk.wo, rng);
+            if self.pilot && raw != Vec3::ZERO {
+                out.pilot
+                    .add(f64::from(luminance(s.weight * raw * share)), w, true);
+            }
+            (raw, raw * w as f32)
+        } else {
+            let wo1 = -v;
+            let slot = self.cache_slot(hit1.prim, hit1.p, wo1);
+            let (sh1, x1, pair, dist2) = self.x1_from(x0, (&hit1, v), slot);
+            let at = (&sh1, &x1, v, dist2, pair);
+            let e = (s.weight, share);
+            self.one_bounce(x0, at, e, rng, (weigher, stats), &mut out.pilot)
+                .0
+        };
+        let t = &mut out.techniques;
+        t.x1_raw += (s.weight * raw * share).as_dvec3();
+        t.x1_weighted += (s.weight * weighted * share).as_dvec3();
+    }
+
+    /// x₁ at `hit1`, reached from `x0` along the unit direction `v`, with its cache `slot`: its
+    /// shading, its weight vertex, the pair's camera side and the squared distance from x₀ (m²).
+    fn x1_from(
+        &self,
+        x0: &FirstVertex<'_>,
+        (hit1, v): (&Hit, Vec3),
+        slot: Option<CacheSlot>,
+    ) -> (Shading, WeightVertex, Pair, f32) {
+        let sh1 = self.scene.shade(hit1, -v);
+        let x1 = self.scene.weight_vertex(&sh1);
         let pair = self.camera_side_base(x0, &x1, v, slot);
         let dist2 = (x1.p - x0.sh.p).length_squared();
+        (sh1, x1, pair, dist2)
+    }
 
+    /// The one-bounce paths light→x₁→x₀ of one x₁ (`at`: its shading and weight vertex, the
+    /// unit direction and squared distance from x₀, the pair's camera side), light by light:
+    /// the (raw, weighted by w₁) sums of their values (W·m⁻²·sr⁻¹, before x₀'s f·cos/p `e.0`),
+    /// and w₁ of the merge paths through x₁. `e.1`, the estimate's share of the camera
+    /// sample's, scales what `corrected-balance`'s pilot is told.
+    fn one_bounce(
+        &self,
+        x0: &FirstVertex<'_>,
+        (sh1, x1, v, dist2, pair): (&Shading, &WeightVertex, Vec3, f32, Pair),
+        (e, share): (Vec3, f32),
+        rng: &mut Rng,
+        (weigher, stats): (&Weigher, &mut WeightStats),
+        pilot: &mut CandidateSums,
+    ) -> ((Vec3, Vec3), f64) {
+        let scene = self.scene;
+        let wo1 = -v;
+        let lights = x1.lights;
+        let e = e * share;
         // One-bounce paths light→x₁→x₀, light by light (their balance weights differ).
         // (raw, weighted by w₁) sums of their values.
         let mut direct = (Vec3::ZERO, Vec3::ZERO);
@@ -324,42 +437,32 @@ impl<'a> Mix<'a> {
         // Without densities a one-bounce path's inputs do not depend on its light: one
         // evaluation serves them all.
         let w_direct = if self.needs.path_kinds && lights != 0 && !per_light {
-            let one = self.path_pair(x0, &x1, (v, dist2), Arrival::Light(0), pair);
+            let one = self.path_pair(x0, x1, (v, dist2), Arrival::Light(0), pair);
             self.w1(&one, weigher, stats)
         } else {
             w_const
         };
         for l in 0..scene.lights().len() {
-            let c = scene.direct_from_masked(&sh1, wo1, l, lights);
+            let c = scene.direct_from_masked(sh1, wo1, l, lights);
             if c == Vec3::ZERO {
                 continue;
             }
             let w = if per_light {
-                let one = self.path_pair(x0, &x1, (v, dist2), Arrival::Light(l), pair);
+                let one = self.path_pair(x0, x1, (v, dist2), Arrival::Light(l), pair);
                 self.w1(&one, weigher, stats)
             } else {
                 w_direct
             };
-            self.add_one_bounce(&mut direct, (c, w), s.weight, &mut out.pilot);
+            self.add_one_bounce(&mut direct, (c, w), e, pilot);
         }
         if scene.has_emission() {
-            let at = (&sh1, &x1, v, dist2);
+            let at = (sh1, x1, v, dist2);
             let area = self.area_at_x1(x0, at, pair, rng, (weigher, stats));
             for cw in area.into_iter().flatten() {
-                self.add_one_bounce(&mut direct, cw, s.weight, &mut out.pilot);
+                self.add_one_bounce(&mut direct, cw, e, pilot);
             }
         }
-        Some(Second {
-            sh1,
-            x1,
-            v,
-            dist2,
-            pair,
-            w_const,
-            weight: s.weight,
-            direct_raw: direct.0,
-            direct_weighted: direct.1,
-        })
+        (direct, w_const)
     }
 
     /// Adds a one-bounce path's value `c` (W·m⁻²·sr⁻¹) at x₁ with its weight `w` to the
@@ -413,7 +516,7 @@ impl<'a> Mix<'a> {
         &self,
         x0: &FirstVertex<'_>,
         map: &PhotonMap,
-        (e, v, r): (Vec3, Vec3, f32),
+        (e, v, r, share): (Vec3, Vec3, f32, f32),
         rng: &mut Rng,
         query: &mut PhotonQuery,
         pilot: &mut CandidateSums,
@@ -427,11 +530,7 @@ impl<'a> Mix<'a> {
         let walk = scene.walk_to_non_delta(origin, v, Transport::Radiance, || rng.uniform())?;
         let sh1 = walk.sh;
         map.restart_query_within(query, sh1.p, r);
-        let mut direct_raw = scene.direct(&sh1, walk.wo);
-        if scene.has_emission() {
-            let area = area_samples_at_x1(scene, &sh1, walk.wo, rng);
-            direct_raw += area.into_iter().flatten().map(|(c, _)| c).sum::<Vec3>();
-        }
+        let direct_raw = chain_direct(scene, &sh1, walk.wo, rng) * share;
         let weight = e * walk.beta;
         if self.pilot && direct_raw != Vec3::ZERO {
             pilot.add(f64::from(luminance(weight * direct_raw)), w, true);
@@ -499,8 +598,9 @@ impl<'a> Mix<'a> {
             }
         });
         let t = &mut out.techniques;
-        t.x1_raw = (e * (direct_raw + ph_raw * k)).as_dvec3();
-        t.x1_weighted = (e * (direct_weighted + ph_weighted * k)).as_dvec3();
+        // Added to what further x₁ of the sample's one-bounce paths brought (`one_bounce_again`).
+        t.x1_raw += (e * (direct_raw + ph_raw * k)).as_dvec3();
+        t.x1_weighted += (e * (direct_weighted + ph_weighted * k)).as_dvec3();
     }
 
     /// BDD=0: photons around x₀ (`query`), each weighted by 1 − w₁(x₀, y_p) (method.md §2),
@@ -583,24 +683,4 @@ fn emitter_hit_at_x1(
     let c = s.weight * le;
     let c = x0.beta.map_or(c, |b| b * c);
     c.as_dvec3() / f64::from(m)
-}
-
-/// x₁'s area-light direct term towards `wo` by its strategies, each (value W·m⁻²·sr⁻¹, unit
-/// direction to the light) or None: at a glossy x₁ one light sample and one BDF ray weighted
-/// against each other by the power heuristic (`Scene::direct_area_sample` with MIS,
-/// `Scene::emitter_hit_by_bdf`), at a Lambert x₁ the light sample alone, whose BDF ray seldom
-/// meets a light (on Mitsuba's box it cost about 15 % of a pass, in one run, for no variance;
-/// docs/results.md, "Area lights: MIS at x₁").
-fn area_samples_at_x1(
-    scene: &Scene,
-    sh1: &Shading,
-    wo: Vec3,
-    rng: &mut Rng,
-) -> [Option<(Vec3, Vec3)>; 2] {
-    let mis = x1_weighs_bdf(scene, sh1);
-    let light = scene.direct_area_sample(sh1, wo, rng.uniform3(), mis);
-    let bdf = mis
-        .then(|| scene.emitter_hit_by_bdf(sh1, wo, rng.uniform3()))
-        .flatten();
-    [light, bdf]
 }

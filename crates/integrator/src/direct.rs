@@ -147,13 +147,10 @@ pub(crate) const THRESHOLD: f64 = 2.0;
 /// Point-light scenes keep [`THRESHOLD`] and so their image bits.
 pub(crate) const THRESHOLD_AREA: f64 = 1.0;
 
-/// Direct-light samples per camera sample, per pixel.
+/// Direct-light samples per camera sample, per pixel: the [`SampleCounts`] M of the module's
+/// rule.
 #[derive(Clone, Debug, PartialEq)]
-pub struct DirectSamples {
-    width: u32,
-    /// M per pixel, row-major; every value in [1, M_max].
-    m: Vec<u8>,
-}
+pub struct DirectSamples(SampleCounts);
 
 impl DirectSamples {
     /// The allocation for `scene` under `settings`: M per pixel as in the module's rule, or
@@ -163,40 +160,76 @@ impl DirectSamples {
         if settings.direct_boost <= 1 || !settings.pixel_jitter {
             return None;
         }
-        let (w, h) = (settings.width, settings.height);
-        let spreads: Vec<f64> = (0..h)
-            .into_par_iter()
-            .flat_map_iter(|y| (0..w).map(move |x| spread(scene, x, y)))
-            .collect();
         let threshold = if scene.has_emission() {
             THRESHOLD_AREA
         } else {
             THRESHOLD
         };
-        let m = allocation(&spreads, settings.direct_boost, threshold);
+        let counts =
+            SampleCounts::from_spreads(settings, threshold, settings.direct_boost, |x, y| {
+                spread(scene, x, y)
+            })?;
+        Some(DirectSamples(counts))
+    }
+}
+
+impl std::ops::Deref for DirectSamples {
+    type Target = SampleCounts;
+
+    fn deref(&self) -> &SampleCounts {
+        &self.0
+    }
+}
+
+/// A count of samples per camera sample for each pixel of the image, every one in [1, 255]:
+/// what a boost of some term of a camera sample (`direct_boost`'s direct light, x₁'s one-bounce
+/// paths) allocates, fixed before the passes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SampleCounts {
+    width: u32,
+    /// The count per pixel, row-major.
+    m: Vec<u8>,
+}
+
+impl SampleCounts {
+    /// The counts of [`allocation`] from the spread of each pixel (x, y) of the image of
+    /// `settings` (`spread`, computed in parallel), or `None` when every count is 1.
+    pub(crate) fn from_spreads(
+        settings: &RenderSettings,
+        threshold: f64,
+        most: u32,
+        spread: impl Fn(u32, u32) -> f64 + Sync,
+    ) -> Option<SampleCounts> {
+        let (w, h) = (settings.width, settings.height);
+        let spreads: Vec<f64> = (0..h)
+            .into_par_iter()
+            .flat_map_iter(|y| (0..w).map(move |x| (x, y)))
+            .map(|(x, y)| spread(x, y))
+            .collect();
+        let m = allocation(&spreads, most, threshold);
         m.iter()
             .any(|&m| m > 1)
-            .then_some(DirectSamples { width: w, m })
+            .then_some(SampleCounts { width: w, m })
     }
 
-    /// M of pixel (x, y).
+    /// The count of pixel (x, y).
     #[inline]
     pub fn at(&self, x: u32, y: u32) -> u32 {
         self.m[(y as usize) * (self.width as usize) + x as usize] as u32
     }
 
-    /// Pixels with M > 1.
+    /// Pixels whose count is more than 1.
     pub fn boosted(&self) -> usize {
         self.m.iter().filter(|&&m| m > 1).count()
     }
 
-    /// Direct-light samples beyond one per camera sample, per camera sample of the image
-    /// (mean of M − 1 over the pixels).
+    /// Samples beyond one per camera sample, per camera sample of the image (mean of the
+    /// count − 1 over the pixels).
     pub fn extra_per_sample(&self) -> f64 {
         self.m.iter().map(|&m| (m - 1) as f64).sum::<f64>() / self.m.len().max(1) as f64
     }
 
-    /// The largest M of any pixel.
+    /// The largest count of any pixel.
     pub fn largest(&self) -> u32 {
         self.m.iter().copied().max().unwrap_or(1) as u32
     }

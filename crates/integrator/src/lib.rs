@@ -22,6 +22,7 @@ mod inputs;
 mod light;
 pub mod memory;
 mod mix;
+pub mod one_bounce;
 mod pass;
 pub mod path;
 mod paths;

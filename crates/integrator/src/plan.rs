@@ -1,13 +1,14 @@
 //! What a camera pass needs for each pixel, built in one place once per pixel
 //! ([`PixelPlanner::plan`]): the pixel's weigher (its A, B and N_eff from the pixel table,
 //! `corrected-balance`'s factor, its radius), its scale of the merge radius, its direct-light
-//! samples per camera sample and its layout of samples in this pass. A preparation that
+//! samples and one-bounce x₁ per camera sample and its layout of samples in this pass. A preparation that
 //! changes how a pixel is sampled or weighed reaches the camera side here.
 use bdpm_mis::Weigher;
 
 use crate::correction::Correction;
 use crate::direct::{DirectExtra, DirectSamples};
 use crate::mix::Mix;
+use crate::one_bounce::OneBounceSamples;
 use crate::products::Products;
 use crate::sampler::{CameraSample, PixelSamples};
 use crate::table::PixelTable;
@@ -24,6 +25,9 @@ pub(crate) struct PixelPlan<'l> {
     pub(crate) radius_scale: f32,
     /// Direct-light samples per camera sample (1 unless `direct_boost` gives the pixel more).
     pub(crate) direct_samples: u32,
+    /// x₁ per camera sample for the one-bounce paths at a glossy x₀ (1 unless
+    /// crate::one_bounce gives the pixel more).
+    pub(crate) one_bounce: u32,
     /// The pixel's samples in this pass, placed on the pixel.
     layout: &'l PixelSamples,
 }
@@ -50,6 +54,7 @@ pub(crate) struct PixelPlanner<'a> {
     table: Option<&'a PixelTable>,
     correction: Option<&'a Correction>,
     direct: Option<&'a DirectSamples>,
+    one_bounce: Option<&'a OneBounceSamples>,
 }
 
 impl<'a> PixelPlanner<'a> {
@@ -61,6 +66,7 @@ impl<'a> PixelPlanner<'a> {
             table: None,
             correction: None,
             direct,
+            one_bounce: None,
         }
     }
 
@@ -78,6 +84,7 @@ impl<'a> PixelPlanner<'a> {
             table,
             correction,
             direct: products.get(),
+            one_bounce: products.get(),
         }
     }
 
@@ -98,6 +105,7 @@ impl<'a> PixelPlanner<'a> {
             weigher: self.mix.map(|_| self.weigher(x, y)),
             radius_scale: self.mix.map_or(1.0, |m| m.radius_scale(x, y)),
             direct_samples: self.direct.map_or(1, |d| d.at(x, y)),
+            one_bounce: self.one_bounce.map_or(1, |d| d.at(x, y)),
             layout,
         }
     }

@@ -135,6 +135,8 @@ struct Terms {
 struct Direction {
     /// w·E·L, the BDD=1 sample value (luminance), W·m⁻²·sr⁻¹.
     value: f64,
+    /// The part of `value` by the one-bounce paths light→x₁→x₀, W·m⁻²·sr⁻¹.
+    direct: f64,
     /// Σ (1 − w)²·L over the parts, times f²·cos/p.
     photons_x0: f64,
     /// w_m²·E²·b.
@@ -242,11 +244,7 @@ impl Renderer<'_> {
         };
         let overlap = overlap_at(&x0.sh, (walk.vertices, walk.branches));
         let n_eff = effective_samples(n_b, overlap);
-        // The weights' inputs exactly as the renderer passes them.
-        let table = self.pixel_table().map(|t| t.get(x, y));
-        let factor = self.correction().map_or(1.0, |c| c.get(x, y));
-        let inputs = (table.map(|p| p.camera_samples), table.map(|p| &p.terms));
-        let weigher = mix.weigher(inputs, factor, scale);
+        let weigher = self.pixel_weigher(mix, (x, y), scale);
         let caustic = self.caustic_cache();
 
         // The model's own directions: as many as the preprint's A/B rays unless given, so that
@@ -254,6 +252,8 @@ impl Renderer<'_> {
         let rays = s.pixel_table_rays.unwrap_or(PINHOLE_TABLE_RAYS).max(2);
         let (mut sum, mut sum_sq, mut photons_x0, mut photons_x1) = (0.0, 0.0, 0.0, 0.0);
         let (mut caustic_x0, mut light_var) = (0.0, 0.0);
+        let n_alloc = self.one_bounce_samples().map_or(1, |n| n.at(x, y));
+        let mut one_bounce = OneBounceShare::new(mix.one_bounce_samples(&x0, n_alloc));
         let grid = direction_strata(s);
         // With stratified directions, rays 2i and 2i + 1 fall in one random cell of the
         // sampler's grid: half their squared difference estimates that cell's variance.
@@ -272,7 +272,7 @@ impl Renderer<'_> {
                 None => (&x0, 1.0, 1.0),
             };
             let d = direction(mix, cache, &weigher, at, u, &mut rng).unwrap_or_default();
-            let value = beta * d.value;
+            let value = one_bounce.value(&d, beta);
             sum += value;
             sum_sq += value * value;
             photons_x0 += share * beta * beta * d.photons_x0;
@@ -298,6 +298,7 @@ impl Renderer<'_> {
             Some(_) => within / (rays / 2) as f64,
             None => ((sum_sq - sum * sum / n) / (n - 1.0)).max(0.0),
         };
+        let jumps = jumps + one_bounce.further_variance(n);
         let jitter = if s.pixel_jitter {
             self.jitter_variance(cache, &x0, (x, y), mix.needs.second_vertex) / n_b
         } else {
@@ -310,11 +311,20 @@ impl Renderer<'_> {
         // alone, (1 − w)² = 1: their noise is α·N_eff/N_B·b_caustic(x₀→u).
         Some(Terms {
             t0: alpha * n_eff / n_b * (photons_x0 + caustic_x0) / n,
-            t1: (jumps + light_samples * light_var / n) / n_b,
+            t1: (jumps + light_samples * light_var / (n * one_bounce.n)) / n_b,
             t2: alpha / n_b * photons_x1 / n,
             jitter,
             overlap,
         })
+    }
+
+    /// Pixel (x, y)'s weigher with its radius `scale`: the weights' inputs exactly as the
+    /// renderer passes them (the pixel table's, `corrected-balance`'s factor).
+    fn pixel_weigher(&self, mix: &Mix<'_>, (x, y): (u32, u32), scale: f32) -> Weigher {
+        let table = self.pixel_table().map(|t| t.get(x, y));
+        let factor = self.correction().map_or(1.0, |c| c.get(x, y));
+        let inputs = (table.map(|p| p.camera_samples), table.map(|p| &p.terms));
+        mix.weigher(inputs, factor, scale)
     }
 
     /// One camera sample's way through the pixel's mirrors and glass from its centre
@@ -564,6 +574,7 @@ fn direction(
     let e = f * cos / pdf;
     Some(Direction {
         value: e * (l0_w + area.weighted + ld * merge_w.mean),
+        direct: e * (l0_w + area.weighted),
         photons_x0: (l0_w0_sq + area.unweighted_sq + ld * merge_w.complement_sq) * f * f * cos
             / pdf,
         photons_x1: merge_w.square_b * e * e * b,
@@ -742,8 +753,46 @@ fn chain_direction(
     let l = beta * (l0 + area.weighted + ld);
     Some(Direction {
         value: e * w * l,
+        direct: e * w * beta * (l0 + area.weighted),
         photons_x0: (1.0 - w).powi(2) * l * f * f * cos / pdf,
         photons_x1: w * w * e * e * beta * beta * b,
         light_var: (e * w * beta).powi(2) * area.variance,
     })
+}
+
+/// The one-bounce paths' share of a camera sample at a glossy x₀ that takes `n` x₁ for them
+/// (crate::one_bounce): the sample's own x₁ carries 1/n of them and n − 1 further x₁, each in
+/// its own independent direction, the rest.
+struct OneBounceShare {
+    /// x₁ per camera sample for the one-bounce paths.
+    n: f64,
+    /// Σ and Σ² over the model's directions of the one-bounce part of a direction's value.
+    sum: f64,
+    sum_sq: f64,
+}
+
+impl OneBounceShare {
+    fn new(n: u32) -> Self {
+        OneBounceShare {
+            n: f64::from(n),
+            sum: 0.0,
+            sum_sq: 0.0,
+        }
+    }
+
+    /// The BDD=1 value of direction `d` (scaled by `beta`) as the sample's own x₁ gives it,
+    /// its one-bounce part at 1/n; the part's moments are kept for [`Self::further_variance`].
+    fn value(&mut self, d: &Direction, beta: f64) -> f64 {
+        let direct = beta * d.direct;
+        self.sum += direct;
+        self.sum_sq += direct * direct;
+        beta * d.value - direct * (1.0 - 1.0 / self.n)
+    }
+
+    /// The further x₁'s variance over `rays` directions: (n − 1)/n² of the one-bounce part's
+    /// full variance.
+    fn further_variance(&self, rays: f64) -> f64 {
+        let var = ((self.sum_sq - self.sum * self.sum / rays) / (rays - 1.0)).max(0.0);
+        (self.n - 1.0) / (self.n * self.n) * var
+    }
 }

@@ -10,6 +10,7 @@ use crate::direct::DirectSamples;
 use crate::error::RenderError;
 use crate::estimates::PassOutput;
 use crate::mix::Mix;
+use crate::one_bounce::OneBounceSamples;
 use crate::pass::{PassContext, TechniqueSplit, bdpm_pass};
 use crate::prepare::{
     BuildContext, MODEL_CACHE_PHOTONS, ModelCache, PLAN, PixelTablePrep, Planned, unless_stopped,
@@ -117,6 +118,12 @@ impl<'a> Renderer<'a> {
     /// The direct-light samples per camera sample of each pixel, when some pixel takes more
     /// than one.
     pub fn direct_samples(&self) -> Option<&DirectSamples> {
+        self.products.get()
+    }
+
+    /// The x₁ per camera sample of each pixel for the one-bounce paths at a glossy x₀
+    /// (crate::one_bounce), when some pixel takes more than one.
+    pub fn one_bounce_samples(&self) -> Option<&OneBounceSamples> {
         self.products.get()
     }
 

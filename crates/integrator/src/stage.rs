@@ -66,6 +66,9 @@ pub enum Stage {
     BalanceCorrection,
     /// How many direct-light samples each pixel takes (`direct_boost`), fixed once.
     DirectSamples,
+    /// How many x₁ each pixel takes for the one-bounce paths at a glossy x₀
+    /// (crate::one_bounce), fixed once.
+    OneBounceSamples,
     /// `adaptive_radius`'s pilot and the radius of each block of pixels (crate::radius).
     RadiusMap,
 }
@@ -84,6 +87,7 @@ impl Stage {
             Stage::PixelFootprints => "pixel footprints",
             Stage::BalanceCorrection => "balance correction",
             Stage::DirectSamples => "direct samples",
+            Stage::OneBounceSamples => "one-bounce samples",
             Stage::RadiusMap => "radius map",
         }
     }

@@ -21,6 +21,7 @@ use crate::stage::{Stage, StageProbe};
 mod balance_correction;
 mod direct_samples;
 mod model_cache;
+mod one_bounce_samples;
 mod pixel_table;
 mod radiance_cache;
 mod radius_map;
@@ -33,15 +34,17 @@ pub(crate) use pixel_table::PixelTablePrep;
 
 /// The preparations in the order they run (a later one may read an earlier one's product):
 /// the radiance cache, the pixel table at r, `corrected-balance`'s pilot, `adaptive_radius`'s
-/// pilot and the pixel table again at each pixel's radius, the direct-light samples, the noise
+/// pilot and the pixel table again at each pixel's radius, the direct-light samples, the x₁ of
+/// the one-bounce paths at a glossy x₀, the noise
 /// model's own cache (only once asked for, `Renderer::with_model_cache`).
-pub(crate) static PLAN: [&dyn Planned; 7] = [
+pub(crate) static PLAN: [&dyn Planned; 8] = [
     &radiance_cache::RadianceCachePrep,
     &PixelTablePrep::AT_R,
     &balance_correction::BalanceCorrectionPrep,
     &radius_map::RadiusMapPrep,
     &PixelTablePrep::AT_PIXEL_RADII,
     &direct_samples::DirectSamplesPrep,
+    &one_bounce_samples::OneBounceSamplesPrep,
     &model_cache::ModelCachePrep,
 ];
 
