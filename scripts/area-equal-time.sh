@@ -5,7 +5,8 @@
 # `path` and `ptracer` (scripts/mitsuba-equal-time.py: the scene through `bdpm export`), each
 # for SECONDS of render time at 2 threads, and compares each image with a long Mitsuba `path`
 # reference (`bdpm compare`: rel. RMSE and relMSE of every pixel's luminance). Prints one line
-# per render and the medians per configuration; run it alone on the machine (timings).
+# per render and the medians per configuration, also scaled to the budget (each render's time,
+# its preparation included, is a little over it); run it alone on the machine (timings).
 #   scripts/area-equal-time.sh [-o DIR] [--scene S.toml] [--seconds "20 60"] [--repeats N]
 #                              [--resolution PX] [--reference REF.exr] [--reference-seconds S]
 #                              [--configs "defaults balance camis path mitsuba-path mitsuba-ptracer"]
@@ -68,18 +69,25 @@ print('%.1f' % (t['prepare_s'] + t['render_s']))" "${img%.exr}.json")
   python3 - "$log" <<'PY'
 import statistics, sys
 rows = [l.split() for l in open(sys.argv[1]) if l.strip()]
+budget = float(rows[0][1])
 by = {}
 for c, b, s, rmse, rel, wall in rows:
-    by.setdefault(c, []).append((float(rmse), float(rel), float(wall)))
+    # At the budget: a render's time (preparation and passes; the last pass ends past the
+    # budget, a bdpm pass by up to a second) scaled out as a variance-dominated error falls,
+    # rel. RMSE by √(wall/budget) and relMSE by wall/budget, as scripts/equal-time.sh does.
+    k = float(wall) / budget
+    by.setdefault(c, []).append((float(rmse), float(rel), float(wall), float(rmse) * k**0.5,
+                                 float(rel) * k))
 # The yardstick: Mitsuba's best, else bdpm's `path`, else none (e.g. --configs defaults alone).
 peers = [c for c in by if c.startswith("mitsuba")] or [c for c in by if c == "path"]
-best = min((statistics.median(r[0] for r in by[c]) for c in peers), default=None)
+med = lambda c, i: statistics.median(r[i] for r in by[c])
+best = min(peers, key=lambda c: med(c, 0), default=None)
 name = "Mitsuba's best" if peers != ["path"] else "bdpm's path"
 print(f"budget {rows[0][1]} s, medians of {len(rows) // len(by)} runs; rel. RMSE in %:")
-for c, v in by.items():
-    m = statistics.median(r[0] for r in v)
-    print(f"  {c:16s} rel. RMSE {m:.3f}  relMSE {statistics.median(r[1] for r in v):.3e}"
-          f"  wall {statistics.median(r[2] for r in v):.1f} s"
-          + (f"  {m / best:.2f}x {name}" if best else ""))
+for c in by:
+    print(f"  {c:16s} rel. RMSE {med(c, 0):.3f}  relMSE {med(c, 1):.3e}  wall {med(c, 2):.1f} s"
+          + (f"  {med(c, 0) / med(best, 0):.2f}x {name}" if best else "")
+          + f"; at the budget {med(c, 3):.3f}  {med(c, 4):.3e}"
+          + (f"  {med(c, 3) / med(best, 3):.2f}x" if best else ""))
 PY
 done
