@@ -5,10 +5,9 @@ use crate::error::RenderError;
 use crate::one_bounce::OneBounceSamples;
 use crate::setup::Setup;
 use crate::stage::Stage;
-use bdpm_settings::Mode;
 
 /// N per pixel from the spread of its one-bounce estimates. Only a BDPM mix that traces x₁
-/// reads it, and only a scene with area lights and glossy surfaces builds one; reported only
+/// reads it (not `bdd0`), and only a scene with area lights and glossy surfaces builds one; reported only
 /// when some pixel takes more than one.
 pub(crate) struct OneBounceSamplesPrep;
 
@@ -20,7 +19,7 @@ impl Preparation for OneBounceSamplesPrep {
     }
 
     fn needed(&self, setup: &Setup<'_>) -> bool {
-        matches!(setup.settings.mode, Mode::Bdpm(_)) && setup.scene.has_emission()
+        setup.scene.has_emission() && setup.heuristic.is_some_and(|h| h.needs().second_vertex)
     }
 
     fn build(&self, cx: &BuildContext<'_>) -> Result<Option<OneBounceSamples>, RenderError> {
